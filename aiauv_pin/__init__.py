@@ -1,0 +1,31 @@
+"""aiauv-pin: articulated intervention AUVs on Pinocchio, with exact per-link hydrodynamics.
+
+The main entry points::
+
+    import aiauv_pin
+    vehicle = aiauv_pin.load_vehicle()            # the paper's vehicle, uniform density
+    dv = vehicle.acceleration(q, v, tau)          # forward dynamics with added mass, damping, restoring
+    trajectory = aiauv_pin.simulate(vehicle, q0, v0, duration=10.0, dt=0.01)
+"""
+
+from .errors import AiauvError, SimulationDiverged, VehicleLoadError
+from .integrators import rk4_step, semi_implicit_euler_step
+from .loading import BUNDLED_CASES, bundled_urdf, load_vehicle
+from .simulation import Trajectory, simulate
+from .vehicle import Vehicle
+
+__all__ = [
+    "BUNDLED_CASES",
+    "AiauvError",
+    "SimulationDiverged",
+    "Trajectory",
+    "Vehicle",
+    "VehicleLoadError",
+    "bundled_urdf",
+    "load_vehicle",
+    "rk4_step",
+    "semi_implicit_euler_step",
+    "simulate",
+]
+
+__version__ = "0.1.0"

@@ -1,0 +1,142 @@
+"""The paper's path-following controller (``control``) wired to a Pinocchio vehicle.
+
+:class:`VehiclePathFollowing` measures what :class:`control.path_following.PathFollowingController`
+needs from the simulator state ``(q, v)`` (end-effector pose and velocity, joint states, the joints'
+hydrostatic forces ``g_q``) and maps its command back to generalised forces with the paper's eq. (20):
+``tau = B(q) tau_thr + [0; tau_q]``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from control.path_following import (
+    PathFollowingController,
+    PathFollowingGains,
+    PathFollowingMeasurement,
+)
+
+from .vehicle import Vehicle
+
+END_EFFECTOR = "end_effector"
+_LOCAL = pin.ReferenceFrame.LOCAL
+
+_AXIS_OF_JOINT_TYPE = {"JointModelRX": "x", "JointModelRY": "y", "JointModelRZ": "z"}
+
+
+def joint_axis_labels(vehicle: Vehicle) -> tuple[str, ...]:
+    """Axis label (``"x"``, ``"y"`` or ``"z"``) of every actuated joint, in model order.
+
+    Raises:
+        ValueError: A joint that is not revolute about a link axis.
+    """
+    labels = []
+    for joint in vehicle.model.joints[2:]:
+        name = joint.shortname()
+        if name in _AXIS_OF_JOINT_TYPE:
+            labels.append(_AXIS_OF_JOINT_TYPE[name])
+            continue
+        axis = getattr(joint, "axis", None)
+        if axis is not None:
+            axis = np.asarray(axis, dtype=float)
+            k = int(np.argmax(np.abs(axis)))
+            if abs(abs(axis[k]) - 1.0) < 1e-9:
+                labels.append("xyz"[k])
+                continue
+        raise ValueError(f"joint '{vehicle.model.names[joint.id]}' is not revolute about a link axis")
+    return tuple(labels)
+
+
+def surge_thruster_indices(vehicle: Vehicle) -> list[int]:
+    """Indices of the thrusters that push along their link's x-axis (the paper's "X" thrusters)."""
+    return [k for k, t in enumerate(vehicle.hydro.thrusters) if abs(t.direction[0]) > 0.999]
+
+
+class VehiclePathFollowing:
+    """Controller callback for :func:`aiauv_pin.simulate` running the paper's path following.
+
+    The end-effector acceleration that the guidance law's second derivative needs is the finite
+    difference of the end-effector velocity between consecutive calls (zero at the first call), so the
+    callback costs no extra dynamics evaluation.
+
+    Args:
+        vehicle: The vehicle; it must have a frame named ``end_effector`` and X thrusters.
+        gains: Controller gains (paper defaults).
+        end_effector: Name of the end-effector frame.
+    """
+
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        gains: PathFollowingGains | None = None,
+        *,
+        end_effector: str = END_EFFECTOR,
+    ) -> None:
+        self.vehicle = vehicle
+        self.gains = gains if gains is not None else PathFollowingGains()
+        self.frame = vehicle.frame_id(end_effector)
+        surge = surge_thruster_indices(vehicle)
+        if not surge:
+            raise ValueError("the vehicle has no thruster along a link x-axis for surge control")
+        self.controller = PathFollowingController(
+            joint_axes=joint_axis_labels(vehicle),
+            surge_thrusters=surge,
+            n_thrusters=len(vehicle.hydro.thrusters),
+            max_thrust=vehicle.max_thrust,
+            gains=self.gains,
+        )
+        self._data = vehicle.model.createData()
+        self.reset()
+
+    def reset(self) -> None:
+        """Clear the surge integrator and the velocity history."""
+        self.controller.reset()
+        self._previous: tuple[float, np.ndarray] | None = None
+
+    def measure(self, t: float, q: np.ndarray, v: np.ndarray) -> PathFollowingMeasurement:
+        """What the controller needs, from the simulator state."""
+        model, data = self.vehicle.model, self._data
+        pin.forwardKinematics(model, data, q, v)
+        pose = pin.updateFramePlacement(model, data, self.frame)
+        twist = pin.getFrameVelocity(model, data, self.frame, _LOCAL)
+        rotation = pose.rotation.copy()
+        velocity_in_world = rotation @ twist.linear
+        if self._previous is None or t <= self._previous[0]:
+            acceleration = np.zeros(3)
+        else:
+            acceleration = (velocity_in_world - self._previous[1]) / (t - self._previous[0])
+        self._previous = (t, velocity_in_world)
+        return PathFollowingMeasurement(
+            position_in_world=pose.translation.copy(),
+            velocity_in_world=velocity_in_world,
+            acceleration_in_world=acceleration,
+            rotation_to_world=rotation,
+            angular_velocity_in_ee=twist.angular.copy(),
+            joint_positions=q[7:].copy(),
+            joint_velocities=v[6:].copy(),
+            joint_hydrostatic_forces=self.vehicle.restoring_forces(q)[6:],
+            surge_velocity=float(twist.linear[0]),
+        )
+
+    def __call__(self, t: float, q: np.ndarray, v: np.ndarray):
+        measurement = self.measure(t, q, v)
+        command = self.controller.command(t, measurement)
+        thrust_matrix = self.vehicle.thrust_matrix(q)
+        tau = thrust_matrix @ command.thrusts
+        tau[6:] += command.joint_torques
+        info = {
+            "p": measurement.position_in_world,
+            "u": measurement.surge_velocity,
+            "phi_tilde": command.phi_tilde,
+            "omega_tilde": command.omega_tilde,
+            "base_angles": command.base_angles,
+            "joint_references": command.joint_references,
+            "x_ref": command.x_ref,
+            "pointing": command.pointing_direction,
+            "thrust": command.thrusts,
+            # mechanical power of each thruster: thrust times the speed of its point along its axis
+            "thruster_power": (v @ thrust_matrix) * command.thrusts,
+            "joint_torque": command.joint_torques,
+        }
+        return tau, info

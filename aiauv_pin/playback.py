@@ -1,0 +1,269 @@
+"""Self-contained HTML playback of a trajectory: one file that opens from disk with no network.
+
+The page embeds meshcat's viewer bundle (``meshcat/viewer/dist/main.min.js``, as meshcat's own
+``static_html`` does) and the scene of :class:`aiauv_pin.viewer.VehicleScene` as a list of meshcat
+commands in JSON, replayed into ``MeshCat.Viewer.handle_command`` on load. The motion is one meshcat
+animation (``set_animation``): per moving node, three.js keyframe tracks with ``times`` in seconds
+(clip ``fps`` = 1, so a key's time is its simulated time) and flat ``values``; meshcat's animation panel
+gives play / pause / reset, a time scrubber and the speed (``timeScale``, 1 = real time). The camera's
+centre of attention (``/Cameras/default``) is animated too, so the vehicle stays framed all the way.
+
+Frames are decimated to ``fps`` per simulated second and to at most ``max_frames`` (by default as many
+as fit a budget of about 16 MB of keyframes), so a 300 s run gives a file of a few MB.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from .atomic import atomic_path
+from .simulation import Trajectory
+from .vehicle import Vehicle
+from .viewer import CAMERA, LOS, ROOT, VehicleScene, set_property, set_transform
+
+#: Default upper bound on the size of the keyframe data [bytes].
+KEYFRAME_BUDGET = 16_000_000
+_DIGITS = 4  # decimals kept in the page: 0.1 mm, 1e-4 in quaternions, 0.1 ms in times
+_CHARS_PER_NUMBER = 9  # upper estimate of one number in the JSON, sign and comma included
+
+
+def meshcat_bundle() -> str:
+    """The JavaScript of meshcat's viewer (three.js included), as shipped by the meshcat package."""
+    import meshcat
+
+    path = Path(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"
+    return path.read_text(encoding="utf-8")
+
+
+def html_page(commands: list[dict], *, title: str = "aiauv-pin playback") -> str:
+    """A self-contained page showing the meshcat scene the commands build.
+
+    Args:
+        commands: meshcat commands (``set_object``, ``set_transform``, ``set_property``,
+            ``set_animation``), JSON-able dicts.
+        title: Page title.
+    """
+    bundle = meshcat_bundle()
+    if "</script" in bundle.lower():
+        raise RuntimeError("meshcat's bundle contains '</script' and cannot be inlined")
+    data = json.dumps(commands, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
+    safe_title = title.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    return f"""<!DOCTYPE html>
+<html>
+<head>
+<meta charset="utf-8">
+<title>{safe_title}</title>
+<style>
+body {{ margin: 0; }}
+#meshcat-pane {{ width: 100vw; height: 100vh; overflow: hidden; }}
+</style>
+</head>
+<body>
+<div id="meshcat-pane"></div>
+<script>
+{bundle}
+</script>
+<script type="application/json" id="aiauv-scene">{data}</script>
+<script>
+var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
+var commands = JSON.parse(document.getElementById("aiauv-scene").textContent);
+for (var i = 0; i < commands.length; i++) {{
+  viewer.handle_command(commands[i]);
+}}
+</script>
+</body>
+</html>
+"""
+
+
+def frame_indices(t: np.ndarray, fps: float, max_frames: int | None = None) -> np.ndarray:
+    """Indices of the logged samples shown: about ``fps`` per simulated second, first and last kept.
+
+    Args:
+        t: Logged times [s], increasing.
+        fps: Frames per simulated second [1/s].
+        max_frames: Upper bound on the number of frames (>= 2).
+    """
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or t.size == 0:
+        raise ValueError("trajectory has no logged sample")
+    if not (math.isfinite(fps) and fps > 0):
+        raise ValueError(f"fps must be a positive number, got {fps!r}")
+    if max_frames is not None and int(max_frames) < 2:
+        raise ValueError(f"max_frames must be at least 2, got {max_frames!r}")
+    if t.size == 1:
+        return np.zeros(1, dtype=int)
+    if not np.all(np.diff(t) > 0):
+        raise ValueError("trajectory times must be increasing")
+    # the first sample at or after each tick of a 1/fps clock, and the last sample
+    ticks = t[0] + np.arange(0.0, t[-1] - t[0], 1.0 / fps)
+    index = np.unique(np.append(np.searchsorted(t, ticks - 1e-9 / fps), t.size - 1))
+    if max_frames is not None and index.size > max_frames:
+        keep = np.unique(np.round(np.linspace(0, index.size - 1, int(max_frames))).astype(int))
+        index = index[keep]
+    return index
+
+
+def _round(values: np.ndarray) -> list[float]:
+    rounded = np.round(np.asarray(values, dtype=float), _DIGITS).ravel()
+    rounded[rounded == 0.0] = 0.0  # no "-0.0"
+    return rounded.tolist()
+
+
+def _info_at(info: dict[str, np.ndarray], k: int) -> dict[str, np.ndarray]:
+    return {key: value[k] for key, value in info.items() if key in ("thrust", "x_ref", "p")}
+
+
+def playback_commands(
+    vehicle: Vehicle,
+    trajectory: Trajectory,
+    *,
+    fps: float = 25.0,
+    max_frames: int | None = None,
+    urdf: str | os.PathLike | None = None,
+) -> list[dict]:
+    """The meshcat commands of a playback: the scene, the first frame, and the animation.
+
+    Args:
+        vehicle: The simulated vehicle.
+        trajectory: The trajectory (``t``, ``q``; ``info`` may hold ``thrust``, ``x_ref``, ``p``).
+        fps: Frames per simulated second [1/s].
+        max_frames: Upper bound on the number of frames; default from :data:`KEYFRAME_BUDGET`.
+        urdf: URDF with the visuals (see :func:`aiauv_pin.viewer.vehicle_visuals`).
+
+    Raises:
+        ValueError: A malformed trajectory (one line).
+    """
+    t = np.asarray(trajectory.t, dtype=float)
+    q = np.asarray(trajectory.q, dtype=float)
+    if q.ndim != 2 or q.shape[1] != vehicle.nq or q.shape[0] != t.size:
+        raise ValueError(
+            f"trajectory.q must have shape ({t.size}, {vehicle.nq}), got {q.shape}"
+        )
+    finite = np.all(np.isfinite(q), axis=1) & np.isfinite(t)
+    if not np.all(finite):
+        bad = int(np.flatnonzero(~finite)[0])
+        raise ValueError(f"trajectory has a non-finite configuration at sample {bad}")
+    info = {k: np.asarray(v, dtype=float) for k, v in (trajectory.info or {}).items()}
+    for key in ("thrust", "x_ref", "p"):
+        if key in info and info[key].shape[0] != t.size:
+            raise ValueError(f"trajectory.info['{key}'] has {info[key].shape[0]} rows, not {t.size}")
+    base_x = q[:, 0]
+    margin = 5.0
+    scene = VehicleScene(
+        vehicle, urdf=urdf, path_range=(float(base_x.min()) - margin, float(base_x.max()) + margin)
+    )
+    show_los = scene.head_frame is not None and "x_ref" in info
+
+    if max_frames is None:
+        states = scene.frame(q[0], _info_at(info, 0))
+        numbers = 8 * len(states.poses) + 4 * len(states.scales) + 4  # values and times per frame
+        max_frames = max(2, KEYFRAME_BUDGET // (_CHARS_PER_NUMBER * numbers))
+    index = frame_indices(t, fps, max_frames)
+
+    poses: dict[str, list[np.ndarray]] = {}
+    scales: dict[str, list[np.ndarray]] = {}
+    camera: list[np.ndarray] = []
+    for k in index:
+        state = scene.frame(q[k], _info_at(info, int(k)))
+        for path, pose in state.poses.items():
+            poses.setdefault(path, []).append(pose)
+        for path, scale in state.scales.items():
+            scales.setdefault(path, []).append(scale)
+        camera.append(state.camera_target)
+    if not show_los:
+        poses.pop(LOS, None)
+    times = _round(t[index] - t[0])
+
+    commands = [set_property(ROOT, "visible", True), *scene.static_commands()]
+    # the first frame, so that the scene is right before the animation starts (and if it is paused)
+    for path, frames in poses.items():
+        commands.append(set_transform(path, frames[0]))
+    for path, frames in scales.items():
+        commands.append(set_transform(path, np.diag([*frames[0], 1.0])))
+    first_camera = np.eye(4)
+    first_camera[:3, 3] = camera[0]
+    commands.append(set_transform(CAMERA, first_camera))
+    if show_los:
+        commands.append(set_property(LOS, "visible", True))
+
+    def clip(tracks: list[dict]) -> dict:
+        return {"fps": 1, "name": "default", "tracks": tracks}
+
+    def track(name: str, kind: str, values) -> dict:
+        return {"name": f".{name}", "type": kind, "times": times, "values": _round(values)}
+
+    animations = []
+    for path, frames in poses.items():
+        matrices = np.array(frames)
+        quaternions = np.array([pin.Quaternion(m[:3, :3]).coeffs() for m in matrices])  # x y z w
+        # same hemisphere frame to frame, so that the keys interpolate along the short arc
+        for k in range(1, len(quaternions)):
+            if quaternions[k] @ quaternions[k - 1] < 0:
+                quaternions[k] = -quaternions[k]
+        tracks = [
+            track("position", "vector3", matrices[:, :3, 3]),
+            track("quaternion", "quaternion", quaternions),
+        ]
+        animations.append({"path": path, "clip": clip(tracks)})
+    for path, frames in scales.items():
+        animations.append({"path": path, "clip": clip([track("scale", "vector3", np.array(frames))])})
+    animations.append(
+        {"path": CAMERA, "clip": clip([track("position", "vector3", np.array(camera))])}
+    )
+    commands.append(
+        {
+            "type": "set_animation",
+            "path": "",
+            "animations": animations,
+            "options": {"play": True, "repetitions": 1},
+        }
+    )
+    return commands
+
+
+def write_playback(
+    vehicle: Vehicle,
+    trajectory: Trajectory,
+    path: str | os.PathLike,
+    *,
+    max_frames: int | None = None,
+    fps: float = 25.0,
+    urdf: str | os.PathLike | None = None,
+) -> Path:
+    """Write a self-contained ``playback.html`` of a trajectory, animated at real-time speed.
+
+    The page needs no network: it carries meshcat's viewer and the whole animation. Open it with any
+    browser; the animation starts on load, and meshcat's *Animations* panel pauses, resumes, scrubs
+    and changes the speed. The file is written atomically (temporary file + rename).
+
+    Args:
+        vehicle: The simulated vehicle.
+        trajectory: Its trajectory.
+        path: Output file.
+        max_frames: Upper bound on the number of frames; default keeps the file under about 20 MB.
+        fps: Frames per simulated second [1/s].
+        urdf: URDF with the visuals (see :func:`aiauv_pin.viewer.vehicle_visuals`).
+
+    Returns:
+        The path written.
+    """
+    commands = playback_commands(vehicle, trajectory, fps=fps, max_frames=max_frames, urdf=urdf)
+    page = html_page(commands, title=f"{vehicle.name}: {float(trajectory.t[-1]):g} s")
+    with atomic_path(path) as temporary:
+        temporary.write_text(page, encoding="utf-8")
+    return Path(path)
+
+
+def read_commands(page: str) -> list[dict]:
+    """The meshcat commands embedded in a page written by :func:`html_page`."""
+    start_tag = '<script type="application/json" id="aiauv-scene">'
+    start = page.index(start_tag) + len(start_tag)
+    end = page.index("</script>", start)
+    return json.loads(page[start:end].replace("<\\/", "</"))

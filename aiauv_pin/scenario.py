@@ -1,0 +1,198 @@
+"""The paper's simulation scenario (Sec. 4): straight-path following from an offset start.
+
+Choices the paper leaves open, documented here and in the README:
+
+* the path is the world x-axis; the vehicle starts straight, at rest, parallel to the path, with its
+  end-effector at ``(0, 3, 3)`` m (a few metres off in y and z, PAPER_DATA "Start");
+* 300 s of simulated time (the lineage code's duration), step ``dt = 0.02`` s (RK4);
+* the base-angle saturation ``q_max`` is :class:`control.path_following.PathFollowingGains`' default.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from control.path_following import PathFollowingGains
+
+from .path_following import END_EFFECTOR, VehiclePathFollowing
+from .simulation import Trajectory, simulate
+from .vehicle import Vehicle
+
+CASES = ("uniform", "stabilised")
+
+
+@dataclass(frozen=True)
+class PaperScenario:
+    """Parameters of one path-following run.
+
+    Attributes:
+        case: ``"uniform"`` or ``"stabilised"`` (selects the paper's ``k_D``).
+        duration: Simulated time [s].
+        dt: Integration step [s].
+        initial_offset: End-effector start ``(p_y, p_z)`` [m]; ``p_x = 0``.
+        initial_surge: Initial forward speed of the straight vehicle [m/s].
+        method: Integrator, ``"rk4"`` or ``"euler"``.
+        current: Constant water velocity in the world frame [m/s].
+        gains: Controller gains; ``None`` means the paper's for the case.
+    """
+
+    case: str = "uniform"
+    duration: float = 300.0
+    dt: float = 0.02
+    initial_offset: tuple[float, float] = (3.0, 3.0)
+    initial_surge: float = 0.0
+    method: str = "rk4"
+    current: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    gains: PathFollowingGains | None = None
+
+    def __post_init__(self) -> None:
+        if self.case not in CASES:
+            raise ValueError(f"unknown case '{self.case}' (expected uniform or stabilised)")
+        for name in ("duration", "dt"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a positive number of seconds, got {value!r}")
+        if self.dt > self.duration:
+            raise ValueError(f"dt ({self.dt:g} s) must not exceed the duration ({self.duration:g} s)")
+        if len(self.initial_offset) != 2 or not all(map(math.isfinite, self.initial_offset)):
+            raise ValueError("initial_offset must be two finite numbers (p_y, p_z) [m]")
+        if not math.isfinite(self.initial_surge):
+            raise ValueError("initial_surge must be finite")
+        if len(self.current) != 3 or not all(map(math.isfinite, self.current)):
+            raise ValueError("current must be three finite numbers [m/s]")
+
+    @property
+    def controller_gains(self) -> PathFollowingGains:
+        """The gains in force: the given ones or the paper's for the case."""
+        return self.gains if self.gains is not None else PathFollowingGains.for_case(self.case)
+
+
+def initial_state(vehicle: Vehicle, scenario: PaperScenario) -> tuple[np.ndarray, np.ndarray]:
+    """Straight vehicle parallel to the x-axis with its end-effector at ``(0, p_y, p_z)``."""
+    q = vehicle.neutral_configuration()
+    tip = vehicle.frame_placement(q, END_EFFECTOR).translation
+    q[:3] = np.array([0.0, *scenario.initial_offset]) - tip
+    v = np.zeros(vehicle.nv)
+    v[0] = scenario.initial_surge
+    return q, v
+
+
+@dataclass
+class ScenarioResult:
+    """A finished (or diverged) path-following run.
+
+    Attributes:
+        scenario: What was run.
+        trajectory: Logged states and controller diagnostics.
+        wall_time: Wall-clock time of the simulation loop [s].
+        joint_names: Names of the actuated joints.
+        thruster_names: Names of the thrusters.
+    """
+
+    scenario: PaperScenario
+    trajectory: Trajectory
+    wall_time: float
+    joint_names: list[str]
+    thruster_names: list[str]
+    extra: dict = field(default_factory=dict)
+
+
+def run_paper_scenario(
+    vehicle: Vehicle, scenario: PaperScenario, *, progress: bool = False
+) -> ScenarioResult:
+    """Simulate the path-following scenario on a vehicle.
+
+    Raises:
+        SimulationDiverged: With the partial trajectory, if the state became non-finite.
+    """
+    controller = VehiclePathFollowing(vehicle, scenario.controller_gains)
+    q0, v0 = initial_state(vehicle, scenario)
+    current = np.asarray(scenario.current, dtype=float)
+    start = time.perf_counter()
+    trajectory = simulate(
+        vehicle,
+        q0,
+        v0,
+        scenario.duration,
+        scenario.dt,
+        controller,
+        method=scenario.method,
+        current=current if np.any(current) else None,
+        progress=progress,
+    )
+    return ScenarioResult(
+        scenario=scenario,
+        trajectory=trajectory,
+        wall_time=time.perf_counter() - start,
+        joint_names=vehicle.joint_names,
+        thruster_names=vehicle.thruster_names,
+    )
+
+
+def settling_time(t: np.ndarray, error: np.ndarray, band: float) -> float | None:
+    """First time after which ``|error|`` stays within ``band`` (``None`` if it never does)."""
+    outside = np.flatnonzero(np.abs(error) > band)
+    if outside.size == 0:
+        return float(t[0])
+    if outside[-1] == len(t) - 1:
+        return None
+    return float(t[outside[-1] + 1])
+
+
+def summary(result: ScenarioResult) -> dict:
+    """Figures of merit of a run (all SI units)."""
+    scenario = result.scenario
+    tr = result.trajectory
+    t, info = tr.t, tr.info
+    gains = scenario.controller_gains
+    p, u = info["p"], info["u"]
+    last30 = t >= t[-1] - 30.0
+    dt_log = np.diff(t)
+    thruster_power = np.abs(info["thruster_power"][:-1])
+    joint_power = np.abs(info["joint_torque"][:-1] * tr.v[:-1, 6:])
+    steps = len(t) - 1
+    gains_dict = asdict(gains)
+    return {
+        "case": scenario.case,
+        "status": tr.status,
+        "message": tr.message,
+        "parameters": {
+            **{k: v for k, v in asdict(scenario).items() if k != "gains"},
+            "gains": gains_dict,
+        },
+        "dt": scenario.dt,
+        "method": scenario.method,
+        "steps": steps,
+        "simulated_time": float(t[-1]),
+        "wall_time": result.wall_time,
+        "real_time_factor": float(t[-1] / result.wall_time) if result.wall_time > 0 else None,
+        "final": {
+            "p_y": float(p[-1, 1]),
+            "p_z": float(p[-1, 2]),
+            "u": float(u[-1]),
+            "phi_tilde": float(info["phi_tilde"][-1]),
+            "omega_tilde": [float(x) for x in info["omega_tilde"][-1]],
+            "max_abs_u_error_last_30s": float(np.abs(u[last30] - gains.u_d).max()),
+            "max_phi_tilde_last_30s": float(np.abs(info["phi_tilde"][last30]).max()),
+        },
+        "settling_time": {
+            "p_y_5cm": settling_time(t, p[:, 1], 0.05),
+            "p_z_5cm": settling_time(t, p[:, 2], 0.05),
+            "u_1cm_s": settling_time(t, u - gains.u_d, 0.01),
+            "phi_tilde_0.02rad": settling_time(t, info["phi_tilde"], 0.02),
+        },
+        "thruster_work": {
+            name: float(np.sum(thruster_power[:, k] * dt_log))
+            for k, name in enumerate(result.thruster_names)
+        },
+        "joint_work": {
+            name: float(np.sum(joint_power[:, k] * dt_log))
+            for k, name in enumerate(result.joint_names)
+        },
+        "total_thruster_work": float(np.sum(thruster_power.sum(axis=1) * dt_log)),
+        "total_joint_work": float(np.sum(joint_power.sum(axis=1) * dt_log)),
+    }

@@ -1,0 +1,586 @@
+"""Vehicle specification of an articulated AUV built from cylindrical modules (tail to head).
+
+A spec is a small TOML file; :func:`load_spec` reads it and :func:`spec_from_dict` validates the
+parsed table into frozen dataclasses. :mod:`aiauv_pin.builder` turns a :class:`VehicleSpec` into a
+URDF.
+
+Spec format (keys not listed here are errors)::
+
+    name = "paper_uniform"      # required; letters, digits, "_", "-", "."
+    radius = 0.085              # [m] default radius of the modules (required unless every module
+                                #     gives its own)
+    fluid_density = 1000.0      # [kg/m^3] optional, default 1000
+    gravity = 9.81              # [m/s^2] optional, default 9.81
+    joint_limit_deg = 65        # [deg] optional, default 65; every joint moves in [-lim, +lim]
+    joint_effort = 1000.0       # [N m] optional, default 1000 (URDF <limit effort>)
+    joint_velocity = 10.0       # [rad/s] optional, default 10 (URDF <limit velocity>)
+    max_thrust = 50.0           # [N] optional, default 50; default for thrusters without one
+
+    [[module]]                  # at least two, tail first
+    name = "link1"              # required, unique
+    length = 0.62               # [m] required
+    mass = 14.3                 # [kg] exactly one of mass or density [kg/m^3]
+                                #      (density: mass = density * pi r^2 L)
+    radius = 0.085              # [m] optional, overrides the top-level radius
+    cg_offset = [0, 0, 0]       # [m] optional, centre of gravity minus module centre (L/2, 0, 0)
+    cb_offset = [0, 0, 0]       # [m] optional, centre of buoyancy minus the module centre
+    volume = 0.0143             # [m^3] optional, default mass / fluid_density (neutrally buoyant on
+                                #       its own), NOT the cylinder volume
+    joint = "z"                 # axis ("x", "y" or "z") of the revolute joint at the FRONT of the
+                                # module; required on every module but the head, forbidden there
+
+    [[module.thruster]]         # optional, any number per module
+    name = "link3_z"            # required, unique in the vehicle
+    x = 0.237                   # [m] required, in [0, L] along the module from its rear end
+    y = 0.0                     # [m] optional, default 0
+    z = 0.0                     # [m] optional, default 0
+    direction = "z"             # "x", "y", "z", "-x", "-y", "-z" or a nonzero [dx, dy, dz]
+    max_thrust = 50.0           # [N] optional, default: the top-level max_thrust
+
+Positions are in the module's link frame: origin on the module's rear joint axis (the tail
+module's rear end), x forward along the module, z up. The centre of gravity and of buoyancy must
+lie inside the module's cylinder.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import sys
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from aiauv_pin.errors import AiauvError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised on Python 3.10 only
+    import tomli as tomllib
+
+
+class SpecError(AiauvError, ValueError):
+    """Malformed vehicle spec; the message is one line naming the field (and module)."""
+
+
+JOINT_AXES: dict[str, tuple[float, float, float]] = {
+    "x": (1.0, 0.0, 0.0),
+    "y": (0.0, 1.0, 0.0),
+    "z": (0.0, 0.0, 1.0),
+}
+"""Unit joint axis in the parent link frame for each ``joint`` letter."""
+
+_DIRECTIONS: dict[str, tuple[float, float, float]] = {
+    **JOINT_AXES,
+    "-x": (-1.0, 0.0, 0.0),
+    "-y": (0.0, -1.0, 0.0),
+    "-z": (0.0, 0.0, -1.0),
+}
+
+END_EFFECTOR_LINK = "end_effector"
+END_EFFECTOR_JOINT = "end_effector_joint"
+_RESERVED_NAMES = frozenset({END_EFFECTOR_LINK, END_EFFECTOR_JOINT, "universe", "root_joint"})
+_NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
+
+DEFAULT_FLUID_DENSITY = 1000.0  # [kg/m^3]
+DEFAULT_GRAVITY = 9.81  # [m/s^2]
+DEFAULT_JOINT_LIMIT_DEG = 65.0  # [deg]
+DEFAULT_JOINT_EFFORT = 1000.0  # [N m]
+DEFAULT_JOINT_VELOCITY = 10.0  # [rad/s]
+DEFAULT_MAX_THRUST = 50.0  # [N]
+
+_TOP_KEYS = frozenset(
+    {
+        "name",
+        "radius",
+        "fluid_density",
+        "gravity",
+        "joint_limit_deg",
+        "joint_effort",
+        "joint_velocity",
+        "max_thrust",
+        "module",
+    }
+)
+_MODULE_KEYS = frozenset(
+    {
+        "name",
+        "length",
+        "mass",
+        "density",
+        "radius",
+        "cg_offset",
+        "cb_offset",
+        "volume",
+        "joint",
+        "thruster",
+    }
+)
+_THRUSTER_KEYS = frozenset({"name", "x", "y", "z", "direction", "max_thrust"})
+
+
+def joint_name(index: int) -> str:
+    """Name of the joint at the front of module ``index`` (0-based): ``joint1``, ``joint2``, ..."""
+    return f"joint{index + 1}"
+
+
+def _positive(value: float, what: str) -> float:
+    value = float(value)
+    if not (math.isfinite(value) and value > 0.0):
+        raise SpecError(f"{what} must be positive and finite, got {value!r}")
+    return value
+
+
+def _finite_vector(value: Any, what: str) -> tuple[float, float, float]:
+    try:
+        vector = tuple(float(v) for v in value)
+    except (TypeError, ValueError):
+        raise SpecError(f"{what} must be a list of 3 numbers, got {value!r}") from None
+    if len(vector) != 3:
+        raise SpecError(f"{what} must have 3 components, got {len(vector)}")
+    if not all(math.isfinite(v) for v in vector):
+        raise SpecError(f"{what} must be finite, got {list(vector)!r}")
+    return vector  # type: ignore[return-value]
+
+
+def _check_name(name: Any, what: str) -> str:
+    if not isinstance(name, str) or not _NAME_PATTERN.fullmatch(name):
+        raise SpecError(
+            f"{what} must be a name of letters, digits, '_', '-', '.' (not starting with a digit), "
+            f"got {name!r}"
+        )
+    return name
+
+
+@dataclass(frozen=True)
+class ThrusterSpec:
+    """A fixed thruster on a module.
+
+    Attributes:
+        name: Thruster name, unique in the vehicle.
+        position: Point of action in the module's link frame [m].
+        direction: Unit direction of positive thrust in the module's link frame.
+        max_thrust: Thrust magnitude limit [N].
+    """
+
+    name: str
+    position: tuple[float, float, float]
+    direction: tuple[float, float, float]
+    max_thrust: float
+
+    def __post_init__(self) -> None:
+        what = f"thruster '{self.name}'"
+        _check_name(self.name, "thruster name")
+        object.__setattr__(self, "position", _finite_vector(self.position, f"{what}: position"))
+        direction = _finite_vector(self.direction, f"{what}: direction")
+        norm = math.sqrt(sum(d * d for d in direction))
+        if norm == 0.0:
+            raise SpecError(f"{what}: direction must be nonzero")
+        object.__setattr__(self, "direction", tuple(d / norm for d in direction))
+        object.__setattr__(self, "max_thrust", _positive(self.max_thrust, f"{what}: max_thrust"))
+
+
+@dataclass(frozen=True)
+class ModuleSpec:
+    """One cylindrical module (one URDF link) of the vehicle.
+
+    Attributes:
+        name: Link name.
+        length: Module length ``L`` [m]; the module spans x in [0, L] of its link frame.
+        mass: Module mass ``m`` [kg].
+        radius: Cylinder radius ``r`` [m].
+        cg_offset: Centre of gravity minus the module centre ``(L/2, 0, 0)`` [m].
+        volume: Displaced volume [m^3].
+        cb_offset: Centre of buoyancy minus the module centre ``(L/2, 0, 0)`` [m].
+        joint: Axis letter of the revolute joint at the module's front, ``None`` on the head.
+        thrusters: Thrusters mounted on the module, in file order.
+    """
+
+    name: str
+    length: float
+    mass: float
+    radius: float
+    cg_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    volume: float | None = None
+    cb_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    joint: str | None = None
+    thrusters: tuple[ThrusterSpec, ...] = ()
+
+    def __post_init__(self) -> None:
+        _check_name(self.name, "module name")
+        what = f"module '{self.name}'"
+        for field_name in ("length", "mass", "radius"):
+            value = _positive(getattr(self, field_name), f"{what}: {field_name}")
+            object.__setattr__(self, field_name, value)
+        if self.volume is not None:
+            object.__setattr__(self, "volume", _positive(self.volume, f"{what}: volume"))
+        for field_name in ("cg_offset", "cb_offset"):
+            offset = _finite_vector(getattr(self, field_name), f"{what}: {field_name}")
+            object.__setattr__(self, field_name, offset)
+            self._check_inside(offset, f"{what}: {field_name}")
+        if self.joint is not None and self.joint not in JOINT_AXES:
+            raise SpecError(f"{what}: joint must be one of 'x', 'y', 'z', got {self.joint!r}")
+        object.__setattr__(self, "thrusters", tuple(self.thrusters))
+        for thruster in self.thrusters:
+            x = thruster.position[0]
+            if not 0.0 <= x <= self.length:
+                raise SpecError(
+                    f"{what}: thruster '{thruster.name}' x = {x!r} m lies outside the module "
+                    f"length [0, {self.length!r}]"
+                )
+
+    def _check_inside(self, offset: tuple[float, float, float], what: str) -> None:
+        half = 0.5 * self.length
+        radial = math.hypot(offset[1], offset[2])
+        if abs(offset[0]) > half or radial > self.radius:
+            raise SpecError(
+                f"{what} = {list(offset)!r} puts the point outside the module cylinder "
+                f"(|x| <= {half!r}, sqrt(y^2 + z^2) <= {self.radius!r})"
+            )
+
+    @property
+    def center_of_gravity(self) -> tuple[float, float, float]:
+        """Centre of gravity in the link frame [m]: ``(L/2, 0, 0) + cg_offset``."""
+        return (0.5 * self.length + self.cg_offset[0], self.cg_offset[1], self.cg_offset[2])
+
+    @property
+    def center_of_buoyancy(self) -> tuple[float, float, float]:
+        """Centre of buoyancy in the link frame [m]: ``(L/2, 0, 0) + cb_offset``."""
+        return (0.5 * self.length + self.cb_offset[0], self.cb_offset[1], self.cb_offset[2])
+
+    @property
+    def inertia_about_cg(self) -> tuple[float, float, float]:
+        """Principal moments ``(Ixx, Iyy, Izz)`` about the CG, link axes [kg m^2].
+
+        Solid homogeneous circular cylinder along x (standard closed form, e.g. Meriam & Kraige,
+        Engineering Mechanics: Dynamics, Table D/4): ``Ixx = m r^2 / 2``,
+        ``Iyy = Izz = m (3 r^2 + L^2) / 12``. The same moments are used when the CG is offset
+        (a modelling choice: the offset is taken as a point-mass shift of a ballast that does not
+        change the moments about the CG).
+        """
+        m, r, length = self.mass, self.radius, self.length
+        axial = 0.5 * m * r * r
+        transverse = m * (3.0 * r * r + length * length) / 12.0
+        return (axial, transverse, transverse)
+
+
+@dataclass(frozen=True)
+class VehicleSpec:
+    """An articulated AUV: modules tail to head joined by revolute joints.
+
+    Attributes:
+        name: Robot name.
+        modules: Modules, tail first (at least two).
+        fluid_density: Water density ``rho`` [kg/m^3].
+        gravity: Gravitational acceleration magnitude ``g`` [m/s^2].
+        joint_limit_deg: Symmetric joint limit [deg]; each joint moves in ``[-lim, +lim]``.
+        joint_effort: URDF joint effort limit [N m].
+        joint_velocity: URDF joint velocity limit [rad/s].
+    """
+
+    name: str
+    modules: tuple[ModuleSpec, ...]
+    fluid_density: float = DEFAULT_FLUID_DENSITY
+    gravity: float = DEFAULT_GRAVITY
+    joint_limit_deg: float = DEFAULT_JOINT_LIMIT_DEG
+    joint_effort: float = DEFAULT_JOINT_EFFORT
+    joint_velocity: float = DEFAULT_JOINT_VELOCITY
+
+    def __post_init__(self) -> None:
+        _check_name(self.name, "name")
+        for field_name in ("fluid_density", "joint_effort", "joint_velocity"):
+            object.__setattr__(self, field_name, _positive(getattr(self, field_name), field_name))
+        gravity = float(self.gravity)
+        if not (math.isfinite(gravity) and gravity >= 0.0):
+            raise SpecError(f"gravity must be >= 0 and finite, got {gravity!r}")
+        object.__setattr__(self, "gravity", gravity)
+        limit = float(self.joint_limit_deg)
+        if not (math.isfinite(limit) and 0.0 < limit <= 180.0):
+            raise SpecError(f"joint_limit_deg must be in (0, 180], got {limit!r}")
+        object.__setattr__(self, "joint_limit_deg", limit)
+        modules = tuple(self.modules)
+        object.__setattr__(self, "modules", modules)
+        if len(modules) < 2:
+            raise SpecError(f"a vehicle needs at least 2 modules, got {len(modules)}")
+        for index, module in enumerate(modules):
+            is_head = index == len(modules) - 1
+            if is_head and module.joint is not None:
+                raise SpecError(f"module '{module.name}': the head module must not have a joint")
+            if not is_head and module.joint is None:
+                raise SpecError(
+                    f"module '{module.name}': missing field 'joint' (axis 'x', 'y' or 'z')"
+                )
+        names = [module.name for module in modules]
+        joints = {joint_name(i) for i in range(len(modules) - 1)}
+        seen: set[str] = set()
+        for name in names:
+            if name in seen:
+                raise SpecError(f"module name '{name}' used twice")
+            if name in _RESERVED_NAMES or name in joints:
+                raise SpecError(f"module name '{name}' is reserved for a generated joint or frame")
+            seen.add(name)
+        thruster_names: set[str] = set()
+        for module in modules:
+            for thruster in module.thrusters:
+                if thruster.name in thruster_names:
+                    raise SpecError(f"thruster name '{thruster.name}' used twice")
+                thruster_names.add(thruster.name)
+
+    @property
+    def total_mass(self) -> float:
+        """Sum of the module masses [kg]."""
+        return math.fsum(module.mass for module in self.modules)
+
+    @property
+    def total_length(self) -> float:
+        """Sum of the module lengths [m] (tail end to end effector in the straight pose)."""
+        return math.fsum(module.length for module in self.modules)
+
+    @property
+    def joint_limit(self) -> float:
+        """Symmetric joint limit [rad]."""
+        return math.radians(self.joint_limit_deg)
+
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        """Link names, tail to head."""
+        return tuple(module.name for module in self.modules)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Revolute joint names, tail to head (``joint1`` .. ``joint{n-1}``)."""
+        return tuple(joint_name(i) for i in range(len(self.modules) - 1))
+
+    def module_volume(self, module: ModuleSpec) -> float:
+        """Displaced volume of ``module`` [m^3]: its ``volume``, else ``mass / fluid_density``."""
+        if module.volume is not None:
+            return module.volume
+        return module.mass / self.fluid_density  # neutrally buoyant on its own
+
+    @property
+    def thrusters(self) -> tuple[tuple[str, ThrusterSpec], ...]:
+        """``(link name, thruster)`` pairs in vehicle order (tail to head, file order)."""
+        return tuple((module.name, t) for module in self.modules for t in module.thrusters)
+
+
+# --------------------------------------------------------------------------------------------------
+# Parsing of the TOML table
+
+
+def _number(table: Mapping[str, Any], key: str, where: str, default: Any = ...) -> Any:
+    if key not in table:
+        if default is ...:
+            raise SpecError(f"{where}missing field '{key}'")
+        return default
+    value = table[key]
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise SpecError(f"{where}field '{key}' must be a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise SpecError(f"{where}field '{key}' must be finite, got {value!r}")
+    return value
+
+
+def _vector(table: Mapping[str, Any], key: str, where: str) -> tuple[float, float, float]:
+    value = table.get(key, [0.0, 0.0, 0.0])
+    if (
+        not isinstance(value, list)
+        or len(value) != 3
+        or any(isinstance(v, bool) or not isinstance(v, int | float) for v in value)
+    ):
+        raise SpecError(f"{where}field '{key}' must be a list of 3 numbers, got {value!r}")
+    return _finite_vector(value, f"{where}field '{key}'")
+
+
+def _check_keys(table: Any, allowed: frozenset[str], where: str, what: str) -> None:
+    if not isinstance(table, Mapping):
+        raise SpecError(f"{where}{what} must be a table, got {table!r}")
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise SpecError(
+            f"{where}unknown field '{unknown[0]}' (allowed: {', '.join(sorted(allowed))})"
+        )
+
+
+def _label(table: Any, index: int) -> str:
+    """``'name'`` of a module or thruster table with a valid name, else ``#index`` (1-based)."""
+    name = table.get("name") if isinstance(table, Mapping) else None
+    if isinstance(name, str) and _NAME_PATTERN.fullmatch(name):
+        return f"'{name}'"
+    return f"#{index + 1}"
+
+
+def _thruster_from_dict(
+    table: Any, module_where: str, index: int, default_max_thrust: float
+) -> ThrusterSpec:
+    where = f"{module_where}thruster {_label(table, index)}: "
+    _check_keys(table, _THRUSTER_KEYS, where, "thruster")
+    if "name" not in table:
+        raise SpecError(f"{where}missing field 'name'")
+    name = _check_name(table["name"], f"{where}field 'name'")
+    position = (
+        _number(table, "x", where),
+        _number(table, "y", where, 0.0),
+        _number(table, "z", where, 0.0),
+    )
+    if "direction" not in table:
+        raise SpecError(f"{where}missing field 'direction'")
+    raw = table["direction"]
+    if isinstance(raw, str):
+        if raw not in _DIRECTIONS:
+            raise SpecError(
+                f"{where}field 'direction' must be one of {', '.join(_DIRECTIONS)} "
+                f"or [dx, dy, dz], got {raw!r}"
+            )
+        direction = _DIRECTIONS[raw]
+    else:
+        direction = _vector(table, "direction", where)
+    max_thrust = _number(table, "max_thrust", where, default_max_thrust)
+    if max_thrust <= 0.0:
+        raise SpecError(f"{where}field 'max_thrust' must be positive, got {max_thrust!r}")
+    try:
+        return ThrusterSpec(name, position, direction, max_thrust)
+    except SpecError as error:
+        raise SpecError(f"{where}{_strip_prefix(error, name)}") from None
+
+
+def _strip_prefix(error: SpecError, name: str) -> str:
+    message = str(error)
+    prefix = f"thruster '{name}': "
+    return message[len(prefix) :] if message.startswith(prefix) else message
+
+
+def _module_from_dict(
+    table: Any, index: int, default_radius: float | None, default_max_thrust: float
+) -> ModuleSpec:
+    where = f"module {_label(table, index)}: "
+    _check_keys(table, _MODULE_KEYS, where, "module")
+    if "name" not in table:
+        raise SpecError(f"{where}missing field 'name'")
+    name = _check_name(table["name"], f"{where}field 'name'")
+    length = _number(table, "length", where)
+    if length <= 0.0:
+        raise SpecError(f"{where}field 'length' must be positive, got {length!r}")
+    radius = _number(table, "radius", where, default_radius)
+    if radius is None:
+        raise SpecError(f"{where}missing field 'radius' (and no top-level radius)")
+    if radius <= 0.0:
+        raise SpecError(f"{where}field 'radius' must be positive, got {radius!r}")
+    has_mass, has_density = "mass" in table, "density" in table
+    if has_mass == has_density:
+        raise SpecError(f"{where}give exactly one of 'mass' [kg] or 'density' [kg/m^3]")
+    if has_mass:
+        mass = _number(table, "mass", where)
+        if mass <= 0.0:
+            raise SpecError(f"{where}field 'mass' must be positive, got {mass!r}")
+    else:
+        density = _number(table, "density", where)
+        if density <= 0.0:
+            raise SpecError(f"{where}field 'density' must be positive, got {density!r}")
+        mass = density * math.pi * radius * radius * length  # mass of a solid cylinder
+    volume = _number(table, "volume", where, None)
+    if volume is not None and volume <= 0.0:
+        raise SpecError(f"{where}field 'volume' must be positive, got {volume!r}")
+    joint = table.get("joint")
+    if joint is not None and joint not in JOINT_AXES:
+        raise SpecError(f"{where}field 'joint' must be one of 'x', 'y', 'z', got {joint!r}")
+    raw_thrusters = table.get("thruster", [])
+    if not isinstance(raw_thrusters, list):
+        raise SpecError(f"{where}field 'thruster' must be an array of tables ([[module.thruster]])")
+    thrusters = tuple(
+        _thruster_from_dict(t, where, k, default_max_thrust) for k, t in enumerate(raw_thrusters)
+    )
+    return ModuleSpec(
+        name=name,
+        length=length,
+        mass=mass,
+        radius=radius,
+        cg_offset=_vector(table, "cg_offset", where),
+        volume=volume,
+        cb_offset=_vector(table, "cb_offset", where),
+        joint=joint,
+        thrusters=thrusters,
+    )
+
+
+def spec_from_dict(table: Mapping[str, Any]) -> VehicleSpec:
+    """Validate a parsed spec table (the TOML document as a dict) into a :class:`VehicleSpec`.
+
+    Args:
+        table: The spec, in the format described in this module's docstring.
+
+    Returns:
+        The vehicle spec.
+
+    Raises:
+        SpecError: On any unknown key, missing field, wrong type, non-positive or non-finite
+            quantity, bad axis or direction, duplicate name, fewer than two modules, a thruster
+            outside its module, or a CG/CB outside its module; the message is one line.
+    """
+    _check_keys(table, _TOP_KEYS, "", "spec")
+    if "name" not in table:
+        raise SpecError("missing field 'name'")
+    name = _check_name(table["name"], "field 'name'")
+    default_radius = _number(table, "radius", "", None)
+    if default_radius is not None and default_radius <= 0.0:
+        raise SpecError(f"field 'radius' must be positive, got {default_radius!r}")
+    default_max_thrust = _number(table, "max_thrust", "", DEFAULT_MAX_THRUST)
+    if default_max_thrust <= 0.0:
+        raise SpecError(f"field 'max_thrust' must be positive, got {default_max_thrust!r}")
+    raw_modules = table.get("module")
+    if raw_modules is None:
+        raise SpecError("missing field 'module' (give at least 2 [[module]] tables)")
+    if not isinstance(raw_modules, list):
+        raise SpecError("field 'module' must be an array of tables ([[module]])")
+    modules = tuple(
+        _module_from_dict(m, i, default_radius, default_max_thrust)
+        for i, m in enumerate(raw_modules)
+    )
+    return VehicleSpec(
+        name=name,
+        modules=modules,
+        fluid_density=_number(table, "fluid_density", "", DEFAULT_FLUID_DENSITY),
+        gravity=_number(table, "gravity", "", DEFAULT_GRAVITY),
+        joint_limit_deg=_number(table, "joint_limit_deg", "", DEFAULT_JOINT_LIMIT_DEG),
+        joint_effort=_number(table, "joint_effort", "", DEFAULT_JOINT_EFFORT),
+        joint_velocity=_number(table, "joint_velocity", "", DEFAULT_JOINT_VELOCITY),
+    )
+
+
+def spec_from_toml(text: str) -> VehicleSpec:
+    """Parse and validate a spec given as TOML text.
+
+    Raises:
+        SpecError: On invalid TOML or an invalid spec (one-line message).
+    """
+    try:
+        table = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise SpecError(f"invalid TOML: {' '.join(str(error).split())}") from None
+    return spec_from_dict(table)
+
+
+def load_spec(path: str | Path) -> VehicleSpec:
+    """Read and validate a vehicle spec TOML file.
+
+    Args:
+        path: Spec file.
+
+    Returns:
+        The vehicle spec.
+
+    Raises:
+        SpecError: If the file cannot be read, is not valid TOML or is not a valid spec; the
+            message is one line and starts with the file name.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        reason = getattr(error, "strerror", None) or str(error)
+        raise SpecError(f"{path}: cannot read vehicle spec: {reason}") from None
+    try:
+        return spec_from_toml(text)
+    except SpecError as error:
+        raise SpecError(f"{path}: {error}") from None

@@ -1,0 +1,64 @@
+"""Path-following control laws for articulated intervention AUVs (plain numpy).
+
+Modules, after Wrzos-Kaminska et al. (2019):
+
+* :mod:`control.reduced_attitude` - reduced-attitude tracking with two torques (Section 2),
+  with the paper's feedforward (``"paper"``) or the corrected one (``"exact"``, default);
+* :mod:`control.guidance` - 3-D vector LOS guidance and exact derivatives of ``x_ref`` (eq. 21);
+* :mod:`control.joint_references` - base angles (eq. 23) and joint references (eq. 22);
+* :mod:`control.joint_control` - joint PD with hydrostatic compensation (eq. 24);
+* :mod:`control.surge` - surge PI on the longitudinal thrusters with anti-windup (eq. 25);
+* :mod:`control.path_following` - gains, measurement/command records and the composed controller.
+
+Nothing here imports Pinocchio or the simulator.
+"""
+
+from control.guidance import cross_track_gains, los_direction, los_reference
+from control.joint_control import joint_torques
+from control.joint_references import base_angles, check_joint_axes, joint_references
+from control.path_following import (
+    CASES,
+    PathFollowingCommand,
+    PathFollowingController,
+    PathFollowingGains,
+    PathFollowingMeasurement,
+)
+from control.reduced_attitude import (
+    FEEDFORWARD_OPTIONS,
+    error_angle,
+    error_axis_angle,
+    lyapunov_function,
+    minimal_rotation,
+    minimal_rotation_rate_correction,
+    reduced_attitude_errors,
+    reduced_attitude_torque,
+    reference_angular_acceleration,
+    reference_angular_velocity,
+)
+from control.surge import SurgePIController
+
+__all__ = [
+    "CASES",
+    "FEEDFORWARD_OPTIONS",
+    "PathFollowingCommand",
+    "PathFollowingController",
+    "PathFollowingGains",
+    "PathFollowingMeasurement",
+    "SurgePIController",
+    "base_angles",
+    "check_joint_axes",
+    "cross_track_gains",
+    "error_angle",
+    "error_axis_angle",
+    "joint_references",
+    "joint_torques",
+    "los_direction",
+    "los_reference",
+    "lyapunov_function",
+    "minimal_rotation",
+    "minimal_rotation_rate_correction",
+    "reduced_attitude_errors",
+    "reduced_attitude_torque",
+    "reference_angular_acceleration",
+    "reference_angular_velocity",
+]

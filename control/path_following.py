@@ -1,0 +1,354 @@
+"""Straight-path following for articulated intervention AUVs (paper, Section 3).
+
+:class:`PathFollowingController` composes
+
+1. LOS guidance (eq. 21, :mod:`control.guidance`): reference pointing direction ``x_ref`` from the
+   end-effector position and its derivatives;
+2. base angles (eq. 23, :mod:`control.joint_references`): the reduced-attitude law applied to the
+   end-effector frame;
+3. joint references (eq. 22) and joint PD with hydrostatic compensation (eq. 24,
+   :mod:`control.joint_control`);
+4. surge PI on the longitudinal thrusters (eq. 25, :mod:`control.surge`); all other thrusters stay
+   0.
+
+It knows nothing about how the vehicle is simulated: every measured quantity comes in a
+:class:`PathFollowingMeasurement`.
+
+Saturation ``q_max`` of the base angles (eq. 22) is not given in the paper. The default, 30 deg,
+keeps the first (largest) joint reference at less than half of the +-65 deg joint limits of the
+vehicle lineage, leaving margin for PD overshoot and for the hydrostatic and hydrodynamic loads on
+the joints; with ``alpha = 0.7`` the references of one axis then sum to at most ``1.87 q_max``
+(about 56 deg of total body bend per plane for four joints), enough for a turn without letting the
+body coil.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from control.guidance import cross_track_gains, los_reference
+from control.joint_control import joint_torques
+from control.joint_references import (
+    base_angles,
+    check_joint_axes,
+    joint_reference_pattern,
+)
+from control.reduced_attitude import check_feedforward, reduced_attitude_errors
+from control.surge import SurgePIController
+
+CASES = ("uniform", "stabilised")
+"""Vehicle cases of the paper's Section 4.2 (they differ in the attitude gain ``k_d``)."""
+
+_CASE_K_D = {"uniform": 19.0, "stabilised": 12.0}
+
+
+@dataclass(frozen=True)
+class PathFollowingGains:
+    """Parameters of the path-following controller; defaults are the paper's (Sec. 4.2).
+
+    Attributes:
+        u_d: Desired surge speed [m/s] (eq. 21, 25).
+        k_e: Cross-track gain [1/s] (eq. 21): a scalar or ``(k_y, k_z)``; ``None`` (default)
+            means ``u_d / 10`` as in the paper.
+        alpha: Shape parameter of the joint references [-] (eq. 22).
+        k_p: Pointing-error gain of the base angles [-] (eq. 23).
+        k_d: Angular-velocity-error gain of the base angles [s] (eq. 23); 19 (uniform density) or 12
+            (passively roll-stabilised) in the paper.
+        k_qp: Joint proportional gain [N m/rad] (eq. 24).
+        k_qd: Joint derivative gain [N m s/rad] (eq. 24).
+        k_1p: Surge proportional gain [N s/m] (eq. 25).
+        k_1i: Surge integral gain [N/m] (eq. 25).
+        q_max: Saturation of the base angles [rad] (eq. 22; project choice, see the module
+            docstring).
+        feedforward: ``"exact"`` (default) or ``"paper"`` feedforward in eq. (23).
+    """
+
+    u_d: float = 0.5
+    k_e: float | tuple[float, float] | None = None
+    alpha: float = 0.7
+    k_p: float = 2.0
+    k_d: float = 19.0
+    k_qp: float = 30.0
+    k_qd: float = 50.0
+    k_1p: float = 100.0
+    k_1i: float = 5.0
+    q_max: float = float(np.deg2rad(30.0))
+    feedforward: str = "exact"
+
+    def __post_init__(self) -> None:
+        positive = ("u_d", "alpha", "k_p", "k_d", "k_qp", "q_max")
+        non_negative = ("k_qd", "k_1p", "k_1i")
+        for name in positive + non_negative:
+            value = getattr(self, name)
+            try:
+                number = float(value)
+            except (TypeError, ValueError):
+                raise ValueError(f"gain {name} must be a number, got {value!r}") from None
+            if not np.isfinite(number) or number < 0.0 or (name in positive and number == 0.0):
+                bound = "> 0" if name in positive else ">= 0"
+                raise ValueError(f"gain {name} must be finite and {bound}, got {value}")
+            object.__setattr__(self, name, number)
+        if self.q_max > np.pi:
+            raise ValueError(f"gain q_max must be at most pi rad, got {self.q_max}")
+        if self.k_e is None:
+            object.__setattr__(self, "k_e", self.u_d / 10.0)  # paper, Sec. 4.2: k_e = u_d / 10
+        gains = cross_track_gains(self.k_e)[1:]
+        if np.any(gains == 0.0):
+            raise ValueError(
+                f"gain k_e must be > 0 (no convergence to the path otherwise), got {self.k_e}"
+            )
+        object.__setattr__(
+            self,
+            "k_e",
+            float(gains[0]) if gains[0] == gains[1] else (float(gains[0]), float(gains[1])),
+        )
+        check_feedforward(self.feedforward)
+
+    @classmethod
+    def for_case(cls, case: str, **overrides) -> PathFollowingGains:
+        """The paper's gains for ``case`` in :data:`CASES` (``k_d`` 19 or 12), with overrides."""
+        if case not in _CASE_K_D:
+            raise ValueError(f"unknown vehicle case {case!r}, expected one of {CASES}")
+        return cls(**{"k_d": _CASE_K_D[case], **overrides})
+
+    @classmethod
+    def uniform(cls, **overrides) -> PathFollowingGains:
+        """The paper's gains for the uniform-density vehicle (``k_d = 19``)."""
+        return cls.for_case("uniform", **overrides)
+
+    @classmethod
+    def stabilised(cls, **overrides) -> PathFollowingGains:
+        """The paper's gains for the passively roll-stabilised vehicle (``k_d = 12``)."""
+        return cls.for_case("stabilised", **overrides)
+
+    def with_changes(self, **changes) -> PathFollowingGains:
+        """A copy with some fields replaced (validated again)."""
+        return replace(self, **changes)
+
+
+def _frozen(value, shape: tuple[int, ...] | None, name: str) -> np.ndarray:
+    array = np.array(value, dtype=float)
+    if shape is None:
+        if array.ndim != 1:
+            raise ValueError(f"{name}: expected a 1-D array, got shape {array.shape}")
+    elif array.shape != shape:
+        raise ValueError(f"{name}: expected shape {shape}, got {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name}: contains NaN or infinite values")
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True)
+class PathFollowingMeasurement:
+    """What the controller needs to know about the vehicle at one instant.
+
+    Attributes:
+        position_in_world: End-effector position ``p_e`` (3,) [m].
+        velocity_in_world: End-effector linear velocity (3,) [m/s].
+        acceleration_in_world: End-effector linear acceleration (3,) [m/s^2] (latest available
+            value).
+        rotation_to_world: End-effector orientation ``R_e`` (end-effector frame to world, 3x3).
+        angular_velocity_in_ee: End-effector angular velocity in its own frame (3,) [rad/s].
+        joint_positions: ``q`` (n,) [rad], model order.
+        joint_velocities: ``q_dot`` (n,) [rad/s].
+        joint_hydrostatic_forces: ``g_q`` (n,) [N m], left-hand-side convention of eq. (19)
+            (see :mod:`control.joint_control`).
+        surge_velocity: ``u`` [m/s], x-component of the end-effector velocity in its own frame.
+    """
+
+    position_in_world: np.ndarray
+    velocity_in_world: np.ndarray
+    acceleration_in_world: np.ndarray
+    rotation_to_world: np.ndarray
+    angular_velocity_in_ee: np.ndarray
+    joint_positions: np.ndarray
+    joint_velocities: np.ndarray
+    joint_hydrostatic_forces: np.ndarray
+    surge_velocity: float
+
+    def __post_init__(self) -> None:
+        for name, shape in (
+            ("position_in_world", (3,)),
+            ("velocity_in_world", (3,)),
+            ("acceleration_in_world", (3,)),
+            ("rotation_to_world", (3, 3)),
+            ("angular_velocity_in_ee", (3,)),
+            ("joint_positions", None),
+        ):
+            object.__setattr__(self, name, _frozen(getattr(self, name), shape, name))
+        n = self.joint_positions.shape
+        for name in ("joint_velocities", "joint_hydrostatic_forces"):
+            object.__setattr__(self, name, _frozen(getattr(self, name), n, name))
+        surge = float(self.surge_velocity)
+        if not np.isfinite(surge):
+            raise ValueError(f"surge_velocity must be finite, got {self.surge_velocity}")
+        object.__setattr__(self, "surge_velocity", surge)
+
+
+@dataclass(frozen=True)
+class PathFollowingCommand:
+    """Controller output and diagnostics at one instant.
+
+    Attributes:
+        joint_torques: ``tau_q`` (n,) [N m] (eq. 24).
+        thrusts: ``tau_thr`` (n_thrusters,) [N] (eq. 25); nonzero only for the surge thrusters.
+        phi_tilde: Pointing error of the end-effector [rad] (eq. 4).
+        omega_tilde: Angular velocity error ``omega_tilde^e`` (2,) [rad/s] (eq. 8).
+        base_angles: ``q0 = (q_y0, q_z0)`` [rad] before saturation (eq. 23).
+        joint_references: ``q*`` (n,) [rad] (eq. 22).
+        x_ref: Reference pointing direction, world frame (3,) (eq. 21).
+        x_ref_dot: Its time derivative (3,) [1/s].
+        pointing_direction: End-effector x-axis in the world frame (3,).
+        surge_integral: ``integral (u - u_d) dt`` of the surge PI [m].
+    """
+
+    joint_torques: np.ndarray
+    thrusts: np.ndarray
+    phi_tilde: float
+    omega_tilde: np.ndarray
+    base_angles: np.ndarray
+    joint_references: np.ndarray
+    x_ref: np.ndarray
+    x_ref_dot: np.ndarray
+    pointing_direction: np.ndarray
+    surge_integral: float
+
+
+class PathFollowingController:
+    """Path following along the world x-axis by curving the body (paper, Section 3).
+
+    Args:
+        joint_axes: Axis label (``"y"``/``"z"``) of each actuated joint, model order, tail to head;
+            equal numbers of each.
+        surge_thrusters: Indices (into the thrust vector) of the longitudinal thrusters.
+        n_thrusters: Length of the thrust vector.
+        max_thrust: Thrust limit [N], one value or one per thruster. All surge thrusters receive the
+            same thrust, limited by the smallest of their limits, so that a symmetric pair produces
+            no turning moment.
+        gains: Controller parameters.
+    """
+
+    def __init__(
+        self,
+        joint_axes: Sequence[str],
+        surge_thrusters: Sequence[int],
+        n_thrusters: int,
+        max_thrust: float | Sequence[float],
+        gains: PathFollowingGains | None = None,
+    ) -> None:
+        self.gains = PathFollowingGains() if gains is None else gains
+        if not isinstance(self.gains, PathFollowingGains):
+            raise ValueError(f"gains: expected PathFollowingGains, got {type(self.gains).__name__}")
+        self.joint_axes = check_joint_axes(joint_axes)
+        self._axis_index, self._reference_scale = joint_reference_pattern(
+            self.joint_axes, self.gains.alpha
+        )
+        if isinstance(n_thrusters, bool) or int(n_thrusters) != n_thrusters or n_thrusters < 1:
+            raise ValueError(f"n_thrusters must be a positive integer, got {n_thrusters}")
+        self.n_thrusters = int(n_thrusters)
+        self.surge_thrusters = self._check_surge_thrusters(surge_thrusters)
+        limits = np.asarray(max_thrust, dtype=float)
+        if limits.ndim == 0:
+            limits = np.full(self.n_thrusters, float(limits))
+        if limits.shape != (self.n_thrusters,):
+            raise ValueError(
+                f"max_thrust: expected one value or {self.n_thrusters}, got shape {limits.shape}"
+            )
+        if not np.all(np.isfinite(limits)) or np.any(limits <= 0.0):
+            raise ValueError(
+                f"max_thrust: limits must be positive and finite, got {limits.tolist()}"
+            )
+        self.max_thrust = limits.copy()
+        self._surge = SurgePIController(
+            self.gains.k_1p,
+            self.gains.k_1i,
+            self.gains.u_d,
+            float(np.min(self.max_thrust[list(self.surge_thrusters)])),
+        )
+
+    def _check_surge_thrusters(self, surge_thrusters: Sequence[int]) -> tuple[int, ...]:
+        indices = tuple(surge_thrusters)
+        if (
+            not indices
+            or any(isinstance(i, bool) or int(i) != i for i in indices)
+            or len(set(indices)) != len(indices)
+        ):
+            raise ValueError(
+                f"surge_thrusters: expected distinct integer indices, got {list(indices)}"
+            )
+        if min(indices) < 0 or max(indices) >= self.n_thrusters:
+            raise ValueError(
+                f"surge_thrusters: indices must lie in [0, {self.n_thrusters}), got {list(indices)}"
+            )
+        return tuple(int(i) for i in indices)
+
+    @property
+    def n_joints(self) -> int:
+        """Number of actuated joints."""
+        return len(self.joint_axes)
+
+    def reset(self) -> None:
+        """Clear the surge integrator (and its sampling history)."""
+        self._surge.reset()
+
+    def command(self, t: float, measurement: PathFollowingMeasurement) -> PathFollowingCommand:
+        """Joint torques and thrusts at time ``t`` [s] (non-decreasing between calls).
+
+        Raises:
+            ValueError: measurement with the wrong number of joints, invalid rotation, time going
+                backwards.
+        """
+        if not isinstance(measurement, PathFollowingMeasurement):
+            raise ValueError(
+                f"measurement: expected PathFollowingMeasurement, got {type(measurement).__name__}"
+            )
+        if measurement.joint_positions.shape != (self.n_joints,):
+            raise ValueError(
+                f"measurement: {measurement.joint_positions.size} joints, "
+                f"controller has {self.n_joints}"
+            )
+        g = self.gains
+        x_ref, x_ref_dot, x_ref_ddot = los_reference(  # eq. (21)
+            measurement.position_in_world,
+            measurement.velocity_in_world,
+            measurement.acceleration_in_world,
+            g.u_d,
+            g.k_e,
+        )
+        R_e = measurement.rotation_to_world
+        omega_e = measurement.angular_velocity_in_ee
+        phi_tilde, omega_tilde = reduced_attitude_errors(
+            R_e, omega_e, x_ref, x_ref_dot
+        )  # eqs. (4), (8)
+        q0 = base_angles(  # eq. (23)
+            R_e, omega_e, x_ref, x_ref_dot, x_ref_ddot, g.k_p, g.k_d, feedforward=g.feedforward
+        )
+        q_ref = self._reference_scale * np.clip(q0, -g.q_max, g.q_max)[self._axis_index]  # eq. (22)
+        tau_q = joint_torques(  # eq. (24)
+            measurement.joint_positions,
+            measurement.joint_velocities,
+            q_ref,
+            measurement.joint_hydrostatic_forces,
+            g.k_qp,
+            g.k_qd,
+        )
+        thrusts = np.zeros(self.n_thrusters)
+        thrusts[list(self.surge_thrusters)] = self._surge.update(
+            t, measurement.surge_velocity
+        )  # eq. (25)
+        return PathFollowingCommand(
+            joint_torques=tau_q,
+            thrusts=thrusts,
+            phi_tilde=phi_tilde,
+            omega_tilde=omega_tilde,
+            base_angles=q0,
+            joint_references=q_ref,
+            x_ref=x_ref,
+            x_ref_dot=x_ref_dot,
+            pointing_direction=R_e[:, 0].copy(),
+            surge_integral=self._surge.integral,
+        )

@@ -1,0 +1,1 @@
+"""Per-link hydrodynamics for underwater multibody vehicles (plain numpy)."""

@@ -1,0 +1,31 @@
+"""Hydrodynamic damping wrenches on links, batched over links.
+
+Linear and quadratic damping follow Fossen 2021, eq. (6.60)-(6.62) in the form
+``tau_D = -D_L nu_r - D_Q (|nu_r| * nu_r)`` (element-wise absolute value and product), with ``nu_r`` the
+link's twist relative to the water (Fossen 2021, eq. (10.4)). Slender links add strip-theory crossflow
+drag (:mod:`hydro.crossflow`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def linear_quadratic_wrench(
+    linear: np.ndarray, quadratic: np.ndarray, relative_twist: np.ndarray
+) -> np.ndarray:
+    """Damping wrench ``-D_L nu_r - D_Q (|nu_r| * nu_r)`` acting on each link.
+
+    Args:
+        linear: ``D_L`` per link, shape (n, 6, 6).
+        quadratic: ``D_Q`` per link, shape (n, 6, 6).
+        relative_twist: ``nu_r`` per link in its frame, shape (n, 6) [m/s, rad/s].
+
+    Returns:
+        Wrenches on the links in their frames, shape (n, 6) [N, N m].
+    """
+    signed_square = np.abs(relative_twist) * relative_twist
+    return -(
+        np.einsum("nij,nj->ni", linear, relative_twist)
+        + np.einsum("nij,nj->ni", quadratic, signed_square)
+    )

@@ -1,0 +1,72 @@
+"""Kirchhoff's equations for a body in an ideal fluid, batched over bodies.
+
+A body with generalised inertia ``M`` (6x6, rigid or added mass, about its frame origin) moving with
+body-frame twist ``nu = (v, omega)`` has momentum ``h = M nu`` and obeys
+
+    M nu_dot + nu x* (M nu) = wrench,                               Fossen 2021, eq. (6.43)
+
+where ``x*`` is the spatial cross product on wrenches,
+``(v, omega) x* (f, n) = (omega x f, v x f + omega x n)``. For the added mass this is
+``C_A(nu) nu`` of Fossen 2021, eq. (6.46); written this way it needs no skew matrices and holds for
+any full symmetric 6x6 ``M``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def spatial_cross_wrench(twist: np.ndarray, wrench: np.ndarray) -> np.ndarray:
+    """Spatial cross product ``twist x* wrench`` (Featherstone's ``crf``), batched.
+
+    Args:
+        twist: Twists ``(v, omega)``, shape (..., 6) [m/s, rad/s].
+        wrench: Wrenches ``(f, n)``, shape (..., 6) [N, N m].
+
+    Returns:
+        ``(omega x f, v x f + omega x n)``, shape (..., 6).
+    """
+    v, omega = twist[..., :3], twist[..., 3:]
+    f, n = wrench[..., :3], wrench[..., 3:]
+    return np.concatenate((cross(omega, f), cross(v, f) + cross(omega, n)), axis=-1)
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product over the last axis (written out: ``np.cross`` costs ~10x more on small arrays)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
+
+
+def coriolis_wrench(inertia: np.ndarray, twist: np.ndarray) -> np.ndarray:
+    """Coriolis-centripetal wrench ``C(nu) nu = nu x* (M nu)`` (Fossen 2021, eq. (6.43), (6.46)).
+
+    Args:
+        inertia: Generalised inertia matrices, shape (..., 6, 6).
+        twist: Body-frame twists, shape (..., 6) [m/s, rad/s].
+
+    Returns:
+        The wrench that appears on the left-hand side of the equations of motion, shape (..., 6).
+    """
+    momentum = np.einsum("...ij,...j->...i", inertia, twist)
+    return spatial_cross_wrench(twist, momentum)
+
+
+def momentum_in_world(
+    inertia: np.ndarray, twist: np.ndarray, rotation: np.ndarray, translation: np.ndarray
+) -> np.ndarray:
+    """Sum of body momenta ``M nu``, expressed as one wrench-like vector about the world origin.
+
+    Args:
+        inertia: Generalised inertias in body frames, shape (n, 6, 6).
+        twist: Body-frame twists, shape (n, 6).
+        rotation: Body-to-world rotations, shape (n, 3, 3).
+        translation: Body origins in the world frame, shape (n, 3) [m].
+
+    Returns:
+        ``(linear momentum [kg m/s], angular momentum about the world origin [kg m^2/s])``, shape (6,).
+    """
+    local = np.einsum("nij,nj->ni", inertia, twist)
+    linear = np.einsum("nij,nj->ni", rotation, local[:, :3])
+    angular = np.einsum("nij,nj->ni", rotation, local[:, 3:]) + cross(translation, linear)
+    return np.concatenate((linear.sum(axis=0), angular.sum(axis=0)))

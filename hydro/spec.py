@@ -1,0 +1,186 @@
+"""Parameter records for per-link hydrodynamics, thrusters and the fluid.
+
+Every quantity of a :class:`LinkHydrodynamics` is expressed in the frame of its URDF link and taken
+about that link's origin (Fossen 2021, Sec. 6.3 and 6.4: matrices about the body-frame origin ``o_b``),
+with generalised velocities ordered ``nu = (u, v, w, p, q, r)``: linear first, then angular, the same
+order as Pinocchio's ``Motion.vector``.
+
+All records are frozen dataclasses whose array fields are read-only numpy arrays, so that a vehicle's
+parameters cannot drift after it has been loaded.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+class HydroError(ValueError):
+    """Non-physical or malformed hydrodynamic parameters; the message is one line naming the problem."""
+
+
+def _frozen_array(value, shape: tuple[int, ...], name: str) -> np.ndarray:
+    array = np.array(value, dtype=float)
+    if array.shape != shape:
+        raise HydroError(f"{name}: expected shape {shape}, got {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise HydroError(f"{name}: contains NaN or infinite values")
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True)
+class CrossflowDrag:
+    """Strip-theory crossflow drag of a circular cylinder (Fossen 2021, Sec. 6.4.3).
+
+    The cylinder frame ``c`` has its x-axis on the cylinder axis and its origin at the cylinder's rear
+    end; the strip integral runs over ``x`` in ``[0, length]`` of that frame.
+
+    Attributes:
+        length: Cylinder length [m].
+        radius: Cylinder radius [m].
+        drag_coefficient: Crossflow drag coefficient ``C_dC`` [-].
+        fluid_density: Water density [kg/m^3].
+        rotation: Orientation of frame ``c`` in the link frame (3x3).
+        translation: Origin of frame ``c`` in the link frame [m].
+    """
+
+    length: float
+    radius: float
+    drag_coefficient: float
+    fluid_density: float
+    rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+    translation: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    def __post_init__(self) -> None:
+        for name in ("length", "radius", "fluid_density"):
+            value = float(getattr(self, name))
+            if not (np.isfinite(value) and value > 0.0):
+                raise HydroError(f"crossflow {name} must be positive and finite, got {value}")
+        if not (np.isfinite(self.drag_coefficient) and self.drag_coefficient >= 0.0):
+            raise HydroError(f"crossflow drag coefficient must be >= 0, got {self.drag_coefficient}")
+        object.__setattr__(self, "rotation", _frozen_array(self.rotation, (3, 3), "rotation"))
+        object.__setattr__(self, "translation", _frozen_array(self.translation, (3,), "translation"))
+
+    @property
+    def strip_coefficient(self) -> float:
+        """``rho * r * C_dC`` [kg/m^2]: drag per unit length is ``-strip_coefficient |v_n| v_n``."""
+        return self.fluid_density * self.radius * self.drag_coefficient
+
+
+@dataclass(frozen=True)
+class LinkHydrodynamics:
+    """Hydrodynamic and hydrostatic parameters of one link, in the link frame about its origin.
+
+    Attributes:
+        link: Name of the URDF link.
+        model: How the parameters were given: ``"fossen"`` (matrices) or ``"slender_cylinder"``.
+        volume: Displaced volume [m^3].
+        center_of_buoyancy: Centre of buoyancy in the link frame [m].
+        added_mass: Added-mass matrix ``M_A`` (6x6, symmetric positive semi-definite)
+            [kg, kg m, kg m^2].
+        linear_damping: Linear damping ``D_L`` (6x6); wrench ``-D_L nu_r``.
+        quadratic_damping: Quadratic damping ``D_Q`` (6x6); wrench ``-D_Q (|nu_r| * nu_r)``
+            (element-wise absolute value and product).
+        crossflow: Optional strip-theory crossflow drag, added to the quadratic damping.
+    """
+
+    link: str
+    model: str
+    volume: float
+    center_of_buoyancy: np.ndarray
+    added_mass: np.ndarray
+    linear_damping: np.ndarray
+    quadratic_damping: np.ndarray
+    crossflow: CrossflowDrag | None = None
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.volume) and self.volume >= 0.0):
+            raise HydroError(f"link '{self.link}': volume must be >= 0 and finite, got {self.volume}")
+        object.__setattr__(self, "volume", float(self.volume))
+        object.__setattr__(
+            self,
+            "center_of_buoyancy",
+            _frozen_array(self.center_of_buoyancy, (3,), f"link '{self.link}': center_of_buoyancy"),
+        )
+        for name in ("added_mass", "linear_damping", "quadratic_damping"):
+            matrix = _frozen_array(getattr(self, name), (6, 6), f"link '{self.link}': {name}")
+            object.__setattr__(self, name, matrix)
+        added_mass = self.added_mass
+        scale = max(1.0, float(np.max(np.abs(added_mass))))
+        if not np.allclose(added_mass, added_mass.T, rtol=0.0, atol=1e-9 * scale):
+            raise HydroError(f"link '{self.link}': added_mass is not symmetric")
+        if np.min(np.linalg.eigvalsh(added_mass)) < -1e-9 * scale:
+            raise HydroError(f"link '{self.link}': added_mass is not positive semi-definite")
+
+
+@dataclass(frozen=True)
+class Thruster:
+    """A fixed thruster producing a force along a unit direction.
+
+    Attributes:
+        name: Thruster name (unique within a vehicle).
+        link: Name of the URDF link the thruster is mounted on.
+        position: Point of action in the link frame [m].
+        direction: Unit direction of positive thrust in the link frame.
+        max_thrust: Thrust magnitude limit [N]; commands are saturated to ``[-max, max]``.
+    """
+
+    name: str
+    link: str
+    position: np.ndarray
+    direction: np.ndarray
+    max_thrust: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(
+            self, "position", _frozen_array(self.position, (3,), f"thruster '{self.name}': xyz")
+        )
+        direction = np.array(self.direction, dtype=float)
+        norm = float(np.linalg.norm(direction)) if direction.shape == (3,) else 0.0
+        if not (np.isfinite(norm) and norm > 0.0):
+            raise HydroError(f"thruster '{self.name}': direction must be a nonzero 3-vector")
+        object.__setattr__(
+            self,
+            "direction",
+            _frozen_array(direction / norm, (3,), f"thruster '{self.name}': direction"),
+        )
+        if not (np.isfinite(self.max_thrust) and self.max_thrust > 0.0):
+            raise HydroError(
+                f"thruster '{self.name}': max_thrust must be positive, got {self.max_thrust}"
+            )
+        object.__setattr__(self, "max_thrust", float(self.max_thrust))
+
+
+@dataclass(frozen=True)
+class HydroSpec:
+    """Everything a vehicle's ``<hydrodynamics>`` block says.
+
+    Attributes:
+        fluid_density: Water density ``rho`` [kg/m^3].
+        gravity: Magnitude of gravitational acceleration ``g`` [m/s^2] (acts along world -z).
+        links: Per-link parameters; links not listed here have no fluid forces.
+        thrusters: Thrusters, in the order of the thrust vector.
+    """
+
+    fluid_density: float = 1025.0
+    gravity: float = 9.81
+    links: tuple[LinkHydrodynamics, ...] = ()
+    thrusters: tuple[Thruster, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.fluid_density) and self.fluid_density > 0.0):
+            raise HydroError(f"fluid_density must be positive, got {self.fluid_density}")
+        if not (np.isfinite(self.gravity) and self.gravity >= 0.0):
+            raise HydroError(f"gravity must be >= 0, got {self.gravity}")
+        object.__setattr__(self, "links", tuple(self.links))
+        object.__setattr__(self, "thrusters", tuple(self.thrusters))
+        names = [link.link for link in self.links]
+        duplicate = {n for n in names if names.count(n) > 1}
+        if duplicate:
+            raise HydroError(f"hydrodynamics given twice for link '{sorted(duplicate)[0]}'")
+        thruster_names = [t.name for t in self.thrusters]
+        duplicate = {n for n in thruster_names if thruster_names.count(n) > 1}
+        if duplicate:
+            raise HydroError(f"thruster name '{sorted(duplicate)[0]}' used twice")
