@@ -7,6 +7,7 @@ standard error, ``aiauv: error: ...``, and a non-zero exit status; never a trace
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 from pathlib import Path
@@ -36,7 +37,7 @@ def _add_simulate(subparsers) -> None:
     parser.add_argument("--vehicle", type=Path, help="URDF file (default: the bundled paper vehicle)")
     parser.add_argument("--case", choices=("uniform", "stabilised"), default="uniform")
     parser.add_argument("--duration", type=positive_seconds, default=300.0, help="[s] (300)")
-    parser.add_argument("--dt", type=positive_seconds, default=None, help="step [s] (0.02)")
+    parser.add_argument("--dt", type=positive_seconds, default=None, help="step [s] (0.01)")
     parser.add_argument("--out", type=Path, default=None, help="output folder (results/<case>/)")
     parser.add_argument("--no-html", action="store_true", help="do not write playback.html")
     parser.add_argument("--feedforward", choices=("exact", "paper"), default="exact")
@@ -52,11 +53,10 @@ def _run_simulate(args) -> int:
 
     path = args.vehicle if args.vehicle is not None else loading.bundled_urdf(args.case)
     vehicle = loading.load_vehicle(path)
-    scenario = PaperScenario(case=args.case, duration=args.duration)
-    if args.dt is not None:
-        scenario = PaperScenario(case=args.case, duration=args.duration, dt=args.dt)
+    options = {"dt": args.dt} if args.dt is not None else {}
+    scenario = PaperScenario(case=args.case, duration=args.duration, **options)
     gains = scenario.controller_gains.with_changes(feedforward=args.feedforward)
-    scenario = PaperScenario(**{**scenario.__dict__, "gains": gains})
+    scenario = dataclasses.replace(scenario, gains=gains)
     out = args.out if args.out is not None else Path("results") / args.case
     try:
         result = run_paper_scenario(vehicle, scenario, progress=not args.quiet)

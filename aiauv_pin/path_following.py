@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from control.joint_control import joint_torques
 from control.path_following import (
     PathFollowingController,
     PathFollowingGains,
@@ -60,10 +61,18 @@ class VehiclePathFollowing:
     difference of the end-effector velocity between consecutive calls (zero at the first call), so the
     callback costs no extra dynamics evaluation.
 
+    Joint loop: with ``continuous_joints=True`` (default) the joint PD with hydrostatic compensation
+    (eq. 24) runs as a continuous-time servo, :meth:`servo`, evaluated by the integrator at every stage
+    with the latest references, the way joint motor controllers run far faster than the guidance
+    loop; the callback's own output then holds only the thrusts. With ``False`` eq. (24) is sampled
+    with the rest of the controller and held over the step; the paper's gains then need
+    ``dt <~ 0.01 s`` (the fastest joint mode has ``k_qD / I ~ 190 1/s``).
+
     Args:
         vehicle: The vehicle; it must have a frame named ``end_effector`` and X thrusters.
         gains: Controller gains (paper defaults).
         end_effector: Name of the end-effector frame.
+        continuous_joints: Run eq. (24) as a continuous servo (see above).
     """
 
     def __init__(
@@ -72,8 +81,10 @@ class VehiclePathFollowing:
         gains: PathFollowingGains | None = None,
         *,
         end_effector: str = END_EFFECTOR,
+        continuous_joints: bool = True,
     ) -> None:
         self.vehicle = vehicle
+        self.continuous_joints = bool(continuous_joints)
         self.gains = gains if gains is not None else PathFollowingGains()
         self.frame = vehicle.frame_id(end_effector)
         surge = surge_thruster_indices(vehicle)
@@ -93,6 +104,20 @@ class VehiclePathFollowing:
         """Clear the surge integrator and the velocity history."""
         self.controller.reset()
         self._previous: tuple[float, np.ndarray] | None = None
+        self._joint_references = np.zeros(self.vehicle.nv - 6)
+
+    def servo(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Joint PD with hydrostatic compensation (eq. 24) at the latest references, as ``tau`` (nv,)."""
+        tau = np.zeros(self.vehicle.nv)
+        tau[6:] = joint_torques(
+            q[7:],
+            v[6:],
+            self._joint_references,
+            self.vehicle.restoring_forces(q)[6:],
+            self.gains.k_qp,
+            self.gains.k_qd,
+        )
+        return tau
 
     def measure(self, t: float, q: np.ndarray, v: np.ndarray) -> PathFollowingMeasurement:
         """What the controller needs, from the simulator state."""
@@ -122,9 +147,11 @@ class VehiclePathFollowing:
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray):
         measurement = self.measure(t, q, v)
         command = self.controller.command(t, measurement)
+        self._joint_references = np.array(command.joint_references)
         thrust_matrix = self.vehicle.thrust_matrix(q)
         tau = thrust_matrix @ command.thrusts
-        tau[6:] += command.joint_torques
+        if not self.continuous_joints:
+            tau[6:] += command.joint_torques
         info = {
             "p": measurement.position_in_world,
             "u": measurement.surge_velocity,

@@ -2,18 +2,20 @@
 
 The page embeds meshcat's viewer bundle (``meshcat/viewer/dist/main.min.js``, as meshcat's own
 ``static_html`` does) and the scene of :class:`aiauv_pin.viewer.VehicleScene` as a list of meshcat
-commands in JSON, replayed into ``MeshCat.Viewer.handle_command`` on load. The motion is one meshcat
-animation (``set_animation``): per moving node, three.js keyframe tracks with ``times`` in seconds
-(clip ``fps`` = 1, so a key's time is its simulated time) and flat ``values``; meshcat's animation panel
-gives play / pause / reset, a time scrubber and the speed (``timeScale``, 1 = real time). The camera's
-centre of attention (``/Cameras/default``) is animated too, so the vehicle stays framed all the way.
+commands in JSON, replayed into ``MeshCat.Viewer.handle_command`` on load. The motion is one
+meshcat animation (``set_animation``): per moving node, three.js keyframe tracks with ``times`` in
+seconds (clip ``fps`` = 1, so a key's time is its simulated time) and flat ``values``; meshcat's
+animation panel gives play / pause / reset, a time scrubber and the speed (``timeScale``, 1 = real
+time). ``/aiauv`` is animated by minus the vehicle's centroid, so the vehicle stays framed all the
+way (see :mod:`aiauv_pin.viewer` for why the world moves rather than the camera).
 
-Frames are decimated to ``fps`` per simulated second and to at most ``max_frames`` (by default as many
-as fit a budget of about 16 MB of keyframes), so a 300 s run gives a file of a few MB.
+Frames are decimated to ``fps`` per simulated second and to at most ``max_frames`` (by default as
+many as fit a budget of about 16 MB of keyframes), so a 300 s run gives a file of about 7 MB.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import os
@@ -25,7 +27,7 @@ import pinocchio as pin
 from .atomic import atomic_path
 from .simulation import Trajectory
 from .vehicle import Vehicle
-from .viewer import CAMERA, LOS, ROOT, VehicleScene, set_property, set_transform
+from .viewer import LOS, ROOT, VehicleScene, set_property, set_transform, translation
 
 #: Default upper bound on the size of the keyframe data [bytes].
 KEYFRAME_BUDGET = 16_000_000
@@ -35,9 +37,10 @@ _CHARS_PER_NUMBER = 9  # upper estimate of one number in the JSON, sign and comm
 
 def meshcat_bundle() -> str:
     """The JavaScript of meshcat's viewer (three.js included), as shipped by the meshcat package."""
-    import meshcat
-
-    path = Path(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"
+    spec = importlib.util.find_spec("meshcat")  # located, not imported (that would start zmq)
+    if spec is None or not spec.submodule_search_locations:
+        raise RuntimeError("the meshcat package is not installed")
+    path = Path(spec.submodule_search_locations[0]) / "viewer" / "dist" / "main.min.js"
     return path.read_text(encoding="utf-8")
 
 
@@ -75,6 +78,11 @@ var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
 var commands = JSON.parse(document.getElementById("aiauv-scene").textContent);
 for (var i = 0; i < commands.length; i++) {{
   viewer.handle_command(commands[i]);
+}}
+if (viewer.gui && commands.some(function (c) {{ return c.type === "set_animation"; }})) {{
+  viewer.gui.open();  // show the Animations panel: play, pause, reset, time, speed
+  var folders = viewer.gui.__folders || {{}};
+  if (folders.Scene) {{ folders.Scene.close(); }}
 }}
 </script>
 </body>
@@ -143,9 +151,7 @@ def playback_commands(
     t = np.asarray(trajectory.t, dtype=float)
     q = np.asarray(trajectory.q, dtype=float)
     if q.ndim != 2 or q.shape[1] != vehicle.nq or q.shape[0] != t.size:
-        raise ValueError(
-            f"trajectory.q must have shape ({t.size}, {vehicle.nq}), got {q.shape}"
-        )
+        raise ValueError(f"trajectory.q must have shape ({t.size}, {vehicle.nq}), got {q.shape}")
     finite = np.all(np.isfinite(q), axis=1) & np.isfinite(t)
     if not np.all(finite):
         bad = int(np.flatnonzero(~finite)[0])
@@ -153,7 +159,9 @@ def playback_commands(
     info = {k: np.asarray(v, dtype=float) for k, v in (trajectory.info or {}).items()}
     for key in ("thrust", "x_ref", "p"):
         if key in info and info[key].shape[0] != t.size:
-            raise ValueError(f"trajectory.info['{key}'] has {info[key].shape[0]} rows, not {t.size}")
+            raise ValueError(
+                f"trajectory.info['{key}'] has {info[key].shape[0]} rows, not {t.size}"
+            )
     base_x = q[:, 0]
     margin = 5.0
     scene = VehicleScene(
@@ -169,27 +177,25 @@ def playback_commands(
 
     poses: dict[str, list[np.ndarray]] = {}
     scales: dict[str, list[np.ndarray]] = {}
-    camera: list[np.ndarray] = []
+    centroid: list[np.ndarray] = []
     for k in index:
         state = scene.frame(q[k], _info_at(info, int(k)))
         for path, pose in state.poses.items():
             poses.setdefault(path, []).append(pose)
         for path, scale in state.scales.items():
             scales.setdefault(path, []).append(scale)
-        camera.append(state.camera_target)
+        centroid.append(state.centroid)
     if not show_los:
         poses.pop(LOS, None)
     times = _round(t[index] - t[0])
 
-    commands = [set_property(ROOT, "visible", True), *scene.static_commands()]
+    commands = scene.static_commands()
     # the first frame, so that the scene is right before the animation starts (and if it is paused)
     for path, frames in poses.items():
         commands.append(set_transform(path, frames[0]))
     for path, frames in scales.items():
         commands.append(set_transform(path, np.diag([*frames[0], 1.0])))
-    first_camera = np.eye(4)
-    first_camera[:3, 3] = camera[0]
-    commands.append(set_transform(CAMERA, first_camera))
+    commands.append(set_transform(ROOT, translation(-centroid[0])))
     if show_los:
         commands.append(set_property(LOS, "visible", True))
 
@@ -213,9 +219,11 @@ def playback_commands(
         ]
         animations.append({"path": path, "clip": clip(tracks)})
     for path, frames in scales.items():
-        animations.append({"path": path, "clip": clip([track("scale", "vector3", np.array(frames))])})
+        animations.append(
+            {"path": path, "clip": clip([track("scale", "vector3", np.array(frames))])}
+        )
     animations.append(
-        {"path": CAMERA, "clip": clip([track("position", "vector3", np.array(camera))])}
+        {"path": ROOT, "clip": clip([track("position", "vector3", -np.array(centroid))])}
     )
     commands.append(
         {

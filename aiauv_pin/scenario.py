@@ -4,7 +4,9 @@ Choices the paper leaves open, documented here and in the README:
 
 * the path is the world x-axis; the vehicle starts straight, at rest, parallel to the path, with its
   end-effector at ``(0, 3, 3)`` m (a few metres off in y and z, PAPER_DATA "Start");
-* 300 s of simulated time (the lineage code's duration), step ``dt = 0.02`` s (RK4);
+* 300 s of simulated time (the lineage code's duration), step ``dt = 0.01`` s (RK4); the guidance,
+  base-angle and surge loops are sampled every step (zero-order hold) and the joint PD (eq. 24) runs as
+  a continuous servo (see :class:`aiauv_pin.path_following.VehiclePathFollowing`);
 * the base-angle saturation ``q_max`` is :class:`control.path_following.PathFollowingGains`' default.
 """
 
@@ -38,16 +40,18 @@ class PaperScenario:
         method: Integrator, ``"rk4"`` or ``"euler"``.
         current: Constant water velocity in the world frame [m/s].
         gains: Controller gains; ``None`` means the paper's for the case.
+        continuous_joints: Joint PD as a continuous servo (True) or sampled with the controller.
     """
 
     case: str = "uniform"
     duration: float = 300.0
-    dt: float = 0.02
+    dt: float = 0.01
     initial_offset: tuple[float, float] = (3.0, 3.0)
     initial_surge: float = 0.0
     method: str = "rk4"
     current: tuple[float, float, float] = (0.0, 0.0, 0.0)
     gains: PathFollowingGains | None = None
+    continuous_joints: bool = True
 
     def __post_init__(self) -> None:
         if self.case not in CASES:
@@ -109,7 +113,9 @@ def run_paper_scenario(
     Raises:
         SimulationDiverged: With the partial trajectory, if the state became non-finite.
     """
-    controller = VehiclePathFollowing(vehicle, scenario.controller_gains)
+    controller = VehiclePathFollowing(
+        vehicle, scenario.controller_gains, continuous_joints=scenario.continuous_joints
+    )
     q0, v0 = initial_state(vehicle, scenario)
     current = np.asarray(scenario.current, dtype=float)
     start = time.perf_counter()
@@ -122,6 +128,7 @@ def run_paper_scenario(
         controller,
         method=scenario.method,
         current=current if np.any(current) else None,
+        servo=controller.servo if scenario.continuous_joints else None,
         progress=progress,
     )
     return ScenarioResult(

@@ -16,6 +16,10 @@ from .vehicle import Vehicle
 #: constant over the step and ``info`` a mapping of scalars or arrays to log.
 Controller = Callable[[float, np.ndarray, np.ndarray], object]
 
+#: ``servo(q, v) -> tau``: a generalised force evaluated at every integrator stage (a continuous-time
+#: inner loop, such as joint servos running much faster than the outer controller).
+Servo = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
 
 @dataclass
 class Trajectory:
@@ -57,6 +61,7 @@ def simulate(
     *,
     method: str = "rk4",
     current: np.ndarray | None = None,
+    servo: Servo | None = None,
     log_every: int = 1,
     progress: bool = False,
 ) -> Trajectory:
@@ -74,6 +79,7 @@ def simulate(
         controller: ``controller(t, q, v) -> tau | (tau, info)``; ``None`` applies no input.
         method: ``"rk4"`` (Runge-Kutta-Munthe-Kaas, order 4) or ``"euler"`` (semi-implicit, order 1).
         current: Constant water velocity in the world frame (3,) [m/s].
+        servo: ``servo(q, v) -> tau`` added to the controller's output at every integrator stage.
         log_every: Log every this many steps (the final state is always logged).
         progress: Show a progress bar (tqdm).
 
@@ -120,7 +126,9 @@ def simulate(
             info_log[key][index] = value
 
     def dynamics_with(tau: np.ndarray):
-        return lambda qq, vv: vehicle.acceleration(qq, vv, tau, current)
+        if servo is None:
+            return lambda qq, vv: vehicle.acceleration(qq, vv, tau, current)
+        return lambda qq, vv: vehicle.acceleration(qq, vv, tau + servo(qq, vv), current)
 
     bar = None
     if progress:
@@ -138,7 +146,10 @@ def simulate(
                 logged += 1
             if k == n_steps:
                 break
-            q_new, v_new = step(model, dynamics_with(tau), q, v, dt)
+            try:
+                q_new, v_new = step(model, dynamics_with(tau), q, v, dt)
+            except np.linalg.LinAlgError:
+                q_new, v_new = q + np.nan, v + np.nan
             if not (np.all(np.isfinite(q_new)) and np.all(np.isfinite(v_new))):
                 trajectory = _trajectory(t_log, q_log, v_log, tau_log, info_log, logged)
                 trajectory.status = "diverged"

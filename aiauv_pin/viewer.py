@@ -1,18 +1,26 @@
 """The meshcat scene of a vehicle, and a live meshcat viewer.
 
-The scene is described once, as meshcat commands (plain JSON-able dicts in the form meshcat's viewer
-``handle_command`` takes), so that the live viewer (:class:`MeshcatViewer`, over meshcat's ZeroMQ
-server) and the self-contained playback page (:mod:`aiauv_pin.playback`) draw exactly the same thing:
+The scene is described once, as meshcat commands (plain JSON-able dicts in the form meshcat's
+viewer ``handle_command`` takes), so that the live viewer (:class:`MeshcatViewer`, over meshcat's
+ZeroMQ server) and the self-contained playback page (:mod:`aiauv_pin.playback`) draw the same thing:
 
-- ``/aiauv/links/<link>``: one node per URDF link that has visual geometry, placed at the link's world
-  pose; its children are the link's visuals (cylinders, boxes, spheres, capsules, meshes), read from the
-  URDF's ``<visual>`` elements with Pinocchio, in the colours the URDF gives;
-- ``/aiauv/links/<link>/thrusters/<name>/arrow``: the thruster's force, an arrow along the thruster's
-  positive direction whose length is proportional to the thrust (pointing backwards for negative thrust);
+- ``/aiauv/links/<link>``: one node per URDF link that has visual geometry, placed at the link's
+  world pose; its children are the link's visuals (cylinders, boxes, spheres, capsules, meshes),
+  read from the URDF's ``<visual>`` elements with Pinocchio, in the colours the URDF gives;
+- ``/aiauv/links/<link>/thrusters/<name>/arrow``: the thruster's force, an arrow along the
+  thruster's positive direction, its length proportional to the thrust (backwards when negative);
 - ``/aiauv/los``: the line-of-sight reference direction ``x_ref`` at the end effector, when the
   controller reports one (``info["x_ref"]``, ``info["p"]``);
-- ``/aiauv/path``: the path, the world x-axis, with a tick every metre so that motion along it shows;
-- ``/Cameras/default``: the camera's centre of attention, at the centroid of the link visuals.
+- ``/aiauv/path``: the path, the world x-axis, with a tick every metre, over a grid of 1 m squares
+  1 m below it (meshcat's own grid and axes, fixed at the page's origin, are hidden);
+- ``/aiauv`` itself is translated by minus the vehicle's centroid, so that the vehicle stays in view
+  around the page's origin while the path and grid slide past.
+
+Why the world moves rather than the camera: meshcat's camera sits in ``/Cameras/default/rotated``,
+and in the bundled three.js the orbit controls make the camera look at their target in *world*
+coordinates every frame, while they orbit in the camera's *parent* coordinates: translating
+``/Cameras/default`` therefore turns the camera back towards the page's origin. Keeping the camera's
+parent fixed and moving ``/aiauv`` gives a following view that orbits and zooms as usual.
 
 meshcat's conventions: three.js cylinders and cones have their axis along ``y``; quaternions are
 ``(x, y, z, w)``; the camera lives in a frame rotated by +90 degrees about ``x`` (three.js is y-up).
@@ -20,6 +28,7 @@ meshcat's conventions: three.js cylinders and cones have their axis along ``y``;
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import time
@@ -38,12 +47,13 @@ ROOT = "/aiauv"
 LINKS = f"{ROOT}/links"
 LOS = f"{ROOT}/los"
 PATH = f"{ROOT}/path"
-CAMERA = "/Cameras/default"
 CAMERA_OBJECT = "/Cameras/default/rotated/<object>"
 
 _THRUST_COLOR = (0.85, 0.1, 0.1, 1.0)
 _LOS_COLOR = (0.1, 0.75, 0.2, 1.0)
-_PATH_COLOR = (0.15, 0.35, 0.9, 1.0)
+_PATH_COLOR = (1.0, 1.0, 1.0, 1.0)
+_GRID_COLOR = (0.55, 0.6, 0.7, 1.0)
+GRID = f"{ROOT}/grid"
 _DOUBLE_SIDE = 2  # THREE.DoubleSide: arrows are mirrored (negative scale) for negative thrust
 
 # three.js cylinders/cones lie along y, URDF cylinders along z: rotate y onto z (+90 deg about x)
@@ -97,8 +107,12 @@ def _shape_geometry(shape) -> list[tuple[dict, pin.SE3]]:
             )
         ]
         if kind == "Capsule":  # this three.js has no CapsuleGeometry: cylinder + two half-spheres
-            ball = {"type": "SphereGeometry", "radius": radius, "widthSegments": 32,
-                    "heightSegments": 16}
+            ball = {
+                "type": "SphereGeometry",
+                "radius": radius,
+                "widthSegments": 32,
+                "heightSegments": 16,
+            }
             parts += [(ball, _Y_TO_Z * _shift_y(half)), (ball, _Y_TO_Z * _shift_y(-half))]
         return parts
     if kind == "Box":
@@ -142,8 +156,8 @@ def vehicle_visuals(vehicle: Vehicle, urdf: str | os.PathLike | None = None) -> 
 
     Args:
         vehicle: The vehicle.
-        urdf: URDF file or XML text. Default: ``vehicle.visual_model`` (a ``pin.GeometryModel``) if the
-            vehicle has one, else the URDF the vehicle was loaded from (``vehicle.urdf_path``), else
+        urdf: URDF file or XML text. Default: ``vehicle.visual_model`` (a ``pin.GeometryModel``) if
+            the vehicle has one, else the URDF it was loaded from (``vehicle.urdf_path``), else
             cylinders from the links' crossflow hydrodynamics.
 
     Raises:
@@ -182,7 +196,7 @@ def vehicle_visuals(vehicle: Vehicle, urdf: str | os.PathLike | None = None) -> 
             if link.crossflow is None:
                 continue
             c = link.crossflow
-            # the crossflow frame c has its x-axis on the cylinder axis and its origin at the rear end
+            # crossflow frame c: x-axis on the cylinder axis, origin at the rear end
             along_x = pin.SE3(np.asarray(c.rotation), np.asarray(c.translation)) * pin.SE3(
                 pin.utils.rotate("z", -math.pi / 2), np.array([c.length / 2.0, 0.0, 0.0])
             )
@@ -284,6 +298,13 @@ def set_property(path: str, key: str, value) -> dict:
     return {"type": "set_property", "path": path, "property": key, "value": value}
 
 
+def translation(offset: np.ndarray) -> np.ndarray:
+    """Homogeneous matrix of a translation (4x4)."""
+    matrix = np.eye(4)
+    matrix[:3, 3] = offset
+    return matrix
+
+
 def _rotation_y_to(direction: np.ndarray) -> np.ndarray:
     """A rotation taking the y-axis onto a unit ``direction``."""
     d = np.asarray(direction, dtype=float)
@@ -335,12 +356,12 @@ class FrameState:
     Attributes:
         poses: Node path -> world (or parent-frame) pose (4x4).
         scales: Node path -> scale ``(sx, sy, sz)``.
-        camera_target: Centre of the camera's attention in the world [m].
+        centroid: Centroid of the link visuals in the world [m]; ``/aiauv`` is moved by minus it.
     """
 
     poses: dict[str, np.ndarray] = field(default_factory=dict)
     scales: dict[str, np.ndarray] = field(default_factory=dict)
-    camera_target: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    centroid: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
 
 class VehicleScene:
@@ -369,11 +390,13 @@ class VehicleScene:
         self._data = vehicle.model.createData()
         x0, x1 = (float(x) for x in path_range)
         if not (math.isfinite(x0) and math.isfinite(x1) and x1 > x0):
-            raise ValueError(f"path_range must be two finite numbers, increasing, got {path_range!r}")
+            raise ValueError(
+                f"path_range must be two finite numbers, increasing, got {path_range!r}"
+            )
         self.path_range = (x0, x1)
         self.size = self._vehicle_size()
         self.camera_distance = (
-            float(camera_distance) if camera_distance is not None else 0.8 * self.size + 0.5
+            float(camera_distance) if camera_distance is not None else 0.75 * self.size + 0.3
         )
         self.arrow_length = 0.15 * self.size  # length of a thruster arrow at full thrust [m]
         self.los_length = 0.2 * self.size
@@ -385,7 +408,8 @@ class VehicleScene:
     def _visual_centres(self, q: np.ndarray) -> np.ndarray:
         pin.framesForwardKinematics(self.vehicle.model, self._data, q)
         link_pose = {
-            name: self._data.oMf[i].homogeneous for name, i in zip(self.links, self._link_frames)
+            name: self._data.oMf[i].homogeneous
+            for name, i in zip(self.links, self._link_frames, strict=True)
         }
         return np.array([(link_pose[v.link] @ v.placement)[:3, 3] for v in self.visuals])
 
@@ -439,23 +463,46 @@ class VehicleScene:
             )
             commands.append(set_property(LOS, "visible", False))
         commands.append(set_object(PATH, _line_object(self._path_points(), _PATH_COLOR)))
+        commands.append(set_object(GRID, _line_object(self._grid_points(), _GRID_COLOR)))
+        commands.append(set_property("/Grid", "visible", False))
+        commands.append(set_property("/Axes", "visible", False))
         # camera: behind, to the side and above the centroid; offset in the rotated (y-up) frame
-        offset_world = self.camera_distance * np.array([-0.45, -0.8, 0.4]) / np.linalg.norm(
-            [-0.45, -0.8, 0.4]
-        )
+        direction = np.array([-0.25, -1.0, 0.45])
+        offset_world = self.camera_distance * direction / np.linalg.norm(direction)
         offset_rotated = [offset_world[0], offset_world[2], -offset_world[1]]
         commands.append(set_property(CAMERA_OBJECT, "position", [float(x) for x in offset_rotated]))
         return commands
 
     def _path_points(self) -> np.ndarray:
+        """Line segments of the path (in pieces between ticks) and of its ticks."""
         x0, x1 = self.path_range
-        points = [[x0, 0.0, 0.0], [x1, 0.0, 0.0]]
-        span = x1 - x0
-        step = max(1.0, 10.0 ** math.ceil(math.log10(span / 2000.0))) if span > 2000 else 1.0
+        step = 10.0 ** math.ceil(math.log10((x1 - x0) / 2000.0)) if x1 - x0 > 2000 else 1.0
+        ticks = np.arange(math.ceil(x0 / step) * step, x1 + 1e-9, step)
         tick = 0.04 * max(self.size, 1.0)
-        for x in np.arange(math.ceil(x0 / step) * step, x1 + 1e-9, step):
+        points = []
+        for x in ticks:
             points += [[x, -tick, 0.0], [x, tick, 0.0], [x, 0.0, -tick], [x, 0.0, tick]]
-        return np.array(points)
+        # short pieces: some WebGL rasterisers (SwiftShader) drop a long line whose ends project far
+        # outside the view
+        stops = np.unique(np.concatenate(([x0], ticks, [x1])))
+        for a, b in itertools.pairwise(stops):
+            points += [[a, 0.0, 0.0], [b, 0.0, 0.0]]
+        return np.array(points, dtype=float)
+
+    def _grid_points(self, half_width: float = 5.0, depth: float = 1.0) -> np.ndarray:
+        """Line segments of a grid of 1 m squares (coarser on long paths), ``depth`` below the path.
+
+        Every line is cut at each crossing (see :meth:`_path_points` on long lines).
+        """
+        x0, x1 = self.path_range
+        step = max(1, math.ceil((x1 - x0) / 1000))
+        xs = np.arange(math.floor(x0), math.ceil(x1) + 1, step, dtype=float)
+        ys = np.arange(-half_width, half_width + 1e-9, 1.0)
+        segments = [((a, y), (b, y)) for y in ys for a, b in itertools.pairwise(xs)] + [
+            ((x, a), (x, b)) for x in xs for a, b in itertools.pairwise(ys)
+        ]
+        points = np.array(segments, dtype=float).reshape(-1, 2)
+        return np.column_stack((points, np.full(len(points), -depth)))
 
     # ------------------------------------------------------------------ motion
     def frame(self, q: np.ndarray, info: Mapping[str, object] | None = None) -> FrameState:
@@ -473,18 +520,20 @@ class VehicleScene:
         model, data = self.vehicle.model, self._data
         pin.framesForwardKinematics(model, data, q)
         state = FrameState()
-        for name, i in zip(self.links, self._link_frames):
+        for name, i in zip(self.links, self._link_frames, strict=True):
             state.poses[f"{LINKS}/{name}"] = data.oMf[i].homogeneous
         centres = np.array(
             [(state.poses[f"{LINKS}/{v.link}"] @ v.placement)[:3, 3] for v in self.visuals]
         )
-        state.camera_target = centres.mean(axis=0)
+        state.centroid = centres.mean(axis=0)
         thrust = info.get("thrust")
         names = self.vehicle.thruster_names
         if thrust is not None:
             thrust = np.asarray(thrust, dtype=float).ravel()
             if thrust.shape != (len(names),):
-                raise ValueError(f"info['thrust'] must have {len(names)} entries, got {thrust.size}")
+                raise ValueError(
+                    f"info['thrust'] must have {len(names)} entries, got {thrust.size}"
+                )
         for t in self.thrusters:
             value = 0.0 if thrust is None else float(thrust[names.index(t.name)])
             if not math.isfinite(value):
@@ -495,7 +544,9 @@ class VehicleScene:
         x_ref = info.get("x_ref")
         if self.head_frame is not None:
             head = info.get("p")
-            head = data.oMf[self.head_frame].translation if head is None else np.asarray(head, float)
+            head = (
+                data.oMf[self.head_frame].translation if head is None else np.asarray(head, float)
+            )
             pose = np.eye(4)
             pose[:3, 3] = head
             if x_ref is not None and np.all(np.isfinite(x_ref)) and np.linalg.norm(x_ref) > 0:
@@ -509,7 +560,7 @@ class VehicleScene:
 
 
 class _Command:
-    """Adapter giving a command dict the ``lower()`` method meshcat's ``ViewerWindow.send`` calls."""
+    """A command dict with the ``lower()`` method meshcat's ``ViewerWindow.send`` calls."""
 
     __slots__ = ("data",)
 
@@ -529,7 +580,7 @@ class MeshcatViewer:
         visualizer: A ``meshcat.Visualizer``; default starts meshcat's server in a subprocess.
         zmq_url: Connect to a running meshcat server instead of starting one.
         path_range: ``(x_start, x_end)`` of the path line [m].
-        follow: Keep the camera's centre of attention on the vehicle.
+        follow: Keep the vehicle in view (by moving ``/aiauv`` by minus its centroid).
 
     Example (notebook)::
 
@@ -576,9 +627,7 @@ class MeshcatViewer:
             self._los_visible = not self._los_visible
             self.send(set_property(LOS, "visible", self._los_visible))
         if self.follow:
-            target = np.eye(4)
-            target[:3, 3] = state.camera_target
-            self.send(set_transform(CAMERA, target))
+            self.send(set_transform(ROOT, translation(-state.centroid)))
 
     def url(self) -> str:
         """URL of the viewer page."""

@@ -15,7 +15,12 @@ Nothing here imports Pinocchio or the simulator.
 
 from control.guidance import cross_track_gains, los_direction, los_reference
 from control.joint_control import joint_torques
-from control.joint_references import base_angles, check_joint_axes, joint_references
+from control.joint_references import (
+    base_angles,
+    check_joint_axes,
+    joint_references,
+    pointing_law,
+)
 from control.path_following import (
     CASES,
     PathFollowingCommand,
@@ -24,9 +29,14 @@ from control.path_following import (
     PathFollowingMeasurement,
 )
 from control.reduced_attitude import (
+    ANTIPODAL_TOLERANCE,
     FEEDFORWARD_OPTIONS,
+    ReducedAttitudeLaw,
+    ReducedAttitudeOutput,
+    check_block_diagonal_inertia,
     error_angle,
     error_axis_angle,
+    is_antipodal,
     lyapunov_function,
     minimal_rotation,
     minimal_rotation_rate_correction,
@@ -38,18 +48,23 @@ from control.reduced_attitude import (
 from control.surge import SurgePIController
 
 __all__ = [
+    "ANTIPODAL_TOLERANCE",
     "CASES",
     "FEEDFORWARD_OPTIONS",
     "PathFollowingCommand",
     "PathFollowingController",
     "PathFollowingGains",
     "PathFollowingMeasurement",
+    "ReducedAttitudeLaw",
+    "ReducedAttitudeOutput",
     "SurgePIController",
     "base_angles",
+    "check_block_diagonal_inertia",
     "check_joint_axes",
     "cross_track_gains",
     "error_angle",
     "error_axis_angle",
+    "is_antipodal",
     "joint_references",
     "joint_torques",
     "los_direction",
@@ -57,6 +72,7 @@ __all__ = [
     "lyapunov_function",
     "minimal_rotation",
     "minimal_rotation_rate_correction",
+    "pointing_law",
     "reduced_attitude_errors",
     "reduced_attitude_torque",
     "reference_angular_acceleration",

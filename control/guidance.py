@@ -27,7 +27,7 @@ def _vector3(value, name: str) -> np.ndarray:
     array = np.asarray(value, dtype=float)
     if array.shape != (3,):
         raise ValueError(f"{name}: expected shape (3,), got {array.shape}")
-    if not np.all(np.isfinite(array)):
+    if not np.isfinite(array).all():
         raise ValueError(f"{name}: contains NaN or infinite values")
     return array
 

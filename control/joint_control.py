@@ -22,7 +22,7 @@ def _array(value, n: int | None, name: str) -> np.ndarray:
     if array.ndim != 1 or (n is not None and array.shape != (n,)):
         expected = "a 1-D array" if n is None else f"shape ({n},)"
         raise ValueError(f"{name}: expected {expected}, got shape {array.shape}")
-    if not np.all(np.isfinite(array)):
+    if not np.isfinite(array).all():
         raise ValueError(f"{name}: contains NaN or infinite values")
     return array
 

@@ -21,15 +21,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from control.reduced_attitude import Feedforward, reduced_attitude_torque
+from control.reduced_attitude import Feedforward, ReducedAttitudeLaw
 
 AXIS_LABELS = ("y", "z")
 """Joint axis labels; their order is also the order of the base angles ``q0 = (q_y0, q_z0)``."""
 
 _UNIT_INERTIA = np.eye(3)
 _UNIT_INERTIA.setflags(write=False)
-_NO_MOMENTS = np.zeros(3)
-_NO_MOMENTS.setflags(write=False)
 
 
 def check_joint_axes(joint_axes: Sequence[str]) -> tuple[str, ...]:
@@ -105,6 +103,14 @@ def joint_references(
     return scale * np.clip(q0, -q_max, q_max)[axis_index]  # eq. (22)
 
 
+def pointing_law(k_p: float, k_d: float, feedforward: Feedforward = "exact") -> ReducedAttitudeLaw:
+    """The law of eq. (23) as a reusable :class:`ReducedAttitudeLaw` (``J = I``, no moments).
+
+    Its ``torque`` output is ``q0 = (q_y0, q_z0)`` [rad] when evaluated on the end-effector frame.
+    """
+    return ReducedAttitudeLaw(_UNIT_INERTIA, k_p, k_d, feedforward)  # eq. (23) = eq. (9), J = I
+
+
 def base_angles(
     rotation_to_world,
     angular_velocity_in_ee,
@@ -131,15 +137,6 @@ def base_angles(
         k_d: Derivative gain [s] (> 0).
         feedforward: ``"exact"`` or ``"paper"``.
     """
-    return reduced_attitude_torque(  # eq. (23) = eq. (9) with J = I, m = 0
-        rotation_to_world,
-        angular_velocity_in_ee,
-        x_ref,
-        x_ref_dot,
-        x_ref_ddot,
-        _UNIT_INERTIA,
-        _NO_MOMENTS,
-        k_p,
-        k_d,
-        feedforward=feedforward,
-    )
+    return pointing_law(k_p, k_d, feedforward)(
+        rotation_to_world, angular_velocity_in_ee, x_ref, x_ref_dot, x_ref_ddot
+    ).torque

@@ -31,12 +31,8 @@ import numpy as np
 
 from control.guidance import cross_track_gains, los_reference
 from control.joint_control import joint_torques
-from control.joint_references import (
-    base_angles,
-    check_joint_axes,
-    joint_reference_pattern,
-)
-from control.reduced_attitude import check_feedforward, reduced_attitude_errors
+from control.joint_references import check_joint_axes, joint_reference_pattern, pointing_law
+from control.reduced_attitude import check_feedforward
 from control.surge import SurgePIController
 
 CASES = ("uniform", "stabilised")
@@ -125,7 +121,11 @@ class PathFollowingGains:
         return cls.for_case("stabilised", **overrides)
 
     def with_changes(self, **changes) -> PathFollowingGains:
-        """A copy with some fields replaced (validated again)."""
+        """A copy with some fields replaced (validated again).
+
+        ``k_e`` keeps its resolved value when only ``u_d`` changes; pass ``k_e=None`` to re-derive
+        ``u_d / 10``.
+        """
         return replace(self, **changes)
 
 
@@ -136,7 +136,7 @@ def _frozen(value, shape: tuple[int, ...] | None, name: str) -> np.ndarray:
             raise ValueError(f"{name}: expected a 1-D array, got shape {array.shape}")
     elif array.shape != shape:
         raise ValueError(f"{name}: expected shape {shape}, got {array.shape}")
-    if not np.all(np.isfinite(array)):
+    if not np.isfinite(array).all():
         raise ValueError(f"{name}: contains NaN or infinite values")
     array.setflags(write=False)
     return array
@@ -263,6 +263,7 @@ class PathFollowingController:
                 f"max_thrust: limits must be positive and finite, got {limits.tolist()}"
             )
         self.max_thrust = limits.copy()
+        self._pointing_law = pointing_law(self.gains.k_p, self.gains.k_d, self.gains.feedforward)
         self._surge = SurgePIController(
             self.gains.k_1p,
             self.gains.k_1i,
@@ -321,11 +322,8 @@ class PathFollowingController:
         )
         R_e = measurement.rotation_to_world
         omega_e = measurement.angular_velocity_in_ee
-        phi_tilde, omega_tilde = reduced_attitude_errors(
-            R_e, omega_e, x_ref, x_ref_dot
-        )  # eqs. (4), (8)
-        q0 = base_angles(  # eq. (23)
-            R_e, omega_e, x_ref, x_ref_dot, x_ref_ddot, g.k_p, g.k_d, feedforward=g.feedforward
+        q0, phi_tilde, omega_tilde = self._pointing_law(  # eqs. (23), (4), (8)
+            R_e, omega_e, x_ref, x_ref_dot, x_ref_ddot
         )
         q_ref = self._reference_scale * np.clip(q0, -g.q_max, g.q_max)[self._axis_index]  # eq. (22)
         tau_q = joint_torques(  # eq. (24)

@@ -44,7 +44,8 @@ conditions with ``V < k_P pi^2 / 2`` (eq. 13); since ``V`` never increases with 
 
 from __future__ import annotations
 
-from typing import Literal
+from dataclasses import dataclass
+from typing import Literal, NamedTuple
 
 import numpy as np
 
@@ -257,7 +258,8 @@ def minimal_rotation_rate_correction(omega, omega_ref_b, x_ref_b) -> float:
     """Scalar ``mu`` of finding 2: ``d/dt R_tilde = R_tilde S(delta + mu y)`` [rad/s].
 
     ``mu = -(e1 . delta + y . delta) / (1 + e1 . y)`` with ``delta = omega - omega_ref^b`` and
-    ``y = x_ref^b``. Zero at the antipodal point, where it is a ``0/0`` (``y = -e1``).
+    ``y = x_ref^b``. It grows like ``1 / (pi - phi_tilde)`` near the antipode and is undefined at
+    ``y = -e1``, where it is set to zero (module docstring).
 
     Args:
         omega: Body angular velocity [rad/s].
@@ -313,6 +315,83 @@ def reduced_attitude_errors(R, omega, x_ref, x_ref_dot) -> tuple[float, np.ndarr
     return _error_angle(y), omega_tilde
 
 
+class ReducedAttitudeOutput(NamedTuple):
+    """Result of one evaluation of :class:`ReducedAttitudeLaw`."""
+
+    torque: np.ndarray
+    """Control torques about the body y- and z-axes (2,) [N m] (eq. 9)."""
+    phi_tilde: float
+    """Pointing error [rad] (eq. 4)."""
+    omega_tilde: np.ndarray
+    """Angular velocity error (2,) [rad/s] (eq. 8)."""
+
+
+@dataclass(frozen=True)
+class ReducedAttitudeLaw:
+    """The tracking law of eq. (9) with fixed, validated parameters (findings 1 and 2 applied).
+
+    ``u = -k_P phi_tilde H^T n - k_D omega_tilde + H^T (J R_tilde R^T (x_ref x x_ref_ddot) - m)``
+    (``"paper"``), plus ``mu H^T J R_tilde (y x omega_ref^b)`` for ``"exact"`` (the default), which
+    makes ``V_dot = -k_D |omega_tilde|^2`` hold exactly for a time-varying reference.
+
+    Attributes:
+        J: Inertia matrix (3x3) [kg m^2], block-diagonal per Assumption 1 (eq. 2).
+        k_p: Proportional gain [N m/rad] (> 0).
+        k_d: Derivative gain [N m s/rad] (> 0).
+        feedforward: ``"exact"`` or ``"paper"``, see the module docstring.
+    """
+
+    J: np.ndarray
+    k_p: float
+    k_d: float
+    feedforward: Feedforward = "exact"
+
+    def __post_init__(self) -> None:
+        J = check_block_diagonal_inertia(self.J).copy()
+        J.setflags(write=False)
+        object.__setattr__(self, "J", J)
+        object.__setattr__(self, "k_p", _positive(self.k_p, "k_p"))
+        object.__setattr__(self, "k_d", _positive(self.k_d, "k_d"))
+        check_feedforward(self.feedforward)
+
+    def __call__(self, R, omega, x_ref, x_ref_dot, x_ref_ddot, m=None) -> ReducedAttitudeOutput:
+        """Evaluate the law.
+
+        Args:
+            R: Body-to-world rotation ``R_b^I`` (3x3).
+            omega: Body angular velocity in the body frame (3,) [rad/s].
+            x_ref: Unit reference direction in the world frame (3,).
+            x_ref_dot: First time derivative of ``x_ref`` (3,) [1/s].
+            x_ref_ddot: Second time derivative of ``x_ref`` (3,) [1/s^2].
+            m: Known body-frame moments other than the control (3,) [N m] (eq. 1); ``None`` = 0.
+
+        Raises:
+            ValueError: bad shapes or values.
+        """
+        R = _rotation(R)
+        omega = _vector(omega, 3, "omega")
+        x_ref = _unit_vector(x_ref, "x_ref")
+        x_ref_dot = _vector(x_ref_dot, 3, "x_ref_dot")
+        x_ref_ddot = _vector(x_ref_ddot, 3, "x_ref_ddot")
+
+        y = R.T @ x_ref
+        R_tilde = _minimal_rotation(y)
+        omega_ref_b = R.T @ _cross(x_ref, x_ref_dot)  # eq. (3)
+        omega_tilde = (omega - R_tilde @ omega_ref_b)[1:]  # eq. (8), H^T v = v[1:]
+        # Reference angular acceleration rotated into the tangent plane at e1 (eq. 9, finding 1).
+        acceleration = R_tilde @ (R.T @ _cross(x_ref, x_ref_ddot))
+        if self.feedforward == "exact":
+            mu = _rate_correction(omega - omega_ref_b, y)
+            acceleration = acceleration + mu * (R_tilde @ _cross(y, omega_ref_b))  # finding 2
+        feedforward = (self.J @ acceleration)[1:]
+        if m is not None:
+            feedforward = feedforward - _vector(m, 3, "m")[1:]
+        torque = (
+            -self.k_p * _error_axis_angle(y)[1:] - self.k_d * omega_tilde + feedforward
+        )  # eq. (9)
+        return ReducedAttitudeOutput(torque, _error_angle(y), omega_tilde)
+
+
 def reduced_attitude_torque(
     R,
     omega,
@@ -328,9 +407,8 @@ def reduced_attitude_torque(
 ) -> np.ndarray:
     """Reduced-attitude tracking torque ``u`` (eq. 9, with findings 1 and 2).
 
-    ``u = -k_P phi_tilde H^T n - k_D omega_tilde + H^T (J R_tilde R^T (x_ref x x_ref_ddot) - m)``
-    (``"paper"``), plus ``mu H^T J R_tilde (y x omega_ref^b)`` for ``"exact"`` (the default), which
-    makes ``V_dot = -k_D |omega_tilde|^2`` hold exactly for a time-varying reference.
+    Functional form of :class:`ReducedAttitudeLaw`; prefer the class in loops (``J`` and the gains
+    are then validated once).
 
     Args:
         R: Body-to-world rotation ``R_b^I`` (3x3).
@@ -350,25 +428,6 @@ def reduced_attitude_torque(
     Raises:
         ValueError: bad shapes or values, ``J`` not block-diagonal, unknown ``feedforward``.
     """
-    check_feedforward(feedforward)
-    R = _rotation(R)
-    omega = _vector(omega, 3, "omega")
-    x_ref = _unit_vector(x_ref, "x_ref")
-    x_ref_dot = _vector(x_ref_dot, 3, "x_ref_dot")
-    x_ref_ddot = _vector(x_ref_ddot, 3, "x_ref_ddot")
-    J = check_block_diagonal_inertia(J)
     m = _vector(m, 3, "m")
-    k_p = _positive(k_p, "k_p")
-    k_d = _positive(k_d, "k_d")
-
-    y = R.T @ x_ref
-    R_tilde = _minimal_rotation(y)
-    omega_ref_b = R.T @ _cross(x_ref, x_ref_dot)  # eq. (3)
-    omega_tilde = (omega - R_tilde @ omega_ref_b)[1:]  # eq. (8)
-    # Reference angular acceleration rotated into the tangent plane at e1 (eq. 9 with finding 1).
-    acceleration = R_tilde @ (R.T @ _cross(x_ref, x_ref_ddot))
-    if feedforward == "exact":
-        mu = _rate_correction(omega - omega_ref_b, y)
-        acceleration = acceleration + mu * (R_tilde @ _cross(y, omega_ref_b))  # finding 2
-    phi_n = _error_axis_angle(y)
-    return -k_p * phi_n[1:] - k_d * omega_tilde + (J @ acceleration - m)[1:]  # eq. (9)
+    law = ReducedAttitudeLaw(J, k_p, k_d, feedforward)
+    return law(R, omega, x_ref, x_ref_dot, x_ref_ddot, m).torque

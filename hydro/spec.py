@@ -59,9 +59,13 @@ class CrossflowDrag:
             if not (np.isfinite(value) and value > 0.0):
                 raise HydroError(f"crossflow {name} must be positive and finite, got {value}")
         if not (np.isfinite(self.drag_coefficient) and self.drag_coefficient >= 0.0):
-            raise HydroError(f"crossflow drag coefficient must be >= 0, got {self.drag_coefficient}")
+            raise HydroError(
+                f"crossflow drag coefficient must be >= 0, got {self.drag_coefficient}"
+            )
         object.__setattr__(self, "rotation", _frozen_array(self.rotation, (3, 3), "rotation"))
-        object.__setattr__(self, "translation", _frozen_array(self.translation, (3,), "translation"))
+        object.__setattr__(
+            self, "translation", _frozen_array(self.translation, (3,), "translation")
+        )
 
     @property
     def strip_coefficient(self) -> float:
@@ -97,7 +101,9 @@ class LinkHydrodynamics:
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.volume) and self.volume >= 0.0):
-            raise HydroError(f"link '{self.link}': volume must be >= 0 and finite, got {self.volume}")
+            raise HydroError(
+                f"link '{self.link}': volume must be >= 0 and finite, got {self.volume}"
+            )
         object.__setattr__(self, "volume", float(self.volume))
         object.__setattr__(
             self,

@@ -92,7 +92,12 @@ class RigidBody:
     disturbance: Callable[[float], np.ndarray]
 
     def moments(self, omega: np.ndarray, t: float) -> np.ndarray:
-        return -np.cross(omega, self.J @ omega) + self.disturbance(t)
+        """Known moments: gyroscopic ``-omega x J omega`` plus the disturbance [N m]."""
+        a, b = omega, self.J @ omega
+        gyroscopic = np.array(
+            [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+        )
+        return -gyroscopic + self.disturbance(t)
 
     def derivative(self, state: np.ndarray, t: float, controller: Controller) -> np.ndarray:
         q, omega = state[:4], state[4:]

@@ -21,6 +21,7 @@ from scipy.spatial.transform import Rotation
 from control.reduced_attitude import (
     E1,
     H,
+    ReducedAttitudeLaw,
     error_angle,
     error_axis_angle,
     lyapunov_function,
@@ -54,12 +55,11 @@ def random_unit_vectors(count: int, seed: int) -> np.ndarray:
 
 
 def tracking_controller(reference, feedforward: str):
+    law = ReducedAttitudeLaw(J, K_P, K_D, feedforward)
+
     def controller(R, omega, t):
         x, x_dot, x_ddot = reference(t)
-        m = BODY.moments(omega, t)
-        return reduced_attitude_torque(
-            R, omega, x, x_dot, x_ddot, J, m, K_P, K_D, feedforward=feedforward
-        )
+        return law(R, omega, x, x_dot, x_ddot, BODY.moments(omega, t)).torque
 
     return controller
 
@@ -323,6 +323,26 @@ def test_constant_reference_both_options_agree_and_converge():
     assert np.max(np.diff(V)) < 1e-8 * V[0]
     assert phi[-1] < 1e-3
     assert np.linalg.norm(omega_tilde[-1]) < 1e-3
+
+
+def test_law_object_matches_the_functions():
+    """ReducedAttitudeLaw returns the torque of reduced_attitude_torque and the errors of
+    reduced_attitude_errors; m = None means no known moments."""
+    for k, state in enumerate(random_states(4, seed=5)):
+        R, omega = quaternion_to_rotation(state[:4]), state[4:]
+        x, x_dot, x_ddot = CONE(0.7 * k)
+        m = BODY.moments(omega, 0.7 * k)
+        for feedforward in ("exact", "paper"):
+            out = ReducedAttitudeLaw(J, K_P, K_D, feedforward)(R, omega, x, x_dot, x_ddot, m)
+            u = reduced_attitude_torque(
+                R, omega, x, x_dot, x_ddot, J, m, K_P, K_D, feedforward=feedforward
+            )
+            np.testing.assert_array_equal(out.torque, u)
+            phi, omega_tilde = reduced_attitude_errors(R, omega, x, x_dot)
+            assert out.phi_tilde == phi
+            np.testing.assert_array_equal(out.omega_tilde, omega_tilde)
+            no_m = ReducedAttitudeLaw(J, K_P, K_D, feedforward)(R, omega, x, x_dot, x_ddot)
+            np.testing.assert_allclose(no_m.torque, u + m[1:], atol=1e-14)
 
 
 # --------------------------------------------------------------------------------------------------

@@ -1,0 +1,806 @@
+"""Numba kernels: kinematics, articulated-body dynamics with general body inertias, hydro, RK4 on SE(3).
+
+Everything here works on the flat arrays of :class:`aiauv_pin.fast.model.FastModel` (a tuple ``M``):
+
+* ``ints`` (nb, 4) int64: parent body (-1 for the base), joint type (0 free flyer, 1 revolute,
+  2 prismatic), index in ``q``, index in ``v``;
+* ``place`` (nb, 4, 3): joint placement in the parent body (rows 0-2 rotation, row 3 translation);
+* ``axis`` (nb, 6): motion subspace ``S`` of the 1-DOF joint in the child frame;
+* ``inertia`` (nb, 3, 6, 6): ``[0]`` rigid + added inertia, ``[1]`` added mass ``M_A``,
+  ``[2]`` rigid inertia, all about the body origin in body axes;
+* ``restore`` (nb, 4): ``(B - W, B c_B - W c_W)`` per body (weight ``W`` at ``c_W``, buoyancy ``B`` at
+  ``c_B``) so that the hydrostatic wrench on the body is ``((B - W) e, (B c_B - W c_W) x e)`` with
+  ``e`` the world's up axis in body axes (Fossen 2021, eq. (4.6));
+* ``link_i`` (nl, 2) int64: body of the link, 1 if it has crossflow drag;
+* ``link_m`` (nl, 4, 6, 6): link-from-body motion transform, ``D_L``, ``D_Q``, cylinder-from-link
+  motion transform;
+* ``link_f`` (nl, 2): cylinder length [m], strip coefficient ``rho r C_dC`` [kg/m^2];
+* ``gauss`` (2, n): Gauss-Legendre nodes and weights on ``[0, 1]``;
+* ``thrust`` (m, 7): body index, unit-thrust wrench in the body frame (6).
+
+Spatial vectors are ``(linear, angular)`` as in Pinocchio. The articulated-body algorithm is
+Featherstone's (2008, Table 7.1) with the rigid inertia replaced by the full 6x6 ``I = I_RB + M_A`` of
+each body, so that the added-mass inertia and Coriolis terms enter exactly as in
+:meth:`aiauv_pin.Vehicle.acceleration` (Kirchhoff: ``M nu_dot + nu x* (M nu)``, Fossen 2021,
+eq. (6.43)); with a current the added mass acts on the relative twist (Fossen 2021, eq. (10.5)).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+_OPTS = dict(cache=True, nogil=True, fastmath=False, error_model="numpy")
+
+FREE_FLYER, REVOLUTE, PRISMATIC = 0, 1, 2
+
+
+# ---------------------------------------------------------------------- small linear algebra
+@njit(**_OPTS)
+def _quat_to_rot(x, y, z, w, out):
+    """Rotation matrix of a unit quaternion ``(x, y, z, w)``."""
+    out[0, 0] = 1.0 - 2.0 * (y * y + z * z)
+    out[0, 1] = 2.0 * (x * y - z * w)
+    out[0, 2] = 2.0 * (x * z + y * w)
+    out[1, 0] = 2.0 * (x * y + z * w)
+    out[1, 1] = 1.0 - 2.0 * (x * x + z * z)
+    out[1, 2] = 2.0 * (y * z - x * w)
+    out[2, 0] = 2.0 * (x * z - y * w)
+    out[2, 1] = 2.0 * (y * z + x * w)
+    out[2, 2] = 1.0 - 2.0 * (x * x + y * y)
+
+
+@njit(**_OPTS)
+def _axis_rot(ax, ay, az, angle, out):
+    """Rodrigues: rotation by ``angle`` about the unit axis ``a``."""
+    s = math.sin(angle)
+    c1 = 1.0 - math.cos(angle)
+    out[0, 0] = 1.0 - c1 * (ay * ay + az * az)
+    out[1, 1] = 1.0 - c1 * (ax * ax + az * az)
+    out[2, 2] = 1.0 - c1 * (ax * ax + ay * ay)
+    out[0, 1] = -s * az + c1 * ax * ay
+    out[1, 0] = s * az + c1 * ax * ay
+    out[0, 2] = s * ay + c1 * ax * az
+    out[2, 0] = -s * ay + c1 * ax * az
+    out[1, 2] = -s * ax + c1 * ay * az
+    out[2, 1] = s * ax + c1 * ay * az
+
+
+@njit(**_OPTS)
+def _motion_cross(a, b, out):
+    """``a x b`` for motion vectors (Featherstone's ``crm``): ``(w x v' + v x w', w x w')``."""
+    v0, v1, v2, w0, w1, w2 = a[0], a[1], a[2], a[3], a[4], a[5]
+    out[0] = w1 * b[2] - w2 * b[1] + v1 * b[5] - v2 * b[4]
+    out[1] = w2 * b[0] - w0 * b[2] + v2 * b[3] - v0 * b[5]
+    out[2] = w0 * b[1] - w1 * b[0] + v0 * b[4] - v1 * b[3]
+    out[3] = w1 * b[5] - w2 * b[4]
+    out[4] = w2 * b[3] - w0 * b[5]
+    out[5] = w0 * b[4] - w1 * b[3]
+
+
+@njit(**_OPTS)
+def _add_force_cross(twist, wrench, out):
+    """``out += twist x* wrench`` (Featherstone's ``crf``): ``(w x f, v x f + w x n)``."""
+    v0, v1, v2, w0, w1, w2 = twist[0], twist[1], twist[2], twist[3], twist[4], twist[5]
+    f0, f1, f2, n0, n1, n2 = wrench[0], wrench[1], wrench[2], wrench[3], wrench[4], wrench[5]
+    out[0] += w1 * f2 - w2 * f1
+    out[1] += w2 * f0 - w0 * f2
+    out[2] += w0 * f1 - w1 * f0
+    out[3] += v1 * f2 - v2 * f1 + w1 * n2 - w2 * n1
+    out[4] += v2 * f0 - v0 * f2 + w2 * n0 - w0 * n2
+    out[5] += v0 * f1 - v1 * f0 + w0 * n1 - w1 * n0
+
+
+@njit(**_OPTS)
+def _matvec6(m, x, out):
+    for i in range(6):
+        s = 0.0
+        for j in range(6):
+            s += m[i, j] * x[j]
+        out[i] = s
+
+
+@njit(**_OPTS)
+def _matTvec6(m, x, out):
+    for i in range(6):
+        s = 0.0
+        for j in range(6):
+            s += m[j, i] * x[j]
+        out[i] = s
+
+
+@njit(**_OPTS)
+def _motion_transform(rot, trans, out):
+    """``X`` mapping parent twists to the child frame at ``(R, p)`` (Featherstone 2008, eq. (2.24))."""
+    px, py, pz = trans[0], trans[1], trans[2]
+    for i in range(3):
+        r0, r1, r2 = rot[0, i], rot[1, i], rot[2, i]  # row i of R^T
+        out[i, 0] = r0
+        out[i, 1] = r1
+        out[i, 2] = r2
+        out[i + 3, 3] = r0
+        out[i + 3, 4] = r1
+        out[i + 3, 5] = r2
+        out[i + 3, 0] = 0.0
+        out[i + 3, 1] = 0.0
+        out[i + 3, 2] = 0.0
+        # -R^T [p]: row i of R^T times [p]
+        out[i, 3] = -(r1 * pz - r2 * py)
+        out[i, 4] = -(r2 * px - r0 * pz)
+        out[i, 5] = -(r0 * py - r1 * px)
+
+
+@njit(**_OPTS)
+def _solve_spd6(a, b, out):
+    """Solve ``a x = b`` for a symmetric positive-definite 6x6 ``a`` (Cholesky)."""
+    low = np.empty((6, 6))
+    for j in range(6):
+        s = a[j, j]
+        for k in range(j):
+            s -= low[j, k] * low[j, k]
+        d = math.sqrt(s) if s > 0.0 else math.nan
+        low[j, j] = d
+        for i in range(j + 1, 6):
+            s = a[i, j]
+            for k in range(j):
+                s -= low[i, k] * low[j, k]
+            low[i, j] = s / d
+    y = np.empty(6)
+    for i in range(6):
+        s = b[i]
+        for k in range(i):
+            s -= low[i, k] * y[k]
+        y[i] = s / low[i, i]
+    for i in range(5, -1, -1):
+        s = y[i]
+        for k in range(i + 1, 6):
+            s -= low[k, i] * out[k]
+        out[i] = s / low[i, i]
+
+
+# ---------------------------------------------------------------------- kinematics
+@njit(**_OPTS)
+def kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc):
+    """Body poses in the world, parent-to-child motion transforms, body twists and ``v x S qd``."""
+    nb = ints.shape[0]
+    rot_l = np.empty((3, 3))
+    rot_j = np.empty((3, 3))
+    pos_l = np.empty(3)
+    tmp = np.empty(6)
+    for b in range(nb):
+        parent, kind, iq, iv = ints[b, 0], ints[b, 1], ints[b, 2], ints[b, 3]
+        if kind == FREE_FLYER:
+            _quat_to_rot(q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6], rot_w[b])
+            for i in range(3):
+                pos_w[b, i] = q[iq + i]
+            for i in range(6):
+                twist[b, i] = v[iv + i]
+                bias_acc[b, i] = 0.0
+            for i in range(6):
+                for j in range(6):
+                    xform[b, i, j] = 1.0 if i == j else 0.0
+            continue
+        qj = q[iq]
+        s = axis[b]
+        if kind == REVOLUTE:
+            _axis_rot(s[3], s[4], s[5], qj, rot_j)
+            for i in range(3):
+                for j in range(3):
+                    rot_l[i, j] = (
+                        place[b, i, 0] * rot_j[0, j]
+                        + place[b, i, 1] * rot_j[1, j]
+                        + place[b, i, 2] * rot_j[2, j]
+                    )
+                pos_l[i] = place[b, 3, i]
+        else:
+            for i in range(3):
+                for j in range(3):
+                    rot_l[i, j] = place[b, i, j]
+                pos_l[i] = place[b, 3, i] + qj * (
+                    place[b, i, 0] * s[0] + place[b, i, 1] * s[1] + place[b, i, 2] * s[2]
+                )
+        if parent < 0:
+            for i in range(3):
+                pos_w[b, i] = pos_l[i]
+                for j in range(3):
+                    rot_w[b, i, j] = rot_l[i, j]
+        else:
+            for i in range(3):
+                acc = pos_w[parent, i]
+                for k in range(3):
+                    acc += rot_w[parent, i, k] * pos_l[k]
+                pos_w[b, i] = acc
+                for j in range(3):
+                    rot_w[b, i, j] = (
+                        rot_w[parent, i, 0] * rot_l[0, j]
+                        + rot_w[parent, i, 1] * rot_l[1, j]
+                        + rot_w[parent, i, 2] * rot_l[2, j]
+                    )
+        _motion_transform(rot_l, pos_l, xform[b])
+        qd = v[iv]
+        if parent < 0:
+            for i in range(6):
+                twist[b, i] = s[i] * qd
+        else:
+            _matvec6(xform[b], twist[parent], twist[b])
+            for i in range(6):
+                twist[b, i] += s[i] * qd
+        for i in range(6):
+            tmp[i] = s[i] * qd
+        _motion_cross(twist[b], tmp, bias_acc[b])
+
+
+# ---------------------------------------------------------------------- hydrodynamics
+@njit(**_OPTS)
+def _crossflow(vel, length, coefficient, gauss, out):
+    """Strip-theory crossflow wrench about the cylinder origin (as :func:`hydro.crossflow.crossflow_wrench`).
+
+    ``f(x) = -k |v_n| v_n`` with ``v_n(x) = (v + r x, w - q x)`` integrated over ``[0, L]`` with
+    Gauss-Legendre on each side of the point where ``|v_n|`` is smallest (Fossen 2021, Sec. 6.4.3).
+    """
+    a_y, a_z = vel[1], vel[2]
+    b_y, b_z = vel[5], -vel[4]
+    slope2 = b_y * b_y + b_z * b_z
+    split = 0.0
+    if slope2 > 0.0:
+        split = -(a_y * b_y + a_z * b_z) / slope2
+    if split < 0.0:
+        split = 0.0
+    elif split > length:
+        split = length
+    fy = 0.0
+    fz = 0.0
+    my = 0.0
+    mz = 0.0
+    n = gauss.shape[1]
+    for part in range(2):
+        start = 0.0 if part == 0 else split
+        width = split if part == 0 else length - split
+        for k in range(n):
+            x = start + width * gauss[0, k]
+            w = width * gauss[1, k]
+            ny = a_y + b_y * x
+            nz = a_z + b_z * x
+            speed = math.hypot(ny, nz)
+            ly = -speed * ny
+            lz = -speed * nz
+            fy += w * ly
+            fz += w * lz
+            my -= w * x * lz
+            mz += w * x * ly
+    out[0] = 0.0
+    out[1] = coefficient * fy
+    out[2] = coefficient * fz
+    out[3] = 0.0
+    out[4] = coefficient * my
+    out[5] = coefficient * mz
+
+
+@njit(**_OPTS)
+def body_bias(M, rot_w, twist, current, bias):
+    """Velocity- and state-dependent part of each body's equation ``f = I a + p`` (left-hand side).
+
+    ``p = nu x* (I_RB nu) + nu_r x* (M_A nu_r) + M_A (w x v_c, 0) - tau_D(nu_r) - g_wrench``.
+    """
+    ints, inertia, restore, link_i, link_m, link_f, gauss = M[0], M[3], M[4], M[5], M[6], M[7], M[8]
+    nb = ints.shape[0]
+    relative = np.empty((nb, 6))
+    mom = np.empty(6)
+    tmp = np.empty(6)
+    tmp2 = np.empty(6)
+    wrench = np.empty(6)
+    cyl = np.empty(6)
+    cyl_w = np.empty(6)
+    cur_x, cur_y, cur_z = current[0], current[1], current[2]
+    has_current = cur_x != 0.0 or cur_y != 0.0 or cur_z != 0.0
+    for b in range(nb):
+        rot = rot_w[b]
+        nu = twist[b]
+        for i in range(6):
+            bias[b, i] = 0.0
+            relative[b, i] = nu[i]
+        # rigid Coriolis-centripetal: nu x* (I_RB nu)   (Featherstone 2008, eq. (2.67))
+        _matvec6(inertia[b, 2], nu, mom)
+        _add_force_cross(nu, mom, bias[b])
+        if has_current:
+            # current in body axes, v_c = R^T V_c; nu_r = nu - (v_c, 0)   (Fossen 2021, eq. (10.4))
+            vc0 = rot[0, 0] * cur_x + rot[1, 0] * cur_y + rot[2, 0] * cur_z
+            vc1 = rot[0, 1] * cur_x + rot[1, 1] * cur_y + rot[2, 1] * cur_z
+            vc2 = rot[0, 2] * cur_x + rot[1, 2] * cur_y + rot[2, 2] * cur_z
+            relative[b, 0] -= vc0
+            relative[b, 1] -= vc1
+            relative[b, 2] -= vc2
+            # M_A (w x v_c, 0): d/dt of the current seen from the rotating body   (Fossen 2021, eq. (10.5))
+            tmp[0] = nu[4] * vc2 - nu[5] * vc1
+            tmp[1] = nu[5] * vc0 - nu[3] * vc2
+            tmp[2] = nu[3] * vc1 - nu[4] * vc0
+            tmp[3] = 0.0
+            tmp[4] = 0.0
+            tmp[5] = 0.0
+            _matvec6(inertia[b, 1], tmp, tmp2)
+            for i in range(6):
+                bias[b, i] += tmp2[i]
+        # added-mass Coriolis: nu_r x* (M_A nu_r)   (Fossen 2021, eq. (6.46))
+        _matvec6(inertia[b, 1], relative[b], mom)
+        _add_force_cross(relative[b], mom, bias[b])
+        # hydrostatics: ((B - W) e, (B c_B - W c_W) x e), e = R^T z   (Fossen 2021, eq. (4.6))
+        e0, e1, e2 = rot[2, 0], rot[2, 1], rot[2, 2]
+        sf, sx, sy, sz = restore[b, 0], restore[b, 1], restore[b, 2], restore[b, 3]
+        bias[b, 0] -= sf * e0
+        bias[b, 1] -= sf * e1
+        bias[b, 2] -= sf * e2
+        bias[b, 3] -= sy * e2 - sz * e1
+        bias[b, 4] -= sz * e0 - sx * e2
+        bias[b, 5] -= sx * e1 - sy * e0
+    # damping per link: -D_L nu_r - D_Q |nu_r| nu_r (+ crossflow)   (Fossen 2021, eq. (6.60)-(6.62))
+    for k in range(link_i.shape[0]):
+        b = link_i[k, 0]
+        x_link = link_m[k, 0]
+        _matvec6(x_link, relative[b], tmp)
+        for i in range(6):
+            tmp2[i] = abs(tmp[i]) * tmp[i]
+        for i in range(6):
+            s = 0.0
+            for j in range(6):
+                s += link_m[k, 1, i, j] * tmp[j] + link_m[k, 2, i, j] * tmp2[j]
+            wrench[i] = -s
+        if link_i[k, 1]:
+            x_cyl = link_m[k, 3]
+            _matvec6(x_cyl, tmp, cyl)
+            _crossflow(cyl, link_f[k, 0], link_f[k, 1], gauss, cyl_w)
+            _matTvec6(x_cyl, cyl_w, tmp2)
+            for i in range(6):
+                wrench[i] += tmp2[i]
+        _matTvec6(x_link, wrench, tmp2)
+        for i in range(6):
+            bias[b, i] -= tmp2[i]
+
+
+# ---------------------------------------------------------------------- articulated-body algorithm
+@njit(**_OPTS)
+def _articulated(M, tau, xform, bias_acc, bias, out):
+    """ABA passes 2 and 3 (Featherstone 2008, Table 7.1) with general 6x6 body inertias."""
+    ints, axis, inertia = M[0], M[2], M[3]
+    nb = ints.shape[0]
+    art = np.empty((nb, 6, 6))
+    pa = np.empty((nb, 6))
+    u_vec = np.empty((nb, 6))
+    d_inv = np.empty(nb)
+    u_sc = np.empty(nb)
+    acc = np.empty((nb, 6))
+    ia = np.empty((6, 6))
+    t66 = np.empty((6, 6))
+    p_loc = np.empty(6)
+    tmp = np.empty(6)
+    for b in range(nb):
+        for i in range(6):
+            pa[b, i] = bias[b, i]
+            for j in range(6):
+                art[b, i, j] = inertia[b, 0, i, j]
+    for b in range(nb - 1, 0, -1):
+        parent = ints[b, 0]
+        s = axis[b]
+        _matvec6(art[b], s, u_vec[b])
+        d = 0.0
+        sp = 0.0
+        for i in range(6):
+            d += s[i] * u_vec[b, i]
+            sp += s[i] * pa[b, i]
+        d_inv[b] = 1.0 / d
+        u_sc[b] = tau[ints[b, 3]] - sp
+        if parent < 0:
+            continue
+        for i in range(6):
+            for j in range(6):
+                ia[i, j] = art[b, i, j] - u_vec[b, i] * u_vec[b, j] * d_inv[b]
+        # p^a = p^A + I^a c + U u / D
+        _matvec6(ia, bias_acc[b], p_loc)
+        for i in range(6):
+            p_loc[i] += pa[b, i] + u_vec[b, i] * u_sc[b] * d_inv[b]
+        x = xform[b]
+        # parent += X^T I^a X, X^T p^a
+        for i in range(6):
+            for j in range(6):
+                acc_ij = 0.0
+                for k in range(6):
+                    acc_ij += ia[i, k] * x[k, j]
+                t66[i, j] = acc_ij
+        for i in range(6):
+            for j in range(6):
+                acc_ij = 0.0
+                for k in range(6):
+                    acc_ij += x[k, i] * t66[k, j]
+                art[parent, i, j] += acc_ij
+        _matTvec6(x, p_loc, tmp)
+        for i in range(6):
+            pa[parent, i] += tmp[i]
+    # root: free flyer (6 DOF, S = identity)
+    iv0 = ints[0, 3]
+    for i in range(6):
+        tmp[i] = tau[iv0 + i] - pa[0, i]
+    _solve_spd6(art[0], tmp, acc[0])
+    for i in range(6):
+        out[iv0 + i] = acc[0, i]
+    for b in range(1, nb):
+        parent = ints[b, 0]
+        s = axis[b]
+        if parent < 0:
+            for i in range(6):
+                tmp[i] = bias_acc[b, i]
+        else:
+            _matvec6(xform[b], acc[parent], tmp)
+            for i in range(6):
+                tmp[i] += bias_acc[b, i]
+        ua = 0.0
+        for i in range(6):
+            ua += u_vec[b, i] * tmp[i]
+        qdd = (u_sc[b] - ua) * d_inv[b]
+        out[ints[b, 3]] = qdd
+        for i in range(6):
+            acc[b, i] = tmp[i] + s[i] * qdd
+
+
+@njit(**_OPTS)
+def _backward_generalized(ints, axis, xform, body_wrench, out):
+    """Generalised force ``sum_b J_b^T w_b`` of body wrenches (in body frames); consumes ``body_wrench``."""
+    nb = ints.shape[0]
+    tmp = np.empty(6)
+    for b in range(nb - 1, -1, -1):
+        iv = ints[b, 3]
+        if ints[b, 1] == FREE_FLYER:
+            for i in range(6):
+                out[iv + i] = body_wrench[b, i]
+        else:
+            s = 0.0
+            for i in range(6):
+                s += axis[b, i] * body_wrench[b, i]
+            out[iv] = s
+        parent = ints[b, 0]
+        if parent >= 0:
+            _matTvec6(xform[b], body_wrench[b], tmp)
+            for i in range(6):
+                body_wrench[parent, i] += tmp[i]
+
+
+@njit(**_OPTS)
+def _restoring_wrenches(restore, rot_w, out):
+    """Hydrostatic wrench acting on each body, in body axes (Fossen 2021, eq. (4.6))."""
+    for b in range(restore.shape[0]):
+        e0, e1, e2 = rot_w[b, 2, 0], rot_w[b, 2, 1], rot_w[b, 2, 2]
+        sf, sx, sy, sz = restore[b, 0], restore[b, 1], restore[b, 2], restore[b, 3]
+        out[b, 0] = sf * e0
+        out[b, 1] = sf * e1
+        out[b, 2] = sf * e2
+        out[b, 3] = sy * e2 - sz * e1
+        out[b, 4] = sz * e0 - sx * e2
+        out[b, 5] = sx * e1 - sy * e0
+
+
+@njit(**_OPTS)
+def restoring_forces(M, q):
+    """``g(q)``: hydrostatic generalised force on the left-hand side (weight minus buoyancy)."""
+    ints, place, axis, restore = M[0], M[1], M[2], M[4]
+    nb = ints.shape[0]
+    nv = M[10][1]
+    rot_w = np.empty((nb, 3, 3))
+    pos_w = np.empty((nb, 3))
+    xform = np.empty((nb, 6, 6))
+    twist = np.empty((nb, 6))
+    bias_acc = np.empty((nb, 6))
+    kinematics(ints, place, axis, q, np.zeros(nv), rot_w, pos_w, xform, twist, bias_acc)
+    wrench = np.empty((nb, 6))
+    _restoring_wrenches(restore, rot_w, wrench)
+    out = np.empty(nv)
+    _backward_generalized(ints, axis, xform, wrench, out)
+    for i in range(nv):
+        out[i] = -out[i]
+    return out
+
+
+@njit(**_OPTS)
+def thrust_matrix(M, q):
+    """``B(q)`` (nv x m): generalised forces of unit thrusts (the paper's eq. (20))."""
+    ints, place, axis, thrust = M[0], M[1], M[2], M[9]
+    nb = ints.shape[0]
+    nv = M[10][1]
+    rot_w = np.empty((nb, 3, 3))
+    pos_w = np.empty((nb, 3))
+    xform = np.empty((nb, 6, 6))
+    twist = np.empty((nb, 6))
+    bias_acc = np.empty((nb, 6))
+    kinematics(ints, place, axis, q, np.zeros(nv), rot_w, pos_w, xform, twist, bias_acc)
+    m = thrust.shape[0]
+    out = np.empty((nv, m))
+    wrench = np.empty((nb, 6))
+    column = np.empty(nv)
+    for k in range(m):
+        wrench[:, :] = 0.0
+        b = int(thrust[k, 0])
+        for i in range(6):
+            wrench[b, i] = thrust[k, 1 + i]
+        _backward_generalized(ints, axis, xform, wrench, column)
+        out[:, k] = column
+    return out
+
+
+# ---------------------------------------------------------------------- forward dynamics
+@njit(**_OPTS)
+def _generalized_with_servo(M, q, v, tau, servo, rot_w, xform, tau_out):
+    """``tau`` plus the joint servo ``-k_p (q - q*) - k_d qd + g_q(q)`` (paper, eq. (24))."""
+    nv = tau.shape[0]
+    for i in range(nv):
+        tau_out[i] = tau[i]
+    n_joint = servo.shape[1]
+    if n_joint == 0 or servo[3, 0] == 0.0:
+        return
+    ints, axis, restore = M[0], M[2], M[4]
+    nb = ints.shape[0]
+    g = np.empty(nv)
+    if servo[4, 0] != 0.0:
+        wrench = np.empty((nb, 6))
+        _restoring_wrenches(restore, rot_w, wrench)
+        _backward_generalized(ints, axis, xform, wrench, g)
+    else:
+        g[:] = 0.0
+    for k in range(n_joint):
+        iq = 7 + k
+        iv = 6 + k
+        # g_q on the left-hand side is minus the hydrostatic force on the joint
+        tau_out[iv] += -servo[0, k] * (q[iq] - servo[2, k]) - servo[1, k] * v[iv] - g[iv]
+
+
+@njit(**_OPTS)
+def acceleration(M, q, v, tau, current, servo, out):
+    """Forward dynamics ``dv`` for ``M(q) dv + bias(q, v) = tau (+ servo)``; writes ``out`` (nv,)."""
+    ints, place, axis = M[0], M[1], M[2]
+    nb = ints.shape[0]
+    rot_w = np.empty((nb, 3, 3))
+    pos_w = np.empty((nb, 3))
+    xform = np.empty((nb, 6, 6))
+    twist = np.empty((nb, 6))
+    bias_acc = np.empty((nb, 6))
+    bias = np.empty((nb, 6))
+    tau_all = np.empty(tau.shape[0])
+    kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc)
+    body_bias(M, rot_w, twist, current, bias)
+    _generalized_with_servo(M, q, v, tau, servo, rot_w, xform, tau_all)
+    _articulated(M, tau_all, xform, bias_acc, bias, out)
+
+
+# ---------------------------------------------------------------------- SE(3) x R^n group operations
+@njit(**_OPTS)
+def _skew_mul(a, m, out):
+    """``out = [a] m`` for a 3-vector ``a`` and 3x3 ``m``."""
+    for j in range(3):
+        out[0, j] = a[1] * m[2, j] - a[2] * m[1, j]
+        out[1, j] = a[2] * m[0, j] - a[0] * m[2, j]
+        out[2, j] = a[0] * m[1, j] - a[1] * m[0, j]
+
+
+@njit(**_OPTS)
+def integrate(q, xi, out):
+    """``out = q * exp(xi)``: free flyer by the exact SE(3) exponential, joints by addition.
+
+    ``exp(v, w) = (exp3(w), V(w) v)`` with ``V = I + (1 - cos t)/t^2 [w] + (t - sin t)/t^3 [w]^2``
+    (Barfoot 2017, eq. (7.85)); the quaternion is ``q_0 (x) (sin(t/2) w/t, cos(t/2))``, renormalised.
+    """
+    w0, w1, w2 = xi[3], xi[4], xi[5]
+    t2 = w0 * w0 + w1 * w1 + w2 * w2
+    t = math.sqrt(t2)
+    if t < 0.1:
+        a = 0.5 - t2 / 24.0 + t2 * t2 / 720.0 - t2 * t2 * t2 / 40320.0  # (1 - cos t)/t^2
+        c = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0 - t2 * t2 * t2 / 362880.0  # (t - sin t)/t^3
+        h = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0 - t2 * t2 * t2 / 645120.0  # sin(t/2)/t
+    else:
+        a = (1.0 - math.cos(t)) / t2
+        c = (t - math.sin(t)) / (t2 * t)
+        h = math.sin(0.5 * t) / t
+    v0, v1, v2 = xi[0], xi[1], xi[2]
+    # V v = v + a w x v + c w x (w x v)
+    c0 = w1 * v2 - w2 * v1
+    c1 = w2 * v0 - w0 * v2
+    c2 = w0 * v1 - w1 * v0
+    d0 = w1 * c2 - w2 * c1
+    d1 = w2 * c0 - w0 * c2
+    d2 = w0 * c1 - w1 * c0
+    p0 = v0 + a * c0 + c * d0
+    p1 = v1 + a * c1 + c * d1
+    p2 = v2 + a * c2 + c * d2
+    x, y, z, w = q[3], q[4], q[5], q[6]
+    rot = np.empty((3, 3))
+    _quat_to_rot(x, y, z, w, rot)
+    for i in range(3):
+        out[i] = q[i] + rot[i, 0] * p0 + rot[i, 1] * p1 + rot[i, 2] * p2
+    ex, ey, ez, ew = h * w0, h * w1, h * w2, math.cos(0.5 * t)
+    nx = w * ex + x * ew + y * ez - z * ey
+    ny = w * ey - x * ez + y * ew + z * ex
+    nz = w * ez + x * ey - y * ex + z * ew
+    nw = w * ew - x * ex - y * ey - z * ez
+    norm = math.sqrt(nx * nx + ny * ny + nz * nz + nw * nw)
+    if x * nx + y * ny + z * nz + w * nw < 0.0:
+        norm = -norm
+    out[3] = nx / norm
+    out[4] = ny / norm
+    out[5] = nz / norm
+    out[6] = nw / norm
+    for i in range(7, q.shape[0]):
+        out[i] = q[i] + xi[i - 1]
+
+
+@njit(**_OPTS)
+def tangent_rate(xi, vel, out):
+    """``out = J_r(xi)^-1 vel``: the rate of ``xi`` for ``integrate(q0, xi)`` moving with ``vel``.
+
+    ``J_r`` is the right Jacobian of ``exp`` (Pinocchio's ``dIntegrate`` w.r.t. its second argument):
+    on SE(3), ``J_r(rho, phi) = [[J3, Q], [0, J3]]`` with ``J3`` the SO(3) right Jacobian and
+    ``Q = Q_l(-rho, -phi)`` (Barfoot 2017, eq. (7.86), (7.87)); its inverse is
+    ``[[J3^-1, -J3^-1 Q J3^-1], [0, J3^-1]]`` with ``J3^-1 = I + [phi]/2 + d [phi]^2``,
+    ``d = 1/t^2 - (1 + cos t)/(2 t sin t)``. Joints: identity.
+    """
+    phi = np.empty(3)
+    rho = np.empty(3)
+    for i in range(3):
+        rho[i] = -xi[i]
+        phi[i] = -xi[i + 3]
+    t2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
+    t = math.sqrt(t2)
+    if t < 0.1:
+        c1 = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0 - t2 * t2 * t2 / 362880.0
+        c2 = 1.0 / 24.0 - t2 / 720.0 + t2 * t2 / 40320.0 - t2 * t2 * t2 / 3628800.0
+        c3 = 1.0 / 120.0 - t2 / 2520.0 + t2 * t2 / 120960.0 - t2 * t2 * t2 / 9979200.0
+        d = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0 + t2 * t2 * t2 / 1209600.0
+    else:
+        s, c = math.sin(t), math.cos(t)
+        c1 = (t - s) / (t2 * t)
+        c2 = (t2 + 2.0 * c - 2.0) / (2.0 * t2 * t2)
+        c3 = (2.0 * t - 3.0 * s + t * c) / (2.0 * t2 * t2 * t)
+        d = 1.0 / t2 - (1.0 + c) / (2.0 * t * s)
+    # skew matrices
+    P = np.zeros((3, 3))
+    R = np.zeros((3, 3))
+    P[0, 1], P[0, 2], P[1, 2] = -phi[2], phi[1], -phi[0]
+    P[1, 0], P[2, 0], P[2, 1] = phi[2], -phi[1], phi[0]
+    R[0, 1], R[0, 2], R[1, 2] = -rho[2], rho[1], -rho[0]
+    R[1, 0], R[2, 0], R[2, 1] = rho[2], -rho[1], rho[0]
+    PR = P @ R
+    RP = R @ P
+    PRP = PR @ P
+    PP = P @ P
+    # Q_l(rho, phi), Barfoot 2017, eq. (7.86), at (-rho, -phi)
+    Q = (
+        0.5 * R
+        + c1 * (PR + RP + PRP)
+        + c2 * (PP @ R + RP @ P - 3.0 * PRP)
+        + c3 * (PRP @ P + PP @ RP)
+    )
+    # J3^-1 = J3l^-1(-phi) = I - [-phi]/2 + d [-phi]^2   (Barfoot 2017, eq. (7.77))
+    jinv = np.eye(3) - 0.5 * P + d * PP
+    lin = np.empty(3)
+    ang = np.empty(3)
+    for i in range(3):
+        ang[i] = jinv[i, 0] * vel[3] + jinv[i, 1] * vel[4] + jinv[i, 2] * vel[5]
+    # top: J3^-1 (v - Q ang)
+    for i in range(3):
+        lin[i] = vel[i] - (Q[i, 0] * ang[0] + Q[i, 1] * ang[1] + Q[i, 2] * ang[2])
+    for i in range(3):
+        out[i] = jinv[i, 0] * lin[0] + jinv[i, 1] * lin[1] + jinv[i, 2] * lin[2]
+        out[i + 3] = ang[i]
+    for i in range(6, vel.shape[0]):
+        out[i] = vel[i]
+
+
+# ---------------------------------------------------------------------- integrators
+@njit(**_OPTS)
+def rk4_step(M, q, v, tau, current, servo, dt, q_out, v_out):
+    """One Runge-Kutta-Munthe-Kaas step of order 4 (as :func:`aiauv_pin.integrators.rk4_step`)."""
+    nv = v.shape[0]
+    nq = q.shape[0]
+    half = 0.5 * dt
+    a1 = np.empty(nv)
+    a2 = np.empty(nv)
+    a3 = np.empty(nv)
+    a4 = np.empty(nv)
+    k2 = np.empty(nv)
+    k3 = np.empty(nv)
+    k4 = np.empty(nv)
+    xi = np.empty(nv)
+    vs = np.empty(nv)
+    qs = np.empty(nq)
+    acceleration(M, q, v, tau, current, servo, a1)
+    for i in range(nv):
+        xi[i] = half * v[i]
+        vs[i] = v[i] + half * a1[i]
+    integrate(q, xi, qs)
+    acceleration(M, qs, vs, tau, current, servo, a2)
+    tangent_rate(xi, vs, k2)
+    for i in range(nv):
+        xi[i] = half * k2[i]
+        vs[i] = v[i] + half * a2[i]
+    integrate(q, xi, qs)
+    acceleration(M, qs, vs, tau, current, servo, a3)
+    tangent_rate(xi, vs, k3)
+    for i in range(nv):
+        xi[i] = dt * k3[i]
+        vs[i] = v[i] + dt * a3[i]
+    integrate(q, xi, qs)
+    acceleration(M, qs, vs, tau, current, servo, a4)
+    tangent_rate(xi, vs, k4)
+    sixth = dt / 6.0
+    for i in range(nv):
+        xi[i] = sixth * (v[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        v_out[i] = v[i] + sixth * (a1[i] + 2.0 * a2[i] + 2.0 * a3[i] + a4[i])
+    integrate(q, xi, q_out)
+
+
+@njit(**_OPTS)
+def euler_step(M, q, v, tau, current, servo, dt, q_out, v_out):
+    """Semi-implicit Euler: ``v += dt f(q, v)``, then ``q = q * exp(dt v)``."""
+    nv = v.shape[0]
+    a = np.empty(nv)
+    acceleration(M, q, v, tau, current, servo, a)
+    xi = np.empty(nv)
+    for i in range(nv):
+        v_out[i] = v[i] + dt * a[i]
+        xi[i] = dt * v_out[i]
+    integrate(q, xi, q_out)
+
+
+@njit(**_OPTS)
+def run_steps(M, q, v, tau, current, servo, dt, n_steps, method):
+    """Advance ``(q, v)`` in place by ``n_steps`` steps (method 0 = RK4, 1 = Euler).
+
+    Returns:
+        The number of steps completed; fewer than ``n_steps`` if the state became non-finite (then
+        ``q, v`` hold the last finite state).
+    """
+    q_new = np.empty(q.shape[0])
+    v_new = np.empty(v.shape[0])
+    for k in range(n_steps):
+        if method == 0:
+            rk4_step(M, q, v, tau, current, servo, dt, q_new, v_new)
+        else:
+            euler_step(M, q, v, tau, current, servo, dt, q_new, v_new)
+        for i in range(q.shape[0]):
+            if not math.isfinite(q_new[i]):
+                return k
+        for i in range(v.shape[0]):
+            if not math.isfinite(v_new[i]):
+                return k
+        q[:] = q_new
+        v[:] = v_new
+    return n_steps
+
+
+@njit(**_OPTS)
+def time_accelerations(M, q, v, tau, current, servo, repeats):
+    """Evaluate the dynamics ``repeats`` times inside compiled code (benchmarking); returns the last."""
+    out = np.empty(v.shape[0])
+    for _ in range(repeats):
+        acceleration(M, q, v, tau, current, servo, out)
+    return out
+
+
+@njit(**_OPTS)
+def frame_kinematics(M, q, v, body, rotation, translation):
+    """World pose and body-frame twist of a frame fixed to ``body`` at ``(rotation, translation)``.
+
+    Returns:
+        ``(R (3x3), p (3,), twist (6,))`` with the twist ``(v, w)`` in the frame's axes.
+    """
+    ints, place, axis = M[0], M[1], M[2]
+    nb = ints.shape[0]
+    rot_w = np.empty((nb, 3, 3))
+    pos_w = np.empty((nb, 3))
+    xform = np.empty((nb, 6, 6))
+    twist = np.empty((nb, 6))
+    bias_acc = np.empty((nb, 6))
+    kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc)
+    rot = rot_w[body] @ rotation
+    pos = pos_w[body] + rot_w[body] @ translation
+    x = np.empty((6, 6))
+    _motion_transform(rotation, translation, x)
+    frame_twist = np.empty(6)
+    _matvec6(x, twist[body], frame_twist)
+    return rot, pos, frame_twist

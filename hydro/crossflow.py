@@ -1,0 +1,126 @@
+"""Strip-theory crossflow drag of slender cylinders, batched over links.
+
+A cylinder of length ``L`` lies on the x-axis of its frame ``c`` (origin at the rear end, so the
+body spans ``x`` in ``[0, L]``). A section at ``x`` moves through the water with the normal velocity
+
+    v_n(x) = (v + r x, w - q x)                       (rigid-body kinematics, v_n = v + w x (x e1))
+
+and feels the drag per unit length ``f(x) = -k |v_n(x)| v_n(x)`` with the strip coefficient
+``k = rho r C_dC`` (crossflow principle; Fossen 2021, Sec. 6.4.3; PAPER_DATA.md "Hydrodynamics of
+one slender cylindrical link"). The wrench about the cylinder origin is
+
+    F_y = int_0^L f_y dx,   F_z = int_0^L f_z dx,
+    M_y = -int_0^L x f_z dx,   M_z = int_0^L x f_y dx      (moment of (x, 0, 0) x f)
+
+with no axial force and no roll moment. The lever arm ``x`` is in metres (the lineage code's
+``x / L`` is exact only for ``L = 1``).
+
+Quadrature. ``|v_n| v_n`` is smooth except where ``v_n`` passes through zero, where its second
+derivative jumps; a plain Gauss-Legendre rule converges only like ``n^-3`` there (16 nodes: 1e-3
+relative error). We therefore split ``[0, L]`` at the point ``x*`` where ``|v_n(x)|`` is smallest
+(the only place the integrand can lose smoothness; ``v_n`` is affine in ``x``) and use an ``n``-node
+Gauss-Legendre rule on each of ``[0, x*]`` and ``[x*, L]``. With the default ``nodes=16`` per part
+(32 evaluations per link) the result agrees with a 200 000-point midpoint rule to better than 1e-7
+relative over random states, including states whose kink lies exactly inside the cylinder and the
+nearly-singular ones where ``|v_n|`` almost vanishes (checked in tests/test_slender_cylinder.py;
+8 nodes give about 4e-6, 12 nodes 4e-7).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from hydro.spec import HydroError
+
+#: Default Gauss-Legendre nodes on each of the two sub-intervals.
+DEFAULT_NODES = 16
+
+
+@lru_cache(maxsize=16)
+def gauss_legendre_unit(nodes: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre nodes and weights mapped to ``[0, 1]`` (read-only, cached).
+
+    Args:
+        nodes: Number of nodes (>= 1).
+
+    Returns:
+        ``(t, w)`` with ``sum(w * g(t))`` approximating ``int_0^1 g``.
+    """
+    if int(nodes) != nodes or nodes < 1:
+        raise HydroError(f"crossflow quadrature needs a positive integer node count, got {nodes}")
+    points, weights = np.polynomial.legendre.leggauss(int(nodes))
+    unit_points = 0.5 * (points + 1.0)
+    unit_weights = 0.5 * weights
+    unit_points.setflags(write=False)
+    unit_weights.setflags(write=False)
+    return unit_points, unit_weights
+
+
+def _split_point(velocity: np.ndarray, length: np.ndarray) -> np.ndarray:
+    """Where ``|v_n(x)|`` is smallest on ``[0, L]``: the only possible kink of ``|v_n| v_n``."""
+    offset_y, offset_z = velocity[..., 1], velocity[..., 2]
+    slope_y, slope_z = velocity[..., 5], -velocity[..., 4]
+    slope_squared = slope_y * slope_y + slope_z * slope_z
+    # Minimiser of |A + B x|^2: x* = -(A . B) / |B|^2, clipped into the cylinder.
+    numerator = -(offset_y * slope_y + offset_z * slope_z)
+    safe = np.where(slope_squared > 0.0, slope_squared, 1.0)
+    split = np.where(slope_squared > 0.0, numerator / safe, 0.0)
+    return np.clip(split, 0.0, length)
+
+
+def crossflow_wrench(
+    velocity_in_cylinder: np.ndarray,
+    length: float | np.ndarray,
+    strip_coefficient: float | np.ndarray,
+    nodes: int = DEFAULT_NODES,
+) -> np.ndarray:
+    """Crossflow drag wrench about the cylinder origin, in cylinder coordinates.
+
+    Args:
+        velocity_in_cylinder: Twists ``(u, v, w, p, q, r)`` of the cylinder frame relative to the
+            water, in cylinder coordinates, shape ``(..., 6)`` [m/s, rad/s].
+        length: Cylinder lengths ``L``, broadcastable to ``velocity_in_cylinder.shape[:-1]`` [m].
+        strip_coefficient: ``rho r C_dC`` per cylinder, broadcastable like ``length`` [kg/m^2].
+        nodes: Gauss-Legendre nodes on each of the two sub-intervals (see module docstring).
+
+    Returns:
+        Wrenches ``(F_x, F_y, F_z, M_x, M_y, M_z)``, shape ``(..., 6)`` [N, N m]; ``F_x = M_x = 0``.
+    """
+    velocity = np.asarray(velocity_in_cylinder, dtype=float)
+    if velocity.ndim == 0 or velocity.shape[-1] != 6:
+        raise HydroError(f"crossflow velocity must have shape (..., 6), got {velocity.shape}")
+    batch = velocity.shape[:-1]
+    length = np.broadcast_to(np.asarray(length, dtype=float), batch)
+    coefficient = np.broadcast_to(np.asarray(strip_coefficient, dtype=float), batch)
+    if np.any(~(length > 0.0)) or np.any(~np.isfinite(length)):
+        raise HydroError("crossflow length must be positive and finite")
+    if np.any(~(coefficient >= 0.0)) or np.any(~np.isfinite(coefficient)):
+        raise HydroError("crossflow strip coefficient must be finite and >= 0")
+
+    unit_points, unit_weights = gauss_legendre_unit(nodes)
+    split = _split_point(velocity, length)[..., None]
+    # Nodes on [0, x*] followed by nodes on [x*, L], shape (..., 2 n).
+    x = np.concatenate(
+        (split * unit_points, split + (length[..., None] - split) * unit_points), axis=-1
+    )
+    weights = np.concatenate(
+        (split * unit_weights, (length[..., None] - split) * unit_weights), axis=-1
+    )
+
+    # v_n(x) = (v + r x, w - q x)
+    normal_y = velocity[..., 1, None] + velocity[..., 5, None] * x
+    normal_z = velocity[..., 2, None] - velocity[..., 4, None] * x
+    speed = np.hypot(normal_y, normal_z)
+    # f(x) = -rho r C_dC |v_n| v_n (Fossen 2021, Sec. 6.4.3; PAPER_DATA)
+    load_y = -speed * normal_y
+    load_z = -speed * normal_z
+
+    wrench = np.zeros((*batch, 6))
+    wrench[..., 1] = np.sum(weights * load_y, axis=-1)
+    wrench[..., 2] = np.sum(weights * load_z, axis=-1)
+    # Moment of the force (x, 0, 0) x (0, f_y, f_z) = (0, -x f_z, x f_y) about the rear end.
+    wrench[..., 4] = -np.sum(weights * x * load_z, axis=-1)
+    wrench[..., 5] = np.sum(weights * x * load_y, axis=-1)
+    return coefficient[..., None] * wrench

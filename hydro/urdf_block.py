@@ -1,0 +1,557 @@
+"""Reader of the ``<hydrodynamics>`` block of a URDF file.
+
+The block is a top-level child of ``<robot>`` (URDF parsers ignore unknown top-level elements)::
+
+    <hydrodynamics fluid_density="1000" gravity="9.81">
+      <link name="hull" model="fossen">        <!-- link frame, about the link origin -->
+        <volume>0.0305</volume>                                   <!-- [m^3], required -->
+        <center_of_buoyancy>0.05 0 0.02</center_of_buoyancy>      <!-- [m], default 0 -->
+        <added_mass>6 (diagonal) or 36 (row-major, symmetric PSD) numbers</added_mass>
+        <linear_damping>6 or 36; wrench -D_L nu, positive = dissipative</linear_damping>
+        <quadratic_damping>6 or 36; wrench -D_Q (|nu| * nu)</quadratic_damping>
+      </link>
+      <link name="link3" model="slender_cylinder" C_dC="0.9"/>
+      <thruster name="t1" link="link3" xyz="0.237 0 0" direction="0 0 1" max_thrust="50"/>
+    </hydrodynamics>
+
+Defaults: ``fluid_density`` 1025 kg/m^3, ``gravity`` 9.81 m/s^2; missing ``fossen`` matrices are
+zero. A ``slender_cylinder`` link takes its length and radius from the link's first ``<collision>``
+cylinder (else its first ``<visual>`` cylinder) and the coefficients of
+:class:`hydro.slender_cylinder.SlenderCylinderCoefficients`; attributes ``C_a``, ``alpha``,
+``C_d1``, ``C_d4``, ``C_dC``, ``C_dL``, ``beta``, ``gamma``, ``v_ref``, ``length`` and ``radius``
+override them, children ``<volume>`` and ``<center_of_buoyancy>`` override the cylinder's volume
+and centroid.
+
+Cylinder frame from a URDF cylinder (which lies along the local z-axis of its ``<origin>``, centred
+on it): the cylinder frame's x-axis is the cylinder axis oriented so that it points forward along
+the link (non-negative link-x component; for an axis perpendicular to link x, the orientation that
+makes the end nearer the link origin the rear end). The frame's origin is the rear end, and its
+orientation is the smallest rotation taking link x onto that axis, so a cylinder along link x gives
+the link's own axes. Axis components below 1e-6 are set to zero (URDF files write pi/2 as
+1.5707963). For the paper's links (``<origin xyz="L/2 0 0" rpy="0 1.5707963 0"/>``) the cylinder
+frame is the link frame.
+
+UUV Simulator blocks (``<gazebo><plugin>`` with ``<link><hydrodynamic_model>``) in the same file are
+read too (:mod:`hydro.uuv_simulator`); for a link named in both, this block wins. Fluid density:
+this block's ``fluid_density`` attribute if given, else the UUV Simulator plugin's
+``<fluid_density>`` (UUV Simulator's default 1028 if the plugin has UUV links but no density), else
+1025.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+from dataclasses import dataclass, fields
+from pathlib import Path
+from xml.etree.ElementTree import Element, ParseError
+
+import defusedxml
+import defusedxml.ElementTree as SafeElementTree
+import numpy as np
+
+from hydro.slender_cylinder import SlenderCylinderCoefficients, slender_cylinder_link
+from hydro.spec import HydroError, HydroSpec, LinkHydrodynamics, Thruster
+
+DEFAULT_FLUID_DENSITY = 1025.0
+DEFAULT_GRAVITY = 9.81
+#: Axis-direction components below this are treated as zero (URDF angles are rounded).
+AXIS_SNAP_TOLERANCE = 1e-6
+#: Relative tolerance of the symmetry and positive semi-definiteness checks of added mass.
+MATRIX_TOLERANCE = 1e-9
+
+_COEFFICIENT_NAMES = tuple(item.name for item in fields(SlenderCylinderCoefficients))
+
+
+# --------------------------------------------------------------------------------------------------
+# XML and number parsing shared with hydro.uuv_simulator
+# --------------------------------------------------------------------------------------------------
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def parse_robot(source: str | os.PathLike) -> Element:
+    """Parse URDF text or a URDF file safely and return its ``<robot>`` element.
+
+    Args:
+        source: A path, or the XML text itself (a string whose first non-blank character is ``<``).
+
+    Returns:
+        The root ``<robot>`` element.
+
+    Raises:
+        HydroError: Unreadable file, not XML, XML with a DTD or entities, or a root that is not
+            ``<robot>``.
+    """
+    if isinstance(source, bytes):
+        source = source.decode("utf-8", errors="replace")
+    if isinstance(source, str) and source.lstrip().startswith("<"):
+        text, where = source, "URDF text"
+    else:
+        path = Path(source)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as error:
+            raise HydroError(f"cannot read URDF file {path}: {_one_line(error)}") from None
+        where = str(path)
+    try:
+        root = SafeElementTree.fromstring(text, forbid_dtd=True)
+    except defusedxml.DefusedXmlException:
+        raise HydroError(f"{where} refused: XML with a DTD/entities") from None
+    except ParseError as error:
+        raise HydroError(f"{where} is not well-formed XML: {_one_line(error)}") from None
+    if root.tag != "robot":
+        raise HydroError(f"{where} is not a URDF file: root element is <{root.tag}>, not <robot>")
+    return root
+
+
+def parse_numbers(text: str | None, what: str) -> np.ndarray:
+    """Whitespace-separated finite numbers.
+
+    Args:
+        text: The text to parse (``None`` counts as empty).
+        what: Name used in error messages.
+
+    Returns:
+        The numbers as a 1-D float array.
+    """
+    values = []
+    for token in (text or "").split():
+        try:
+            value = float(token)
+        except ValueError:
+            raise HydroError(f"{what}: '{token}' is not a number") from None
+        if not math.isfinite(value):
+            raise HydroError(f"{what}: '{token}' is not a finite number")
+        values.append(value)
+    return np.array(values, dtype=float)
+
+
+def parse_vector(text: str | None, count: int, what: str) -> np.ndarray:
+    """Exactly ``count`` finite numbers."""
+    values = parse_numbers(text, what)
+    if values.size != count:
+        raise HydroError(f"{what}: expected {count} numbers, got {values.size}")
+    return values
+
+
+def parse_scalar(text: str | None, what: str) -> float:
+    """Exactly one finite number."""
+    return float(parse_vector(text, 1, what)[0])
+
+
+def parse_matrix(text: str | None, what: str) -> np.ndarray:
+    """A 6x6 matrix from 6 numbers (its diagonal) or 36 numbers (row-major)."""
+    values = parse_numbers(text, what)
+    if values.size == 6:
+        return np.diag(values)
+    if values.size == 36:
+        return values.reshape(6, 6)
+    raise HydroError(f"{what}: expected 6 (diagonal) or 36 (row-major) numbers, got {values.size}")
+
+
+def check_added_mass(matrix: np.ndarray, what: str) -> None:
+    """Raise unless ``matrix`` is symmetric PSD (tolerance relative to its 2-norm)."""
+    scale = float(np.linalg.norm(matrix, 2))
+    if np.max(np.abs(matrix - matrix.T), initial=0.0) > MATRIX_TOLERANCE * scale:
+        raise HydroError(f"{what} is not symmetric")
+    smallest = float(np.min(np.linalg.eigvalsh(0.5 * (matrix + matrix.T))))
+    if smallest < -MATRIX_TOLERANCE * scale:
+        raise HydroError(f"{what} is not positive semi-definite (eigenvalue {smallest:.6g})")
+
+
+def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
+    """URDF fixed-axis roll-pitch-yaw: ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
+    roll, pitch, yaw = (float(angle) for angle in rpy)
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def _origin(element: Element, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(xyz, rpy)`` of an element's ``<origin>`` child (zeros if absent)."""
+    origin = element.find("origin")
+    if origin is None:
+        return np.zeros(3), np.zeros(3)
+    xyz = parse_vector(origin.get("xyz", "0 0 0"), 3, f"{what} <origin> xyz")
+    rpy = parse_vector(origin.get("rpy", "0 0 0"), 3, f"{what} <origin> rpy")
+    return xyz, rpy
+
+
+# --------------------------------------------------------------------------------------------------
+# URDF links
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class CylinderGeometry:
+    """A link's cylinder, placed as the slender-cylinder model needs it.
+
+    Attributes:
+        length: Cylinder length [m].
+        radius: Cylinder radius [m].
+        rotation: Orientation in the link frame of the cylinder frame (x on the axis) (3x3).
+        translation: Rear end of the cylinder (cylinder-frame origin) in the link frame [m].
+    """
+
+    length: float
+    radius: float
+    rotation: np.ndarray
+    translation: np.ndarray
+
+
+@dataclass(frozen=True)
+class UrdfLink:
+    """What the hydrodynamics readers need from one URDF ``<link>``.
+
+    Attributes:
+        name: Link name.
+        mass: ``<inertial><mass value>`` [kg], or ``None`` without an inertial.
+        inertial_origin: Centre of mass in the link frame [m] (zeros without an inertial).
+        cylinder: The link's first collision (else visual) cylinder, or ``None``.
+    """
+
+    name: str
+    mass: float | None
+    inertial_origin: np.ndarray
+    cylinder: CylinderGeometry | None
+
+
+def _minimal_rotation_from_x(axis: np.ndarray) -> np.ndarray:
+    """Smallest rotation taking ``e_x`` to the unit vector ``axis`` (requires ``axis[0] > -1``)."""
+    cosine = float(axis[0])
+    if cosine == 1.0:
+        return np.eye(3)
+    k = np.cross([1.0, 0.0, 0.0], axis)  # sin(angle) times the unit rotation axis
+    skew_k = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    # Rodrigues' formula with (1 - cos) / sin^2 = 1 / (1 + cos).
+    return np.eye(3) + skew_k + skew_k @ skew_k / (1.0 + cosine)
+
+
+def cylinder_frame(
+    length: float, radius: float, xyz: np.ndarray, rpy: np.ndarray
+) -> CylinderGeometry:
+    """Cylinder frame (x on the axis, origin at the rear end) of a URDF cylinder.
+
+    Args:
+        length: URDF cylinder ``length`` [m].
+        radius: URDF cylinder ``radius`` [m].
+        xyz: Its ``<origin xyz>`` (the cylinder centre) in the link frame [m].
+        rpy: Its ``<origin rpy>`` [rad]; the cylinder lies along the rotated z-axis.
+
+    Returns:
+        The cylinder placed in the link frame (see the module docstring for the choice of end).
+    """
+    axis = rpy_matrix(rpy)[:, 2]
+    axis[np.abs(axis) < AXIS_SNAP_TOLERANCE] = 0.0
+    axis /= np.linalg.norm(axis)
+    centre = np.asarray(xyz, dtype=float)
+    half = 0.5 * length
+    if axis[0] > 0.0:
+        sign = 1.0
+    elif axis[0] < 0.0:
+        sign = -1.0
+    else:
+        # Axis across the link: the end nearer the link origin is the rear end.
+        sign = (
+            1.0
+            if np.linalg.norm(centre - half * axis) <= np.linalg.norm(centre + half * axis)
+            else -1.0
+        )
+    axis = sign * axis
+    rear_end = centre - half * axis
+    rear_end[np.abs(rear_end) < 1e-12 * max(1.0, length)] = 0.0
+    return CylinderGeometry(
+        length=float(length),
+        radius=float(radius),
+        rotation=_minimal_rotation_from_x(axis),
+        translation=rear_end,
+    )
+
+
+def _link_cylinder(link: Element, name: str) -> CylinderGeometry | None:
+    for kind in ("collision", "visual"):
+        for element in link.findall(kind):
+            cylinder = element.find("geometry/cylinder")
+            if cylinder is None:
+                continue
+            what = f"link '{name}' {kind} cylinder"
+            length = parse_scalar(cylinder.get("length"), f"{what} length")
+            radius = parse_scalar(cylinder.get("radius"), f"{what} radius")
+            if length <= 0.0 or radius <= 0.0:
+                raise HydroError(f"{what}: length and radius must be positive")
+            xyz, rpy = _origin(element, f"link '{name}' {kind}")
+            return cylinder_frame(length, radius, xyz, rpy)
+    return None
+
+
+def robot_links(root: Element) -> dict[str, UrdfLink]:
+    """The ``<link>`` elements of a ``<robot>``, by name."""
+    links: dict[str, UrdfLink] = {}
+    for link in root.findall("link"):
+        name = link.get("name")
+        if not name:
+            raise HydroError("URDF <link> without a name")
+        if name in links:
+            raise HydroError(f"URDF link '{name}' defined twice")
+        mass = None
+        inertial_origin = np.zeros(3)
+        inertial = link.find("inertial")
+        if inertial is not None:
+            mass_element = inertial.find("mass")
+            if mass_element is not None:
+                mass = parse_scalar(mass_element.get("value"), f"link '{name}' mass")
+            inertial_origin, _ = _origin(inertial, f"link '{name}' inertial")
+        links[name] = UrdfLink(name, mass, inertial_origin, _link_cylinder(link, name))
+    return links
+
+
+def link_cylinders(source: str | os.PathLike) -> dict[str, CylinderGeometry]:
+    """Cylinder frames of the links that have a collision or visual cylinder.
+
+    Args:
+        source: URDF path or text.
+
+    Returns:
+        ``{link name: CylinderGeometry}``.
+    """
+    links = robot_links(parse_robot(source))
+    return {name: link.cylinder for name, link in links.items() if link.cylinder is not None}
+
+
+# --------------------------------------------------------------------------------------------------
+# The <hydrodynamics> block
+# --------------------------------------------------------------------------------------------------
+
+
+def _children(element: Element, allowed: tuple[str, ...], what: str) -> dict[str, Element]:
+    found: dict[str, Element] = {}
+    for child in element:
+        if not isinstance(child.tag, str):
+            continue  # comments and processing instructions
+        if child.tag not in allowed:
+            raise HydroError(f"{what}: unknown element <{child.tag}>")
+        if child.tag in found:
+            raise HydroError(f"{what}: <{child.tag}> given twice")
+        found[child.tag] = child
+    return found
+
+
+def _check_attributes(element: Element, allowed: tuple[str, ...], what: str) -> None:
+    for attribute in element.attrib:
+        if attribute not in allowed:
+            raise HydroError(f"{what}: unknown attribute '{attribute}'")
+
+
+def _volume(element: Element | None, what: str) -> float | None:
+    if element is None:
+        return None
+    volume = parse_scalar(element.text, f"{what} volume")
+    if volume < 0.0:
+        raise HydroError(f"{what}: volume must be >= 0, got {volume}")
+    return volume
+
+
+def _fossen_link(element: Element, name: str) -> LinkHydrodynamics:
+    what = f"<hydrodynamics> link '{name}'"
+    _check_attributes(element, ("name", "model"), what)
+    children = _children(
+        element,
+        ("volume", "center_of_buoyancy", "added_mass", "linear_damping", "quadratic_damping"),
+        what,
+    )
+    volume = _volume(children.get("volume"), what)
+    if volume is None:
+        raise HydroError(f"{what}: fossen model needs <volume>")
+    center = np.zeros(3)
+    if "center_of_buoyancy" in children:
+        center = parse_vector(children["center_of_buoyancy"].text, 3, f"{what} center_of_buoyancy")
+    matrices = {}
+    for tag in ("added_mass", "linear_damping", "quadratic_damping"):
+        child = children.get(tag)
+        matrices[tag] = (
+            np.zeros((6, 6)) if child is None else parse_matrix(child.text, f"{what} {tag}")
+        )
+    check_added_mass(matrices["added_mass"], f"{what} added_mass")
+    return LinkHydrodynamics(
+        link=name,
+        model="fossen",
+        volume=volume,
+        center_of_buoyancy=center,
+        added_mass=matrices["added_mass"],
+        linear_damping=matrices["linear_damping"],
+        quadratic_damping=matrices["quadratic_damping"],
+    )
+
+
+def _slender_cylinder_link(
+    element: Element, name: str, urdf_link: UrdfLink, fluid_density: float
+) -> LinkHydrodynamics:
+    what = f"<hydrodynamics> link '{name}'"
+    _check_attributes(element, ("name", "model", "length", "radius", *_COEFFICIENT_NAMES), what)
+    children = _children(element, ("volume", "center_of_buoyancy"), what)
+    overrides = {
+        key: parse_scalar(element.get(key), f"{what} {key}")
+        for key in _COEFFICIENT_NAMES
+        if key in element.attrib
+    }
+    coefficients = SlenderCylinderCoefficients(**overrides)
+    geometry = urdf_link.cylinder
+    length = geometry.length if geometry is not None else None
+    radius = geometry.radius if geometry is not None else None
+    if "length" in element.attrib:
+        length = parse_scalar(element.get("length"), f"{what} length")
+    if "radius" in element.attrib:
+        radius = parse_scalar(element.get("radius"), f"{what} radius")
+    if length is None or radius is None:
+        raise HydroError(
+            f"{what}: slender_cylinder model needs a <collision> or <visual> cylinder "
+            "(or length and radius attributes)"
+        )
+    if not (length > 0.0 and radius > 0.0):
+        raise HydroError(f"{what}: length and radius must be positive")
+    center = None
+    if "center_of_buoyancy" in children:
+        center = parse_vector(children["center_of_buoyancy"].text, 3, f"{what} center_of_buoyancy")
+    return slender_cylinder_link(
+        name,
+        length,
+        radius,
+        fluid_density,
+        volume=_volume(children.get("volume"), what),
+        center_of_buoyancy=center,
+        coefficients=coefficients,
+        rotation=None if geometry is None else geometry.rotation,
+        translation=None if geometry is None else geometry.translation,
+    )
+
+
+def _thruster(element: Element, links: dict[str, UrdfLink]) -> Thruster:
+    name = element.get("name")
+    if not name:
+        raise HydroError("<hydrodynamics> <thruster> without a name")
+    what = f"thruster '{name}'"
+    _check_attributes(element, ("name", "link", "xyz", "direction", "max_thrust"), what)
+    for child in element:
+        if isinstance(child.tag, str):
+            raise HydroError(f"{what}: unexpected child element <{child.tag}>")
+    link = element.get("link")
+    if not link:
+        raise HydroError(f"{what}: missing link attribute")
+    if link not in links:
+        raise HydroError(f"{what}: link '{link}' is not a <link> of the robot")
+    if "direction" not in element.attrib:
+        raise HydroError(f"{what}: missing direction attribute")
+    if "max_thrust" not in element.attrib:
+        raise HydroError(f"{what}: missing max_thrust attribute")
+    direction = parse_vector(element.get("direction"), 3, f"{what} direction")
+    if not np.any(direction):
+        raise HydroError(f"{what}: direction is the zero vector")
+    return Thruster(
+        name=name,
+        link=link,
+        position=parse_vector(element.get("xyz", "0 0 0"), 3, f"{what} xyz"),
+        direction=direction,
+        max_thrust=parse_scalar(element.get("max_thrust"), f"{what} max_thrust"),
+    )
+
+
+def _hydrodynamics_block(root: Element) -> Element | None:
+    blocks = root.findall("hydrodynamics")
+    if len(blocks) > 1:
+        raise HydroError(f"URDF has {len(blocks)} <hydrodynamics> blocks; expected at most one")
+    return blocks[0] if blocks else None
+
+
+def read_hydrodynamics(source: str | os.PathLike) -> HydroSpec:
+    """Read a URDF's ``<hydrodynamics>`` block (and any UUV Simulator blocks).
+
+    Args:
+        source: URDF path or text.
+
+    Returns:
+        The vehicle's hydrodynamic parameters; ``HydroSpec()`` without links if the file has neither
+        a ``<hydrodynamics>`` block nor UUV Simulator blocks.
+
+    Raises:
+        HydroError: Any malformed or non-physical input; the message is one line.
+    """
+    from hydro import uuv_simulator  # imported here: uuv_simulator uses this module's helpers
+
+    root = parse_robot(source)
+    links = robot_links(root)
+    block = _hydrodynamics_block(root)
+    uuv_density = uuv_simulator.uuv_fluid_density(root)
+
+    fluid_density, gravity = None, DEFAULT_GRAVITY
+    if block is not None:
+        _check_attributes(block, ("fluid_density", "gravity"), "<hydrodynamics>")
+        if "fluid_density" in block.attrib:
+            fluid_density = parse_scalar(
+                block.get("fluid_density"), "<hydrodynamics> fluid_density"
+            )
+        if "gravity" in block.attrib:
+            gravity = parse_scalar(block.get("gravity"), "<hydrodynamics> gravity")
+    if fluid_density is not None and uuv_density is not None and fluid_density != uuv_density:
+        warnings.warn(
+            f"<hydrodynamics> fluid_density {fluid_density} overrides the UUV Simulator plugin's "
+            f"{uuv_density}",
+            stacklevel=2,
+        )
+    if fluid_density is None:
+        fluid_density = uuv_density if uuv_density is not None else DEFAULT_FLUID_DENSITY
+    if not (fluid_density > 0.0):
+        raise HydroError(f"fluid_density must be positive, got {fluid_density}")
+
+    ours: list[LinkHydrodynamics] = []
+    thrusters: list[Thruster] = []
+    if block is not None:
+        for element in block:
+            if not isinstance(element.tag, str):
+                continue
+            if element.tag == "link":
+                name = element.get("name")
+                if not name:
+                    raise HydroError("<hydrodynamics> <link> without a name")
+                if name not in links:
+                    raise HydroError(f"<hydrodynamics> link '{name}' is not a <link> of the robot")
+                if any(link.link == name for link in ours):
+                    raise HydroError(f"<hydrodynamics> link '{name}' given twice")
+                model = element.get("model")
+                if model == "fossen":
+                    ours.append(_fossen_link(element, name))
+                elif model == "slender_cylinder":
+                    ours.append(_slender_cylinder_link(element, name, links[name], fluid_density))
+                elif model is None:
+                    raise HydroError(
+                        f"<hydrodynamics> link '{name}': missing model (fossen or slender_cylinder)"
+                    )
+                else:
+                    raise HydroError(
+                        f"<hydrodynamics> link '{name}': unknown model '{model}' "
+                        "(expected fossen or slender_cylinder)"
+                    )
+            elif element.tag == "thruster":
+                thrusters.append(_thruster(element, links))
+            else:
+                raise HydroError(f"<hydrodynamics>: unknown element <{element.tag}>")
+
+    # Our block wins for a link that both blocks describe.
+    named = {link.link for link in ours}
+    uuv_links = uuv_simulator.uuv_links(root, links, fluid_density, skip=named)
+    return HydroSpec(
+        fluid_density=fluid_density,
+        gravity=gravity,
+        links=(*ours, *uuv_links),
+        thrusters=tuple(thrusters),
+    )
