@@ -42,6 +42,9 @@ def _add_simulate(subparsers) -> None:
     parser.add_argument("--no-html", action="store_true", help="do not write playback.html")
     parser.add_argument("--feedforward", choices=("exact", "paper"), default="exact")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--view", action="store_true", help="show the run live in meshcat (opens a browser tab)"
+    )
     parser.set_defaults(handler=_run_simulate)
 
 
@@ -58,8 +61,13 @@ def _run_simulate(args) -> int:
     gains = scenario.controller_gains.with_changes(feedforward=args.feedforward)
     scenario = dataclasses.replace(scenario, gains=gains)
     out = args.out if args.out is not None else Path("results") / args.case
+    on_log = None
+    if args.view:
+        from .viewer import live_view
+
+        on_log = live_view(vehicle)
     try:
-        result = run_paper_scenario(vehicle, scenario, progress=not args.quiet)
+        result = run_paper_scenario(vehicle, scenario, progress=not args.quiet, on_log=on_log)
     except SimulationDiverged as exc:
         partial = ScenarioResult(scenario, exc.trajectory, float("nan"), vehicle.joint_names,
                                  vehicle.thruster_names)

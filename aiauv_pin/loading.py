@@ -1,22 +1,42 @@
-"""Loading vehicle descriptions: bundled URDFs, user URDFs, and their hydrodynamics blocks."""
+"""Loading vehicle descriptions: bundled URDFs, user URDFs, and their hydrodynamics blocks.
+
+A user's URDF goes through three gates, each ending in a one-line :class:`VehicleLoadError`:
+
+1. safe XML parsing (:func:`hydro.urdf_block.parse_robot`: no DTD, hence no entity expansion and no
+   external entities) and the URDF structure check of :mod:`aiauv_pin.urdf_validation`;
+2. the ``<hydrodynamics>`` (and UUV Simulator) blocks (:func:`hydro.urdf_block.read_hydrodynamics`);
+3. Pinocchio's parser, with the process's standard error (file descriptor 2) redirected to a
+   temporary file while it runs: urdfdom prints its complaints there, and they are turned into the
+   one-line error instead of reaching the terminal. The model is then cross-checked against the
+   validated URDF (total mass, joint types), since urdfdom can silently drop a bad value.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import importlib.resources
+import math
 import os
-import re
+import sys
+import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import pinocchio as pin
 
 from hydro.spec import HydroError
-from hydro.urdf_block import read_hydrodynamics
+from hydro.urdf_block import parse_robot, read_hydrodynamics
 
 from .errors import VehicleLoadError
+from .urdf_validation import UrdfStructure, validate_urdf
 from .vehicle import Vehicle
 
 #: Cases of the paper's vehicle shipped with the package (PAPER_DATA.md, Sec. 4.2 of the paper).
 BUNDLED_CASES = ("uniform", "stabilised")
+#: Joint types a vehicle may have (1-DOF joints and rigid attachments).
+SUPPORTED_JOINT_TYPES = ("revolute", "prismatic", "fixed")
+#: Largest URDF accepted [bytes] (a vehicle description is a few hundred kB at most).
+MAX_URDF_BYTES = 50_000_000
 
 
 def bundled_urdf(case: str = "uniform") -> Path:
@@ -38,14 +58,81 @@ def _read_text(path: str | os.PathLike) -> str:
     if path.is_dir():
         raise VehicleLoadError(f"{path}: is a directory, not a URDF file")
     try:
+        if path.stat().st_size > MAX_URDF_BYTES:
+            raise VehicleLoadError(f"{path}: larger than {MAX_URDF_BYTES} bytes, not a URDF")
         return path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
+    except UnicodeDecodeError:
+        raise VehicleLoadError(f"{path}: not a text file (not UTF-8), not a URDF") from None
+    except OSError as exc:
         raise VehicleLoadError(f"{path}: cannot read ({exc.__class__.__name__})") from None
 
 
-def _robot_name(text: str) -> str:
-    match = re.search(r"<robot[^>]*\sname\s*=\s*[\"']([^\"']*)[\"']", text)
-    return match.group(1) if match else "vehicle"
+@contextlib.contextmanager
+def captured_stderr_fd() -> Iterator[list[str]]:
+    """Redirect file descriptor 2 to a temporary file; yield a list that receives what was written.
+
+    Catches what C++ libraries print straight to the process's standard error (Python's own
+    ``sys.stderr`` is flushed first). Other threads writing to standard error meanwhile are captured
+    too.
+    """
+    captured: list[str] = []
+    try:
+        sys.stderr.flush()
+    except (AttributeError, ValueError):
+        pass
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield captured
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            sink.seek(0)
+            captured.append(sink.read().decode("utf-8", errors="replace"))
+
+
+def _parser_complaint(text: str) -> str:
+    """The first ``Error:`` message of urdfdom's output, on one line."""
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    for line in lines:
+        if line.startswith("Error:"):
+            return " ".join(line[len("Error:") :].split())
+    return " ".join(lines[0].split()) if lines else ""
+
+
+def _build_model(text: str, source: Path) -> pin.Model:
+    with captured_stderr_fd() as captured:
+        try:
+            model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+            failure = None
+        except (RuntimeError, ValueError) as exc:
+            model, failure = None, " ".join(str(exc).split())
+    said = _parser_complaint(captured[0]) if captured else ""
+    if model is None:
+        reason = said or failure or "the URDF parser rejected it"
+        raise VehicleLoadError(f"{source}: not a valid URDF ({reason})")
+    if said:
+        # urdfdom complained but returned a model: it dropped something, so refuse it
+        raise VehicleLoadError(f"{source}: not a valid URDF ({said})")
+    return model
+
+
+def _cross_check(model: pin.Model, structure: UrdfStructure, source: Path) -> None:
+    """The Pinocchio model carries what the validated URDF says."""
+    for joint in model.joints[2:]:
+        if joint.nq != 1 or joint.nv != 1:
+            raise VehicleLoadError(f"{source}: joint '{model.names[joint.id]}' is not a 1-DOF joint")
+    urdf_mass = math.fsum(inertial.mass for inertial in structure.inertials.values())
+    model_mass = math.fsum(inertia.mass for inertia in model.inertias[1:])
+    if not math.isclose(model_mass, urdf_mass, rel_tol=1e-9, abs_tol=1e-12):
+        raise VehicleLoadError(
+            f"{source}: Pinocchio read a total mass of {model_mass:g} kg but the URDF says "
+            f"{urdf_mass:g} kg"
+        )
+    for link in structure.links:
+        if not model.existFrame(link, pin.FrameType.BODY):
+            raise VehicleLoadError(f"{source}: Pinocchio dropped link '{link}'")
 
 
 def load_vehicle(
@@ -56,6 +143,9 @@ def load_vehicle(
     restoring: bool = True,
 ) -> Vehicle:
     """Load an underwater vehicle from a URDF with an optional ``<hydrodynamics>`` block.
+
+    The URDF may also carry UUV Simulator hydrodynamic blocks (:mod:`hydro.uuv_simulator`); they are
+    read with it.
 
     Args:
         path: URDF file; ``None`` loads the bundled paper vehicle with uniform density.
@@ -68,35 +158,41 @@ def load_vehicle(
 
     Raises:
         VehicleLoadError: One line naming the problem (missing file, not XML, not a URDF, unsafe XML,
-            unknown link, non-physical parameter, ...).
+            broken tree, unknown link, non-physical parameter, unsupported joint, ...).
     """
     source = bundled_urdf("uniform") if path is None else Path(path)
     text = _read_text(source)
     try:
+        root = parse_robot(text)
+    except HydroError as exc:
+        message = str(exc).replace("URDF text ", "", 1)
+        raise VehicleLoadError(f"{source}: {message}") from None
+    try:
+        structure = validate_urdf(root)
+    except VehicleLoadError as exc:
+        raise VehicleLoadError(f"{source}: {exc}") from None
+    for joint in structure.joints:
+        if joint.type not in SUPPORTED_JOINT_TYPES:
+            raise VehicleLoadError(
+                f"{source}: joint '{joint.name}' has type {joint.type}, not supported "
+                f"(expected one of {', '.join(SUPPORTED_JOINT_TYPES)})"
+            )
+    try:
         hydro = read_hydrodynamics(text)
     except HydroError as exc:
         raise VehicleLoadError(f"{source}: {exc}") from None
-    try:
-        model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
-    except (RuntimeError, ValueError) as exc:
-        reason = " ".join(str(exc).split()) or "the URDF parser rejected it"
-        raise VehicleLoadError(f"{source}: not a valid URDF ({reason})") from None
-    for joint in model.joints[2:]:
-        if joint.nq != 1 or joint.nv != 1:
-            raise VehicleLoadError(
-                f"{source}: joint '{model.names[joint.id]}' is not a 1-DOF joint"
-            )
+    model = _build_model(text, source)
+    _cross_check(model, structure, source)
     for name in [link.link for link in hydro.links] + [t.link for t in hydro.thrusters]:
         if not model.existFrame(name, pin.FrameType.BODY):
             raise VehicleLoadError(f"{source}: hydrodynamics refer to unknown link '{name}'")
-    for inertia, name in zip(model.inertias[1:], model.names[1:]):
-        if not inertia.mass >= 0.0:
-            raise VehicleLoadError(f"{source}: body of joint '{name}' has a negative or NaN mass")
-    return Vehicle(
+    vehicle = Vehicle(
         model,
         hydro,
-        name=_robot_name(text),
+        name=structure.name,
         added_mass=added_mass,
         damping=damping,
         restoring=restoring,
     )
+    vehicle.urdf_path = source
+    return vehicle

@@ -9,19 +9,17 @@ hydrostatic forces ``g_q``) and maps its command back to generalised forces with
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 
-from control.joint_control import joint_torques
 from control.path_following import (
     PathFollowingController,
     PathFollowingGains,
     PathFollowingMeasurement,
 )
 
+from .simulation import JointServo
 from .vehicle import Vehicle
 
 END_EFFECTOR = "end_effector"
-_LOCAL = pin.ReferenceFrame.LOCAL
 
 _AXIS_OF_JOINT_TYPE = {"JointModelRX": "x", "JointModelRY": "y", "JointModelRZ": "z"}
 
@@ -64,7 +62,9 @@ class VehiclePathFollowing:
     Joint loop: with ``continuous_joints=True`` (default) the joint PD with hydrostatic compensation
     (eq. 24) runs as a continuous-time servo, :meth:`servo`, evaluated by the integrator at every stage
     with the latest references, the way joint motor controllers run far faster than the guidance
-    loop; the callback's own output then holds only the thrusts. With ``False`` eq. (24) is sampled
+    loop; the callback's own output then holds only the thrusts. :attr:`joint_servo` is that servo as
+    data (a :class:`aiauv_pin.simulation.JointServo` whose references the callback updates), which the
+    compiled backend evaluates inside its integration kernel. With ``False`` eq. (24) is sampled
     with the rest of the controller and held over the step; the paper's gains then need
     ``dt <~ 0.01 s`` (the fastest joint mode has ``k_qD / I ~ 190 1/s``).
 
@@ -97,57 +97,44 @@ class VehiclePathFollowing:
             max_thrust=vehicle.max_thrust,
             gains=self.gains,
         )
-        self._data = vehicle.model.createData()
+        self.joint_servo = JointServo.uniform(vehicle.nv - 6, self.gains.k_qp, self.gains.k_qd)
         self.reset()
 
     def reset(self) -> None:
         """Clear the surge integrator and the velocity history."""
         self.controller.reset()
         self._previous: tuple[float, np.ndarray] | None = None
-        self._joint_references = np.zeros(self.vehicle.nv - 6)
+        self.joint_servo.references[:] = 0.0
 
     def servo(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Joint PD with hydrostatic compensation (eq. 24) at the latest references, as ``tau`` (nv,)."""
-        tau = np.zeros(self.vehicle.nv)
-        tau[6:] = joint_torques(
-            q[7:],
-            v[6:],
-            self._joint_references,
-            self.vehicle.restoring_forces(q)[6:],
-            self.gains.k_qp,
-            self.gains.k_qd,
-        )
-        return tau
+        return self.joint_servo.torque(self.vehicle, q, v)
 
     def measure(self, t: float, q: np.ndarray, v: np.ndarray) -> PathFollowingMeasurement:
         """What the controller needs, from the simulator state."""
-        model, data = self.vehicle.model, self._data
-        pin.forwardKinematics(model, data, q, v)
-        pose = pin.updateFramePlacement(model, data, self.frame)
-        twist = pin.getFrameVelocity(model, data, self.frame, _LOCAL)
-        rotation = pose.rotation.copy()
-        velocity_in_world = rotation @ twist.linear
+        rotation, position, twist = self.vehicle.frame_motion(q, v, self.frame)
+        velocity_in_world = rotation @ twist[:3]
         if self._previous is None or t <= self._previous[0]:
             acceleration = np.zeros(3)
         else:
             acceleration = (velocity_in_world - self._previous[1]) / (t - self._previous[0])
         self._previous = (t, velocity_in_world)
         return PathFollowingMeasurement(
-            position_in_world=pose.translation.copy(),
+            position_in_world=position,
             velocity_in_world=velocity_in_world,
             acceleration_in_world=acceleration,
             rotation_to_world=rotation,
-            angular_velocity_in_ee=twist.angular.copy(),
+            angular_velocity_in_ee=twist[3:].copy(),
             joint_positions=q[7:].copy(),
             joint_velocities=v[6:].copy(),
             joint_hydrostatic_forces=self.vehicle.restoring_forces(q)[6:],
-            surge_velocity=float(twist.linear[0]),
+            surge_velocity=float(twist[0]),
         )
 
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray):
         measurement = self.measure(t, q, v)
         command = self.controller.command(t, measurement)
-        self._joint_references = np.array(command.joint_references)
+        self.joint_servo.references[:] = command.joint_references
         thrust_matrix = self.vehicle.thrust_matrix(q)
         tau = thrust_matrix @ command.thrusts
         if not self.continuous_joints:

@@ -3,10 +3,13 @@
 Choices the paper leaves open, documented here and in the README:
 
 * the path is the world x-axis; the vehicle starts straight, at rest, parallel to the path, with its
-  end-effector at ``(0, 3, 3)`` m (a few metres off in y and z, PAPER_DATA "Start");
+  end-effector at ``(0, 2, 2)`` m (a few metres off in y and z, PAPER_DATA "Start");
 * 300 s of simulated time (the lineage code's duration), step ``dt = 0.01`` s (RK4); the guidance,
-  base-angle and surge loops are sampled every step (zero-order hold) and the joint PD (eq. 24) runs as
-  a continuous servo (see :class:`aiauv_pin.path_following.VehiclePathFollowing`);
+  base-angle and surge loops are sampled every ``control_period = 0.05`` s (a 20 Hz digital loop,
+  zero-order hold of the commanded generalised force; the step-to-step thruster mapping ``B(q)`` is
+  therefore held too) and the joint PD (eq. 24) runs as a continuous servo evaluated at every
+  integrator stage (see :class:`aiauv_pin.path_following.VehiclePathFollowing`); states are logged at
+  the controller's rate;
 * the base-angle saturation ``q_max`` is :class:`control.path_following.PathFollowingGains`' default.
 """
 
@@ -41,17 +44,20 @@ class PaperScenario:
         current: Constant water velocity in the world frame [m/s].
         gains: Controller gains; ``None`` means the paper's for the case.
         continuous_joints: Joint PD as a continuous servo (True) or sampled with the controller.
+        control_period: Sampling period of the guidance, base-angle and surge loops [s], a whole
+            multiple of ``dt``; ``None`` samples them every step.
     """
 
     case: str = "uniform"
     duration: float = 300.0
     dt: float = 0.01
-    initial_offset: tuple[float, float] = (3.0, 3.0)
+    initial_offset: tuple[float, float] = (2.0, 2.0)
     initial_surge: float = 0.0
     method: str = "rk4"
     current: tuple[float, float, float] = (0.0, 0.0, 0.0)
     gains: PathFollowingGains | None = None
     continuous_joints: bool = True
+    control_period: float | None = 0.05
 
     def __post_init__(self) -> None:
         if self.case not in CASES:
@@ -60,6 +66,14 @@ class PaperScenario:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive number of seconds, got {value!r}")
+        if self.control_period is not None:
+            period = self.control_period
+            ratio = period / self.dt if isinstance(period, (int, float)) else math.nan
+            if not (math.isfinite(ratio) and period > 0 and abs(ratio - round(ratio)) < 1e-9 * ratio):
+                raise ValueError(
+                    f"control_period must be a positive whole multiple of dt = {self.dt:g} s, "
+                    f"got {period!r}"
+                )
         if self.dt > self.duration:
             raise ValueError(f"dt ({self.dt:g} s) must not exceed the duration ({self.duration:g} s)")
         if len(self.initial_offset) != 2 or not all(map(math.isfinite, self.initial_offset)):
@@ -68,6 +82,13 @@ class PaperScenario:
             raise ValueError("initial_surge must be finite")
         if len(self.current) != 3 or not all(map(math.isfinite, self.current)):
             raise ValueError("current must be three finite numbers [m/s]")
+
+    @property
+    def steps_per_control(self) -> int:
+        """Integration steps per controller call."""
+        if self.control_period is None:
+            return 1
+        return max(1, round(self.control_period / self.dt))
 
     @property
     def controller_gains(self) -> PathFollowingGains:
@@ -106,9 +127,11 @@ class ScenarioResult:
 
 
 def run_paper_scenario(
-    vehicle: Vehicle, scenario: PaperScenario, *, progress: bool = False
+    vehicle: Vehicle, scenario: PaperScenario, *, progress: bool = False, on_log=None
 ) -> ScenarioResult:
     """Simulate the path-following scenario on a vehicle.
+
+    ``on_log(t, q, info)`` is called at every logged sample (see :func:`aiauv_pin.simulate`).
 
     Raises:
         SimulationDiverged: With the partial trajectory, if the state became non-finite.
@@ -128,8 +151,11 @@ def run_paper_scenario(
         controller,
         method=scenario.method,
         current=current if np.any(current) else None,
-        servo=controller.servo if scenario.continuous_joints else None,
+        servo=controller.joint_servo if scenario.continuous_joints else None,
         progress=progress,
+        control_period=scenario.control_period,
+        log_every=scenario.steps_per_control,
+        on_log=on_log,
     )
     return ScenarioResult(
         scenario=scenario,

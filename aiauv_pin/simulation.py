@@ -1,4 +1,10 @@
-"""Fixed-step simulation loop with a controller callback and state logging."""
+"""Fixed-step simulation loop with a controller callback and state logging.
+
+On the compiled backend (``vehicle.active_backend == "numba"``) the steps between two controller calls
+(or log points) run in one compiled call, with a :class:`JointServo` evaluated inside the kernel at every
+integrator stage, so no Python runs per step; a servo given as a Python callable is still supported but
+then every step goes through Python. On Pinocchio every step calls :mod:`aiauv_pin.integrators`.
+"""
 
 from __future__ import annotations
 
@@ -19,6 +25,69 @@ Controller = Callable[[float, np.ndarray, np.ndarray], object]
 #: ``servo(q, v) -> tau``: a generalised force evaluated at every integrator stage (a continuous-time
 #: inner loop, such as joint servos running much faster than the outer controller).
 Servo = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class JointServo:
+    """Joint PD with hydrostatic compensation, run at every integrator stage (paper, eq. (24)).
+
+    ``tau_q = -k_p (q - q*) - k_d q_dot + g_q(q)``, with ``g_q`` the joints' part of the hydrostatic
+    generalised force on the left-hand side (:meth:`Vehicle.restoring_forces`). Both backends evaluate
+    it: Pinocchio through :meth:`torque`, the compiled backend inside the kernel from :meth:`packed`.
+
+    Attributes:
+        stiffness: ``k_p`` per joint (n,) [N m/rad] (or [N/m] for a prismatic joint).
+        damping: ``k_d`` per joint (n,) [N m s/rad].
+        references: ``q*`` per joint (n,) [rad]; a buffer the outer controller overwrites in place
+            (``servo.references[:] = ...``) each time it runs.
+        compensate_restoring: Add ``g_q(q)``.
+    """
+
+    stiffness: np.ndarray
+    damping: np.ndarray
+    references: np.ndarray
+    compensate_restoring: bool = True
+
+    def __post_init__(self) -> None:
+        stiffness = np.array(self.stiffness, dtype=float).reshape(-1)
+        damping = np.array(self.damping, dtype=float).reshape(-1)
+        references = np.array(self.references, dtype=float).reshape(-1)
+        if not (stiffness.shape == damping.shape == references.shape):
+            raise ValueError("joint servo: stiffness, damping and references must have one entry per joint")
+        if not (np.all(np.isfinite(stiffness)) and np.all(np.isfinite(damping))):
+            raise ValueError("joint servo: gains must be finite")
+        object.__setattr__(self, "stiffness", stiffness)
+        object.__setattr__(self, "damping", damping)
+        object.__setattr__(self, "references", references)
+
+    @classmethod
+    def uniform(cls, n_joints: int, k_p: float, k_d: float, compensate_restoring: bool = True):
+        """The same gains on every joint, references at zero."""
+        return cls(
+            np.full(n_joints, float(k_p)),
+            np.full(n_joints, float(k_d)),
+            np.zeros(n_joints),
+            compensate_restoring,
+        )
+
+    def torque(self, vehicle: Vehicle, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Generalised force (nv,) of the servo at ``(q, v)`` (zero on the base)."""
+        tau = np.zeros(vehicle.nv)
+        # eq. (24)
+        tau[6:] = -self.stiffness * (q[7:] - self.references) - self.damping * v[6:]
+        if self.compensate_restoring:
+            tau[6:] += vehicle.restoring_forces(q)[6:]
+        return tau
+
+    def packed(self) -> np.ndarray:
+        """The (5, n) array the kernels read: ``k_p``, ``k_d``, ``q*``, then the two switches."""
+        n = self.references.size
+        packed = np.zeros((5, n))
+        packed[0], packed[1], packed[2] = self.stiffness, self.damping, self.references
+        if n:
+            packed[3, 0] = 1.0
+            packed[4, 0] = 1.0 if self.compensate_restoring else 0.0
+        return packed
 
 
 @dataclass
@@ -61,14 +130,17 @@ def simulate(
     *,
     method: str = "rk4",
     current: np.ndarray | None = None,
-    servo: Servo | None = None,
+    servo: Servo | JointServo | None = None,
     log_every: int = 1,
     progress: bool = False,
+    on_log: Callable[[float, np.ndarray, Mapping[str, object]], None] | None = None,
+    control_period: float | None = None,
 ) -> Trajectory:
     """Integrate the vehicle's dynamics with a fixed step.
 
-    The controller is called once per step at the step's start; its output is held over the step
-    (zero-order hold, as a digital controller would apply it).
+    The controller is called at the start of every control period (default: every step); its output is
+    held until the next call (zero-order hold, as a digital controller would apply it). Rows logged
+    between two calls repeat the last call's output and diagnostics.
 
     Args:
         vehicle: The vehicle.
@@ -79,9 +151,13 @@ def simulate(
         controller: ``controller(t, q, v) -> tau | (tau, info)``; ``None`` applies no input.
         method: ``"rk4"`` (Runge-Kutta-Munthe-Kaas, order 4) or ``"euler"`` (semi-implicit, order 1).
         current: Constant water velocity in the world frame (3,) [m/s].
-        servo: ``servo(q, v) -> tau`` added to the controller's output at every integrator stage.
+        servo: ``servo(q, v) -> tau`` or a :class:`JointServo`, added to the controller's output at
+            every integrator stage.
         log_every: Log every this many steps (the final state is always logged).
         progress: Show a progress bar (tqdm).
+        control_period: Controller sampling period [s], a whole multiple of ``dt``; ``None`` means
+            ``dt``.
+        on_log: ``on_log(t, q, info)`` called at every logged sample (e.g. a live viewer).
 
     Returns:
         The trajectory.
@@ -99,6 +175,15 @@ def simulate(
         raise ValueError(f"unknown method '{method}' (expected one of {', '.join(INTEGRATORS)})")
     if int(log_every) < 1:
         raise ValueError(f"log_every must be >= 1, got {log_every!r}")
+    steps_per_control = 1
+    if control_period is not None:
+        ratio = control_period / dt if math.isfinite(control_period) else math.nan
+        if not (control_period > 0 and abs(ratio - round(ratio)) < 1e-9 * max(1.0, ratio)):
+            raise ValueError(
+                f"control_period must be a positive whole multiple of dt = {dt:g} s, "
+                f"got {control_period!r}"
+            )
+        steps_per_control = max(1, round(ratio))
     step = INTEGRATORS[method]
     model = vehicle.model
     q = np.array(q0, dtype=float)
@@ -124,11 +209,36 @@ def simulate(
             if key not in info_log:
                 info_log[key] = np.full((n_logs, *value.shape), np.nan)
             info_log[key][index] = value
+        if on_log is not None:
+            on_log(t, q, info)
+
+    servo_function = (
+        (lambda qq, vv: servo.torque(vehicle, qq, vv)) if isinstance(servo, JointServo) else servo
+    )
 
     def dynamics_with(tau: np.ndarray):
-        if servo is None:
+        if servo_function is None:
             return lambda qq, vv: vehicle.acceleration(qq, vv, tau, current)
-        return lambda qq, vv: vehicle.acceleration(qq, vv, tau + servo(qq, vv), current)
+        return lambda qq, vv: vehicle.acceleration(qq, vv, tau + servo_function(qq, vv), current)
+
+    fast = vehicle.fast if (servo is None or isinstance(servo, JointServo)) else None
+
+    def advance(tau: np.ndarray, n: int, k: int) -> int:
+        """Take ``n`` steps from step ``k``; returns how many stayed finite."""
+        nonlocal q, v
+        if fast is not None:
+            packed = servo.packed() if servo is not None else None
+            tau_c = np.ascontiguousarray(tau, dtype=float)
+            return fast.run(q, v, tau_c, dt, n, method=method, current=current, servo=packed)
+        for i in range(n):
+            try:
+                q_new, v_new = step(model, dynamics_with(tau), q, v, dt)
+            except np.linalg.LinAlgError:
+                return i
+            if not (np.all(np.isfinite(q_new)) and np.all(np.isfinite(v_new))):
+                return i
+            q, v = q_new, v_new
+        return n
 
     bar = None
     if progress:
@@ -137,30 +247,37 @@ def simulate(
         bar = tqdm(total=n_steps, unit="step", desc=f"simulate {duration:g} s", leave=False)
 
     logged = 0
+    tau, info = zero_tau, {}
     try:
-        for k in range(n_steps + 1):
+        k = 0
+        while True:
             t = k * dt
-            tau, info = _split(controller(t, q, v)) if controller is not None else (zero_tau, {})
+            if k % steps_per_control == 0 and controller is not None:
+                tau, info = _split(controller(t, q, v))
             if k % log_every == 0 or k == n_steps:
                 log(logged, t, tau, info)
                 logged += 1
             if k == n_steps:
                 break
-            try:
-                q_new, v_new = step(model, dynamics_with(tau), q, v, dt)
-            except np.linalg.LinAlgError:
-                q_new, v_new = q + np.nan, v + np.nan
-            if not (np.all(np.isfinite(q_new)) and np.all(np.isfinite(v_new))):
+            # run up to the next controller call or log point
+            n = min(
+                steps_per_control - k % steps_per_control if controller is not None else n_steps,
+                log_every - k % log_every,
+                n_steps - k,
+            )
+            done = advance(tau, n, k)
+            if done < n:
+                t_bad = (k + done + 1) * dt
                 trajectory = _trajectory(t_log, q_log, v_log, tau_log, info_log, logged)
                 trajectory.status = "diverged"
                 trajectory.message = (
-                    f"state became non-finite at t = {t + dt:.6g} s (step {k + 1}); "
+                    f"state became non-finite at t = {t_bad:.6g} s (step {k + done + 1}); "
                     f"try a smaller step than dt = {dt:g} s"
                 )
-                raise SimulationDiverged(trajectory.message, t + dt, trajectory)
-            q, v = q_new, v_new
+                raise SimulationDiverged(trajectory.message, t_bad, trajectory)
+            k += n
             if bar is not None:
-                bar.update(1)
+                bar.update(n)
     finally:
         if bar is not None:
             bar.close()

@@ -280,11 +280,14 @@ def slender_cylinder_link(
         linear = 0.5 * (linear + linear.T)
         # -D_Q (|nu_c| * nu_c) only stays of that form in link coordinates when the axial speed u_c
         # and the roll rate p_c are each +- one link velocity component.
-        for index, label in ((0, "C_d1 (axial)"), (3, "C_d4 (roll)")):
+        for index, label, needed in (
+            (0, "C_d1 (axial)", "parallel to a link axis and pass through the link origin"),
+            (3, "C_d4 (roll)", "parallel to a link axis"),
+        ):
             if quadratic[index, index] != 0.0 and not _is_signed_unit_row(transform[index]):
                 raise HydroError(
                     f"link '{name}': {label} quadratic drag has no exact form in the link frame; "
-                    "the cylinder axis must be parallel to a link axis through the link origin"
+                    f"the cylinder axis must be {needed}"
                 )
         quadratic = transform.T @ quadratic @ transform
         quadratic[

@@ -66,6 +66,12 @@ class CrossflowDrag:
         object.__setattr__(
             self, "translation", _frozen_array(self.translation, (3,), "translation")
         )
+        rotation = self.rotation
+        if not (
+            np.allclose(rotation.T @ rotation, np.eye(3), rtol=0.0, atol=1e-9)
+            and np.linalg.det(rotation) > 0.0
+        ):
+            raise HydroError("crossflow rotation is not a proper rotation matrix")
 
     @property
     def strip_coefficient(self) -> float:

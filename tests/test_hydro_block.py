@@ -104,8 +104,8 @@ def test_data_file_by_path_and_text():
 
 
 def test_slender_cylinder_matches_the_library_for_the_papers_layout():
-    spec = read_hydrodynamics(robot('<hydrodynamics fluid_density="1000">'
-                                    '<link name="arm" model="slender_cylinder"/></hydrodynamics>'))  # fmt: skip
+    block = '<hydrodynamics fluid_density="1000"><link name="arm" model="slender_cylinder"/>'
+    spec = read_hydrodynamics(robot(block + "</hydrodynamics>"))
     link = spec.links[0]
     expected = slender_cylinder_link("arm", 0.584, 0.085, 1000.0)
     # The paper's collision origin makes the cylinder frame the link frame exactly.
@@ -222,35 +222,41 @@ BAD_SOURCES = {
         "twice",
     ),
     "thruster on unknown link": (
-        robot('<hydrodynamics><thruster name="t" link="fin" direction="1 0 0" max_thrust="5"/>'
-              "</hydrodynamics>"),
+        robot(
+            '<hydrodynamics><thruster name="t" link="fin" direction="1 0 0" max_thrust="5"/>'
+            "</hydrodynamics>"
+        ),
         "fin",
-    ),  # fmt: skip
+    ),
     "zero direction": (
-        robot('<hydrodynamics><thruster name="t" link="arm" direction="0 0 0" max_thrust="5"/>'
-              "</hydrodynamics>"),
+        robot(
+            '<hydrodynamics><thruster name="t" link="arm" direction="0 0 0" max_thrust="5"/>'
+            "</hydrodynamics>"
+        ),
         "direction",
-    ),  # fmt: skip
+    ),
     "missing max_thrust": (
         robot('<hydrodynamics><thruster name="t" link="arm" direction="1 0 0"/></hydrodynamics>'),
         "max_thrust",
     ),
     "zero max_thrust": (
-        robot('<hydrodynamics><thruster name="t" link="arm" direction="1 0 0" max_thrust="0"/>'
-              "</hydrodynamics>"),
+        robot(
+            '<hydrodynamics><thruster name="t" link="arm" direction="1 0 0" max_thrust="0"/>'
+            "</hydrodynamics>"
+        ),
         "max_thrust",
-    ),  # fmt: skip
+    ),
     "unknown element": (fossen(VOLUME + "<added_mas>1 1 1 1 1 1</added_mas>"), "added_mas"),
     "unknown attribute": (
-        robot('<hydrodynamics><link name="arm" model="slender_cylinder" C_x="1"/>'
-              "</hydrodynamics>"),
+        robot('<hydrodynamics><link name="arm" model="slender_cylinder" C_x="1"/></hydrodynamics>'),
         "C_x",
-    ),  # fmt: skip
+    ),
     "bad override": (
-        robot('<hydrodynamics><link name="arm" model="slender_cylinder" C_dC="-1"/>'
-              "</hydrodynamics>"),
+        robot(
+            '<hydrodynamics><link name="arm" model="slender_cylinder" C_dC="-1"/></hydrodynamics>'
+        ),
         "C_dC",
-    ),  # fmt: skip
+    ),
     "two blocks": (robot("<hydrodynamics/><hydrodynamics/>"), "blocks"),
     "bad density": (robot('<hydrodynamics fluid_density="0"/>'), "fluid_density"),
     "tilted slender link": (
@@ -259,7 +265,7 @@ BAD_SOURCES = {
             '<link name="arm"><collision><origin xyz="0.2 0 0" rpy="0 1.0 0"/>'
             '<geometry><cylinder length="0.4" radius="0.05"/></geometry></collision></link>',
         ),
-        "link axis",
+        "parallel to a link axis",
     ),
     "not XML": ("<robot><link name='a'></robot>", "not well-formed"),
     "not a robot": ("<sdf version='1.6'><model name='m'/></sdf>", "<sdf>"),

@@ -283,12 +283,10 @@ def test_default_quadrature_is_converged_to_one_part_per_million():
     """A much finer rule (200 nodes per part, and the midpoint rule) changes nothing above 1e-6."""
     rng = np.random.default_rng(4)
     length = 0.584
-    states = np.concatenate(
-        (near_singular_states(rng, 40, length), rng.normal(size=(40, 6)) * 0.5)
-    )
+    states = np.concatenate((near_singular_states(rng, 40, length), rng.normal(size=(40, 6)) * 0.5))
     default = crossflow_wrench(states, length, K)
     fine = crossflow_wrench(states, length, K, nodes=200)
-    for index, state in enumerate(states):
+    for index in range(len(states)):
         assert scaled_error(default[index], fine[index], length) < 1e-6
     for index in range(0, len(states), 8):
         reference = midpoint_crossflow(states[index], length, K)

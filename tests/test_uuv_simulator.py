@@ -119,8 +119,10 @@ def uuv_link(name: str, body: str) -> str:
 def vehicle(plugin_links: str, block: str = "", density: str = "1000") -> str:
     return f"""<robot name="v">
       <link name="v/a"><inertial><mass value="10"/></inertial>
-        <collision><origin xyz="0.1 0 0"/><geometry><box size="0.2 0.1 0.1"/></geometry></collision>
-        <collision><origin xyz="0.4 0 0.2"/><geometry><box size="0.2 0.1 0.1"/></geometry></collision>
+        <collision><origin xyz="0.1 0 0"/><geometry><box size="0.2 0.1 0.1"/></geometry>
+        </collision>
+        <collision><origin xyz="0.4 0 0.2"/><geometry><box size="0.2 0.1 0.1"/></geometry>
+        </collision>
       </link>
       <link name="v/b"><inertial><mass value="5"/></inertial></link>
       <link name="v/massless"/>
@@ -174,8 +176,9 @@ def test_forward_speed_damping_and_offdiagonal_quadratic_warn():
 
 BAD = {
     "positive damping": (
-        uuv_link("v/b", "<volume>1</volume><center_of_buoyancy>0 0 0</center_of_buoyancy>")
-        .replace("-1 -2", "1 -2"),
+        uuv_link("v/b", "<volume>1</volume><center_of_buoyancy>0 0 0</center_of_buoyancy>").replace(
+            "-1 -2", "1 -2"
+        ),
         "negative",
     ),
     "unknown link": (uuv_link("v/zzz", "<volume>1</volume>"), "not a <link>"),

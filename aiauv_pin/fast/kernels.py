@@ -133,9 +133,8 @@ def _motion_transform(rot, trans, out):
 
 
 @njit(**_OPTS)
-def _solve_spd6(a, b, out):
+def _solve_spd6(a, b, out, low, y):
     """Solve ``a x = b`` for a symmetric positive-definite 6x6 ``a`` (Cholesky)."""
-    low = np.empty((6, 6))
     for j in range(6):
         s = a[j, j]
         for k in range(j):
@@ -147,7 +146,6 @@ def _solve_spd6(a, b, out):
             for k in range(j):
                 s -= low[i, k] * low[j, k]
             low[i, j] = s / d
-    y = np.empty(6)
     for i in range(6):
         s = b[i]
         for k in range(i):
@@ -162,13 +160,13 @@ def _solve_spd6(a, b, out):
 
 # ---------------------------------------------------------------------- kinematics
 @njit(**_OPTS)
-def kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc):
+def kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc, m33, v6):
     """Body poses in the world, parent-to-child motion transforms, body twists and ``v x S qd``."""
     nb = ints.shape[0]
-    rot_l = np.empty((3, 3))
-    rot_j = np.empty((3, 3))
-    pos_l = np.empty(3)
-    tmp = np.empty(6)
+    rot_l = m33[0]
+    rot_j = m33[1]
+    pos_l = v6[0, :3]
+    tmp = v6[1]
     for b in range(nb):
         parent, kind, iq, iv = ints[b, 0], ints[b, 1], ints[b, 2], ints[b, 3]
         if kind == FREE_FLYER:
@@ -263,7 +261,7 @@ def _crossflow(vel, length, coefficient, gauss, out):
             w = width * gauss[1, k]
             ny = a_y + b_y * x
             nz = a_z + b_z * x
-            speed = math.hypot(ny, nz)
+            speed = math.sqrt(ny * ny + nz * nz)
             ly = -speed * ny
             lz = -speed * nz
             fy += w * ly
@@ -279,20 +277,19 @@ def _crossflow(vel, length, coefficient, gauss, out):
 
 
 @njit(**_OPTS)
-def body_bias(M, rot_w, twist, current, bias):
+def body_bias(M, rot_w, twist, current, bias, relative, v6):
     """Velocity- and state-dependent part of each body's equation ``f = I a + p`` (left-hand side).
 
     ``p = nu x* (I_RB nu) + nu_r x* (M_A nu_r) + M_A (w x v_c, 0) - tau_D(nu_r) - g_wrench``.
     """
     ints, inertia, restore, link_i, link_m, link_f, gauss = M[0], M[3], M[4], M[5], M[6], M[7], M[8]
     nb = ints.shape[0]
-    relative = np.empty((nb, 6))
-    mom = np.empty(6)
-    tmp = np.empty(6)
-    tmp2 = np.empty(6)
-    wrench = np.empty(6)
-    cyl = np.empty(6)
-    cyl_w = np.empty(6)
+    mom = v6[0]
+    tmp = v6[1]
+    tmp2 = v6[2]
+    wrench = v6[3]
+    cyl = v6[4]
+    cyl_w = v6[5]
     cur_x, cur_y, cur_z = current[0], current[1], current[2]
     has_current = cur_x != 0.0 or cur_y != 0.0 or cur_z != 0.0
     for b in range(nb):
@@ -360,20 +357,16 @@ def body_bias(M, rot_w, twist, current, bias):
 
 # ---------------------------------------------------------------------- articulated-body algorithm
 @njit(**_OPTS)
-def _articulated(M, tau, xform, bias_acc, bias, out):
+def _articulated(M, tau, xform, bias_acc, bias, out, art, pa, u_vec, scal, acc, m66, v6):
     """ABA passes 2 and 3 (Featherstone 2008, Table 7.1) with general 6x6 body inertias."""
     ints, axis, inertia = M[0], M[2], M[3]
     nb = ints.shape[0]
-    art = np.empty((nb, 6, 6))
-    pa = np.empty((nb, 6))
-    u_vec = np.empty((nb, 6))
-    d_inv = np.empty(nb)
-    u_sc = np.empty(nb)
-    acc = np.empty((nb, 6))
-    ia = np.empty((6, 6))
-    t66 = np.empty((6, 6))
-    p_loc = np.empty(6)
-    tmp = np.empty(6)
+    d_inv = scal[0]
+    u_sc = scal[1]
+    ia = m66[0]
+    t66 = m66[1]
+    p_loc = v6[0]
+    tmp = v6[1]
     for b in range(nb):
         for i in range(6):
             pa[b, i] = bias[b, i]
@@ -420,7 +413,7 @@ def _articulated(M, tau, xform, bias_acc, bias, out):
     iv0 = ints[0, 3]
     for i in range(6):
         tmp[i] = tau[iv0 + i] - pa[0, i]
-    _solve_spd6(art[0], tmp, acc[0])
+    _solve_spd6(art[0], tmp, acc[0], m66[2], v6[2])
     for i in range(6):
         out[iv0 + i] = acc[0, i]
     for b in range(1, nb):
@@ -443,10 +436,9 @@ def _articulated(M, tau, xform, bias_acc, bias, out):
 
 
 @njit(**_OPTS)
-def _backward_generalized(ints, axis, xform, body_wrench, out):
+def _backward_generalized(ints, axis, xform, body_wrench, out, tmp):
     """Generalised force ``sum_b J_b^T w_b`` of body wrenches (in body frames); consumes ``body_wrench``."""
     nb = ints.shape[0]
-    tmp = np.empty(6)
     for b in range(nb - 1, -1, -1):
         iv = ints[b, 3]
         if ints[b, 1] == FREE_FLYER:
@@ -478,113 +470,124 @@ def _restoring_wrenches(restore, rot_w, out):
         out[b, 5] = sx * e1 - sy * e0
 
 
+# ---------------------------------------------------------------------- workspace
+@njit(**_OPTS)
+def workspace(nb, nq, nv):
+    """Scratch arrays reused by every evaluation (no allocation inside the step loop)."""
+    return (
+        np.empty((nb, 3, 3)),  # 0 rot_w
+        np.empty((nb, 3)),  # 1 pos_w
+        np.empty((nb, 6, 6)),  # 2 xform
+        np.empty((nb, 6)),  # 3 twist
+        np.empty((nb, 6)),  # 4 bias_acc
+        np.empty((nb, 6)),  # 5 bias
+        np.empty((nb, 6)),  # 6 relative twist / wrenches
+        np.empty((nb, 6, 6)),  # 7 articulated inertia
+        np.empty((nb, 6)),  # 8 articulated bias
+        np.empty((nb, 6)),  # 9 U
+        np.empty((2, nb)),  # 10 1/D, u
+        np.empty((nb, 6)),  # 11 accelerations
+        np.empty((3, 6, 6)),  # 12 6x6 scratch
+        np.empty((8, 6)),  # 13 6-vector scratch
+        np.empty((2, 3, 3)),  # 14 3x3 scratch
+        np.empty((3, nv)),  # 15 generalised scratch: tau + servo, g(q), zero velocity
+        np.empty((10, nv)),  # 16 integrator stages
+        np.empty((3, nq)),  # 17 stage / next configurations
+    )
+
+
+@njit(**_OPTS)
+def _kinematics_ws(M, q, v, W):
+    kinematics(M[0], M[1], M[2], q, v, W[0], W[1], W[2], W[3], W[4], W[14], W[13])
+
+
+@njit(**_OPTS)
+def _restoring_ws(M, W, out):
+    """``g(q)`` after :func:`_kinematics_ws` (left-hand side: minus the force on the system)."""
+    wrench = W[6]
+    _restoring_wrenches(M[4], W[0], wrench)
+    _backward_generalized(M[0], M[2], W[2], wrench, out, W[13][0])
+    for i in range(out.shape[0]):
+        out[i] = -out[i]
+
+
 @njit(**_OPTS)
 def restoring_forces(M, q):
     """``g(q)``: hydrostatic generalised force on the left-hand side (weight minus buoyancy)."""
-    ints, place, axis, restore = M[0], M[1], M[2], M[4]
-    nb = ints.shape[0]
     nv = M[10][1]
-    rot_w = np.empty((nb, 3, 3))
-    pos_w = np.empty((nb, 3))
-    xform = np.empty((nb, 6, 6))
-    twist = np.empty((nb, 6))
-    bias_acc = np.empty((nb, 6))
-    kinematics(ints, place, axis, q, np.zeros(nv), rot_w, pos_w, xform, twist, bias_acc)
-    wrench = np.empty((nb, 6))
-    _restoring_wrenches(restore, rot_w, wrench)
+    W = workspace(M[0].shape[0], q.shape[0], nv)
+    zero = W[15][2]
+    zero[:] = 0.0
+    _kinematics_ws(M, q, zero, W)
     out = np.empty(nv)
-    _backward_generalized(ints, axis, xform, wrench, out)
-    for i in range(nv):
-        out[i] = -out[i]
+    _restoring_ws(M, W, out)
     return out
 
 
 @njit(**_OPTS)
 def thrust_matrix(M, q):
     """``B(q)`` (nv x m): generalised forces of unit thrusts (the paper's eq. (20))."""
-    ints, place, axis, thrust = M[0], M[1], M[2], M[9]
-    nb = ints.shape[0]
+    ints, axis, thrust = M[0], M[2], M[9]
     nv = M[10][1]
-    rot_w = np.empty((nb, 3, 3))
-    pos_w = np.empty((nb, 3))
-    xform = np.empty((nb, 6, 6))
-    twist = np.empty((nb, 6))
-    bias_acc = np.empty((nb, 6))
-    kinematics(ints, place, axis, q, np.zeros(nv), rot_w, pos_w, xform, twist, bias_acc)
+    W = workspace(ints.shape[0], q.shape[0], nv)
+    zero = W[15][2]
+    zero[:] = 0.0
+    _kinematics_ws(M, q, zero, W)
     m = thrust.shape[0]
     out = np.empty((nv, m))
-    wrench = np.empty((nb, 6))
-    column = np.empty(nv)
+    wrench = W[6]
+    column = W[15][0]
     for k in range(m):
         wrench[:, :] = 0.0
         b = int(thrust[k, 0])
         for i in range(6):
             wrench[b, i] = thrust[k, 1 + i]
-        _backward_generalized(ints, axis, xform, wrench, column)
+        _backward_generalized(ints, axis, W[2], wrench, column, W[13][0])
         out[:, k] = column
     return out
 
 
 # ---------------------------------------------------------------------- forward dynamics
 @njit(**_OPTS)
-def _generalized_with_servo(M, q, v, tau, servo, rot_w, xform, tau_out):
-    """``tau`` plus the joint servo ``-k_p (q - q*) - k_d qd + g_q(q)`` (paper, eq. (24))."""
-    nv = tau.shape[0]
-    for i in range(nv):
-        tau_out[i] = tau[i]
+def _acceleration_ws(M, q, v, tau, current, servo, W, out):
+    """Forward dynamics into ``out`` using the workspace ``W``."""
+    _kinematics_ws(M, q, v, W)
+    body_bias(M, W[0], W[3], current, W[5], W[6], W[13])
+    tau_all = W[15][0]
+    for i in range(tau.shape[0]):
+        tau_all[i] = tau[i]
     n_joint = servo.shape[1]
-    if n_joint == 0 or servo[3, 0] == 0.0:
-        return
-    ints, axis, restore = M[0], M[2], M[4]
-    nb = ints.shape[0]
-    g = np.empty(nv)
-    if servo[4, 0] != 0.0:
-        wrench = np.empty((nb, 6))
-        _restoring_wrenches(restore, rot_w, wrench)
-        _backward_generalized(ints, axis, xform, wrench, g)
-    else:
-        g[:] = 0.0
-    for k in range(n_joint):
-        iq = 7 + k
-        iv = 6 + k
-        # g_q on the left-hand side is minus the hydrostatic force on the joint
-        tau_out[iv] += -servo[0, k] * (q[iq] - servo[2, k]) - servo[1, k] * v[iv] - g[iv]
+    if n_joint > 0 and servo[3, 0] != 0.0:
+        # joint servo, paper eq. (24): -k_p (q - q*) - k_d qd + g_q(q)
+        g = W[15][1]
+        if servo[4, 0] != 0.0:
+            _restoring_ws(M, W, g)
+        else:
+            g[:] = 0.0
+        for k in range(n_joint):
+            tau_all[6 + k] += -servo[0, k] * (q[7 + k] - servo[2, k]) - servo[1, k] * v[6 + k] + g[6 + k]
+    _articulated(M, tau_all, W[2], W[4], W[5], out, W[7], W[8], W[9], W[10], W[11], W[12], W[13])
 
 
 @njit(**_OPTS)
 def acceleration(M, q, v, tau, current, servo, out):
-    """Forward dynamics ``dv`` for ``M(q) dv + bias(q, v) = tau (+ servo)``; writes ``out`` (nv,)."""
-    ints, place, axis = M[0], M[1], M[2]
-    nb = ints.shape[0]
-    rot_w = np.empty((nb, 3, 3))
-    pos_w = np.empty((nb, 3))
-    xform = np.empty((nb, 6, 6))
-    twist = np.empty((nb, 6))
-    bias_acc = np.empty((nb, 6))
-    bias = np.empty((nb, 6))
-    tau_all = np.empty(tau.shape[0])
-    kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc)
-    body_bias(M, rot_w, twist, current, bias)
-    _generalized_with_servo(M, q, v, tau, servo, rot_w, xform, tau_all)
-    _articulated(M, tau_all, xform, bias_acc, bias, out)
+    """Forward dynamics ``dv`` for ``M(q) dv + bias(q, v) = tau (+ servo)``; writes ``out`` (nv,).
+
+    ``servo`` (5, n): rows ``k_p``, ``k_d``, ``q*``, then ``[enabled, compensate g_q]`` in column 0
+    (shape (5, 0): no servo).
+    """
+    W = workspace(M[0].shape[0], q.shape[0], v.shape[0])
+    _acceleration_ws(M, q, v, tau, current, servo, W, out)
 
 
 # ---------------------------------------------------------------------- SE(3) x R^n group operations
-@njit(**_OPTS)
-def _skew_mul(a, m, out):
-    """``out = [a] m`` for a 3-vector ``a`` and 3x3 ``m``."""
-    for j in range(3):
-        out[0, j] = a[1] * m[2, j] - a[2] * m[1, j]
-        out[1, j] = a[2] * m[0, j] - a[0] * m[2, j]
-        out[2, j] = a[0] * m[1, j] - a[1] * m[0, j]
-
-
 @njit(**_OPTS)
 def integrate(q, xi, out):
     """``out = q * exp(xi)``: free flyer by the exact SE(3) exponential, joints by addition.
 
     ``exp(v, w) = (exp3(w), V(w) v)`` with ``V = I + (1 - cos t)/t^2 [w] + (t - sin t)/t^3 [w]^2``
-    (Barfoot 2017, eq. (7.85)); the quaternion is ``q_0 (x) (sin(t/2) w/t, cos(t/2))``, renormalised.
+    (Barfoot 2017, eq. (7.85)); the quaternion is ``q_0 (x) (sin(t/2) w/t, cos(t/2))``, renormalised
+    and kept in ``q_0``'s hemisphere.
     """
     w0, w1, w2 = xi[3], xi[4], xi[5]
     t2 = w0 * w0 + w1 * w1 + w2 * w2
@@ -609,10 +612,19 @@ def integrate(q, xi, out):
     p1 = v1 + a * c1 + c * d1
     p2 = v2 + a * c2 + c * d2
     x, y, z, w = q[3], q[4], q[5], q[6]
-    rot = np.empty((3, 3))
-    _quat_to_rot(x, y, z, w, rot)
-    for i in range(3):
-        out[i] = q[i] + rot[i, 0] * p0 + rot[i, 1] * p1 + rot[i, 2] * p2
+    # R(q0) p
+    r00 = 1.0 - 2.0 * (y * y + z * z)
+    r01 = 2.0 * (x * y - z * w)
+    r02 = 2.0 * (x * z + y * w)
+    r10 = 2.0 * (x * y + z * w)
+    r11 = 1.0 - 2.0 * (x * x + z * z)
+    r12 = 2.0 * (y * z - x * w)
+    r20 = 2.0 * (x * z - y * w)
+    r21 = 2.0 * (y * z + x * w)
+    r22 = 1.0 - 2.0 * (x * x + y * y)
+    out[0] = q[0] + r00 * p0 + r01 * p1 + r02 * p2
+    out[1] = q[1] + r10 * p0 + r11 * p1 + r12 * p2
+    out[2] = q[2] + r20 * p0 + r21 * p1 + r22 * p2
     ex, ey, ez, ew = h * w0, h * w1, h * w2, math.cos(0.5 * t)
     nx = w * ex + x * ew + y * ez - z * ey
     ny = w * ey - x * ez + y * ew + z * ex
@@ -630,21 +642,23 @@ def integrate(q, xi, out):
 
 
 @njit(**_OPTS)
+def _cross(a0, a1, a2, b0, b1, b2):
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+
+
+@njit(**_OPTS)
 def tangent_rate(xi, vel, out):
     """``out = J_r(xi)^-1 vel``: the rate of ``xi`` for ``integrate(q0, xi)`` moving with ``vel``.
 
     ``J_r`` is the right Jacobian of ``exp`` (Pinocchio's ``dIntegrate`` w.r.t. its second argument):
-    on SE(3), ``J_r(rho, phi) = [[J3, Q], [0, J3]]`` with ``J3`` the SO(3) right Jacobian and
-    ``Q = Q_l(-rho, -phi)`` (Barfoot 2017, eq. (7.86), (7.87)); its inverse is
-    ``[[J3^-1, -J3^-1 Q J3^-1], [0, J3^-1]]`` with ``J3^-1 = I + [phi]/2 + d [phi]^2``,
-    ``d = 1/t^2 - (1 + cos t)/(2 t sin t)``. Joints: identity.
+    on SE(3), ``J_r(rho, phi) = J_l(-rho, -phi) = [[J3, Q], [0, J3]]`` with ``Q = Q_l(-rho, -phi)``
+    (Barfoot 2017, eq. (7.86)); its inverse is ``[[J3^-1, -J3^-1 Q J3^-1], [0, J3^-1]]`` with
+    ``J3^-1 = I - [p]/2 + d [p]^2`` at ``p = -phi``, ``d = 1/t^2 - (1 + cos t)/(2 t sin t)``
+    (Barfoot 2017, eq. (7.77)). Joints: identity.
     """
-    phi = np.empty(3)
-    rho = np.empty(3)
-    for i in range(3):
-        rho[i] = -xi[i]
-        phi[i] = -xi[i + 3]
-    t2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]
+    r0, r1, r2 = -xi[0], -xi[1], -xi[2]
+    p0, p1, p2 = -xi[3], -xi[4], -xi[5]
+    t2 = p0 * p0 + p1 * p1 + p2 * p2
     t = math.sqrt(t2)
     if t < 0.1:
         c1 = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0 - t2 * t2 * t2 / 362880.0
@@ -657,75 +671,72 @@ def tangent_rate(xi, vel, out):
         c2 = (t2 + 2.0 * c - 2.0) / (2.0 * t2 * t2)
         c3 = (2.0 * t - 3.0 * s + t * c) / (2.0 * t2 * t2 * t)
         d = 1.0 / t2 - (1.0 + c) / (2.0 * t * s)
-    # skew matrices
-    P = np.zeros((3, 3))
-    R = np.zeros((3, 3))
-    P[0, 1], P[0, 2], P[1, 2] = -phi[2], phi[1], -phi[0]
-    P[1, 0], P[2, 0], P[2, 1] = phi[2], -phi[1], phi[0]
-    R[0, 1], R[0, 2], R[1, 2] = -rho[2], rho[1], -rho[0]
-    R[1, 0], R[2, 0], R[2, 1] = rho[2], -rho[1], rho[0]
-    PR = P @ R
-    RP = R @ P
-    PRP = PR @ P
-    PP = P @ P
-    # Q_l(rho, phi), Barfoot 2017, eq. (7.86), at (-rho, -phi)
-    Q = (
-        0.5 * R
-        + c1 * (PR + RP + PRP)
-        + c2 * (PP @ R + RP @ P - 3.0 * PRP)
-        + c3 * (PRP @ P + PP @ RP)
-    )
-    # J3^-1 = J3l^-1(-phi) = I - [-phi]/2 + d [-phi]^2   (Barfoot 2017, eq. (7.77))
-    jinv = np.eye(3) - 0.5 * P + d * PP
-    lin = np.empty(3)
-    ang = np.empty(3)
-    for i in range(3):
-        ang[i] = jinv[i, 0] * vel[3] + jinv[i, 1] * vel[4] + jinv[i, 2] * vel[5]
-    # top: J3^-1 (v - Q ang)
-    for i in range(3):
-        lin[i] = vel[i] - (Q[i, 0] * ang[0] + Q[i, 1] * ang[1] + Q[i, 2] * ang[2])
-    for i in range(3):
-        out[i] = jinv[i, 0] * lin[0] + jinv[i, 1] * lin[1] + jinv[i, 2] * lin[2]
-        out[i + 3] = ang[i]
+    # angular part: J3^-1 w = w - p x w / 2 + d p x (p x w)
+    w0, w1, w2 = vel[3], vel[4], vel[5]
+    x0, x1, x2 = _cross(p0, p1, p2, w0, w1, w2)
+    y0, y1, y2 = _cross(p0, p1, p2, x0, x1, x2)
+    a0 = w0 - 0.5 * x0 + d * y0
+    a1 = w1 - 0.5 * x1 + d * y1
+    a2 = w2 - 0.5 * x2 + d * y2
+    # Q a with Q = r/2 + c1 (pr + rp + prp) + c2 (ppr + rpp - 3 prp) + c3 (prpp + pprp)   (products
+    # of skew matrices applied right to left)
+    pa0, pa1, pa2 = _cross(p0, p1, p2, a0, a1, a2)
+    ra0, ra1, ra2 = _cross(r0, r1, r2, a0, a1, a2)
+    pra0, pra1, pra2 = _cross(p0, p1, p2, ra0, ra1, ra2)
+    rpa0, rpa1, rpa2 = _cross(r0, r1, r2, pa0, pa1, pa2)
+    prpa0, prpa1, prpa2 = _cross(p0, p1, p2, rpa0, rpa1, rpa2)
+    ppra0, ppra1, ppra2 = _cross(p0, p1, p2, pra0, pra1, pra2)
+    ppa0, ppa1, ppa2 = _cross(p0, p1, p2, pa0, pa1, pa2)
+    rppa0, rppa1, rppa2 = _cross(r0, r1, r2, ppa0, ppa1, ppa2)
+    prppa0, prppa1, prppa2 = _cross(p0, p1, p2, rppa0, rppa1, rppa2)
+    pprpa0, pprpa1, pprpa2 = _cross(p0, p1, p2, prpa0, prpa1, prpa2)
+    q0 = (0.5 * ra0 + c1 * (pra0 + rpa0 + prpa0) + c2 * (ppra0 + rppa0 - 3.0 * prpa0)
+          + c3 * (prppa0 + pprpa0))
+    q1 = (0.5 * ra1 + c1 * (pra1 + rpa1 + prpa1) + c2 * (ppra1 + rppa1 - 3.0 * prpa1)
+          + c3 * (prppa1 + pprpa1))
+    q2 = (0.5 * ra2 + c1 * (pra2 + rpa2 + prpa2) + c2 * (ppra2 + rppa2 - 3.0 * prpa2)
+          + c3 * (prppa2 + pprpa2))
+    # linear part: J3^-1 (v - Q a)
+    l0, l1, l2 = vel[0] - q0, vel[1] - q1, vel[2] - q2
+    x0, x1, x2 = _cross(p0, p1, p2, l0, l1, l2)
+    y0, y1, y2 = _cross(p0, p1, p2, x0, x1, x2)
+    out[0] = l0 - 0.5 * x0 + d * y0
+    out[1] = l1 - 0.5 * x1 + d * y1
+    out[2] = l2 - 0.5 * x2 + d * y2
+    out[3] = a0
+    out[4] = a1
+    out[5] = a2
     for i in range(6, vel.shape[0]):
         out[i] = vel[i]
 
 
 # ---------------------------------------------------------------------- integrators
 @njit(**_OPTS)
-def rk4_step(M, q, v, tau, current, servo, dt, q_out, v_out):
+def _rk4_ws(M, q, v, tau, current, servo, dt, W, q_out, v_out):
     """One Runge-Kutta-Munthe-Kaas step of order 4 (as :func:`aiauv_pin.integrators.rk4_step`)."""
     nv = v.shape[0]
-    nq = q.shape[0]
     half = 0.5 * dt
-    a1 = np.empty(nv)
-    a2 = np.empty(nv)
-    a3 = np.empty(nv)
-    a4 = np.empty(nv)
-    k2 = np.empty(nv)
-    k3 = np.empty(nv)
-    k4 = np.empty(nv)
-    xi = np.empty(nv)
-    vs = np.empty(nv)
-    qs = np.empty(nq)
-    acceleration(M, q, v, tau, current, servo, a1)
+    st = W[16]
+    a1, a2, a3, a4, k2, k3, k4, xi, vs = st[0], st[1], st[2], st[3], st[4], st[5], st[6], st[7], st[8]
+    qs = W[17][0]
+    _acceleration_ws(M, q, v, tau, current, servo, W, a1)
     for i in range(nv):
-        xi[i] = half * v[i]
+        xi[i] = half * v[i]  # k1 = v: the Jacobian at xi = 0 is the identity
         vs[i] = v[i] + half * a1[i]
     integrate(q, xi, qs)
-    acceleration(M, qs, vs, tau, current, servo, a2)
+    _acceleration_ws(M, qs, vs, tau, current, servo, W, a2)
     tangent_rate(xi, vs, k2)
     for i in range(nv):
         xi[i] = half * k2[i]
         vs[i] = v[i] + half * a2[i]
     integrate(q, xi, qs)
-    acceleration(M, qs, vs, tau, current, servo, a3)
+    _acceleration_ws(M, qs, vs, tau, current, servo, W, a3)
     tangent_rate(xi, vs, k3)
     for i in range(nv):
         xi[i] = dt * k3[i]
         vs[i] = v[i] + dt * a3[i]
     integrate(q, xi, qs)
-    acceleration(M, qs, vs, tau, current, servo, a4)
+    _acceleration_ws(M, qs, vs, tau, current, servo, W, a4)
     tangent_rate(xi, vs, k4)
     sixth = dt / 6.0
     for i in range(nv):
@@ -735,16 +746,25 @@ def rk4_step(M, q, v, tau, current, servo, dt, q_out, v_out):
 
 
 @njit(**_OPTS)
-def euler_step(M, q, v, tau, current, servo, dt, q_out, v_out):
+def _euler_ws(M, q, v, tau, current, servo, dt, W, q_out, v_out):
     """Semi-implicit Euler: ``v += dt f(q, v)``, then ``q = q * exp(dt v)``."""
-    nv = v.shape[0]
-    a = np.empty(nv)
-    acceleration(M, q, v, tau, current, servo, a)
-    xi = np.empty(nv)
-    for i in range(nv):
+    a = W[16][0]
+    xi = W[16][1]
+    _acceleration_ws(M, q, v, tau, current, servo, W, a)
+    for i in range(v.shape[0]):
         v_out[i] = v[i] + dt * a[i]
         xi[i] = dt * v_out[i]
     integrate(q, xi, q_out)
+
+
+@njit(**_OPTS)
+def step(M, q, v, tau, current, servo, dt, method, q_out, v_out):
+    """One step (method 0 = RK4, 1 = semi-implicit Euler) into ``q_out, v_out``."""
+    W = workspace(M[0].shape[0], q.shape[0], v.shape[0])
+    if method == 0:
+        _rk4_ws(M, q, v, tau, current, servo, dt, W, q_out, v_out)
+    else:
+        _euler_ws(M, q, v, tau, current, servo, dt, W, q_out, v_out)
 
 
 @njit(**_OPTS)
@@ -755,13 +775,14 @@ def run_steps(M, q, v, tau, current, servo, dt, n_steps, method):
         The number of steps completed; fewer than ``n_steps`` if the state became non-finite (then
         ``q, v`` hold the last finite state).
     """
-    q_new = np.empty(q.shape[0])
-    v_new = np.empty(v.shape[0])
+    W = workspace(M[0].shape[0], q.shape[0], v.shape[0])
+    q_new = W[17][1]
+    v_new = W[16][9]
     for k in range(n_steps):
         if method == 0:
-            rk4_step(M, q, v, tau, current, servo, dt, q_new, v_new)
+            _rk4_ws(M, q, v, tau, current, servo, dt, W, q_new, v_new)
         else:
-            euler_step(M, q, v, tau, current, servo, dt, q_new, v_new)
+            _euler_ws(M, q, v, tau, current, servo, dt, W, q_new, v_new)
         for i in range(q.shape[0]):
             if not math.isfinite(q_new[i]):
                 return k
@@ -776,9 +797,10 @@ def run_steps(M, q, v, tau, current, servo, dt, n_steps, method):
 @njit(**_OPTS)
 def time_accelerations(M, q, v, tau, current, servo, repeats):
     """Evaluate the dynamics ``repeats`` times inside compiled code (benchmarking); returns the last."""
+    W = workspace(M[0].shape[0], q.shape[0], v.shape[0])
     out = np.empty(v.shape[0])
     for _ in range(repeats):
-        acceleration(M, q, v, tau, current, servo, out)
+        _acceleration_ws(M, q, v, tau, current, servo, W, out)
     return out
 
 
@@ -789,18 +811,13 @@ def frame_kinematics(M, q, v, body, rotation, translation):
     Returns:
         ``(R (3x3), p (3,), twist (6,))`` with the twist ``(v, w)`` in the frame's axes.
     """
-    ints, place, axis = M[0], M[1], M[2]
-    nb = ints.shape[0]
-    rot_w = np.empty((nb, 3, 3))
-    pos_w = np.empty((nb, 3))
-    xform = np.empty((nb, 6, 6))
-    twist = np.empty((nb, 6))
-    bias_acc = np.empty((nb, 6))
-    kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc)
+    W = workspace(M[0].shape[0], q.shape[0], v.shape[0])
+    _kinematics_ws(M, q, v, W)
+    rot_w, pos_w = W[0], W[1]
     rot = rot_w[body] @ rotation
     pos = pos_w[body] + rot_w[body] @ translation
-    x = np.empty((6, 6))
+    x = W[12][0]
     _motion_transform(rotation, translation, x)
     frame_twist = np.empty(6)
-    _matvec6(x, twist[body], frame_twist)
+    _matvec6(x, W[3][body], frame_twist)
     return rot, pos, frame_twist

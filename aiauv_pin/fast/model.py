@@ -190,8 +190,7 @@ class FastModel:
         """One integrator step; returns new ``(q, v)`` (as :mod:`aiauv_pin.integrators`)."""
         q_out = np.empty(self.nq)
         v_out = np.empty(self.nv)
-        kernel = kernels.rk4_step if method == "rk4" else kernels.euler_step
-        kernel(
+        kernels.step(
             self.arrays,
             np.ascontiguousarray(q, dtype=float),
             np.ascontiguousarray(v, dtype=float),
@@ -199,6 +198,7 @@ class FastModel:
             self._current(current),
             self._servo(servo),
             float(dt),
+            METHOD_CODES[method],
             q_out,
             v_out,
         )
