@@ -1,7 +1,9 @@
 """The ``aiauv`` command line.
 
 Every failure the user can cause (bad arguments, a broken URDF, a diverging run) ends with one line on
-standard error, ``aiauv: error: ...``, and a non-zero exit status; never a traceback.
+standard error, ``aiauv: error: ...``, and a non-zero exit status (2 for bad arguments, 1 otherwise);
+never a traceback (set ``AIAUV_DEBUG=1`` to get one for an unexpected internal error). Python warnings
+are printed as single ``aiauv: warning: ...`` lines.
 """
 
 from __future__ import annotations
@@ -9,11 +11,23 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import os
 import sys
+import time
+import warnings
 from pathlib import Path
 
 EXIT_USAGE = 2
 EXIT_FAILED = 1
+#: Largest number of integration steps ``aiauv simulate`` accepts (the logs are preallocated).
+MAX_STEPS = 5_000_000
+
+
+class OneLineArgumentParser(argparse.ArgumentParser):
+    """An argument parser whose usage errors are one line on standard error (exit status 2)."""
+
+    def error(self, message: str):
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {' '.join(message.split())}\n")
 
 
 def positive_seconds(text: str) -> float:
@@ -32,7 +46,9 @@ def _add_simulate(subparsers) -> None:
         "simulate",
         help="run the paper's path-following scenario",
         description="Run the paper's path-following scenario and write timeseries.csv, "
-        "summary.json, figures/ and playback.html into the output folder.",
+        "summary.json, figures/ and playback.html into the output folder. If the simulation "
+        "diverges, the files are written for what was computed before (without playback.html), "
+        "and the command fails naming the time and the cause.",
     )
     parser.add_argument("--vehicle", type=Path, help="URDF file (default: the bundled paper vehicle)")
     parser.add_argument("--case", choices=("uniform", "stabilised"), default="uniform")
@@ -50,14 +66,20 @@ def _add_simulate(subparsers) -> None:
 
 def _run_simulate(args) -> int:
     from . import loading
-    from .errors import SimulationDiverged
+    from .errors import AiauvError, SimulationDiverged
     from .outputs import write_results
     from .scenario import PaperScenario, ScenarioResult, run_paper_scenario
 
-    path = args.vehicle if args.vehicle is not None else loading.bundled_urdf(args.case)
-    vehicle = loading.load_vehicle(path)
     options = {"dt": args.dt} if args.dt is not None else {}
     scenario = PaperScenario(case=args.case, duration=args.duration, **options)
+    steps = scenario.duration / scenario.dt
+    if steps > MAX_STEPS:
+        raise AiauvError(
+            f"duration / dt = {steps:.3g} steps exceeds {MAX_STEPS}; use a larger --dt or a shorter "
+            "--duration"
+        )
+    path = args.vehicle if args.vehicle is not None else loading.bundled_urdf(args.case)
+    vehicle = loading.load_vehicle(path)
     gains = scenario.controller_gains.with_changes(feedforward=args.feedforward)
     scenario = dataclasses.replace(scenario, gains=gains)
     out = args.out if args.out is not None else Path("results") / args.case
@@ -66,14 +88,26 @@ def _run_simulate(args) -> int:
         from .viewer import live_view
 
         on_log = live_view(vehicle)
+    start = time.perf_counter()
     try:
         result = run_paper_scenario(vehicle, scenario, progress=not args.quiet, on_log=on_log)
     except SimulationDiverged as exc:
-        partial = ScenarioResult(scenario, exc.trajectory, float("nan"), vehicle.joint_names,
-                                 vehicle.thruster_names)
-        if exc.trajectory is not None and len(exc.trajectory.t) > 1:
-            write_results(partial, out)
-        raise
+        cause = " ".join(str(exc).split())
+        partial = exc.trajectory
+        if partial is None or len(partial.t) == 0:
+            raise AiauvError(f"simulation diverged: {cause}; nothing to write") from None
+        result = ScenarioResult(
+            scenario,
+            partial,
+            time.perf_counter() - start,
+            vehicle.joint_names,
+            vehicle.thruster_names,
+        )
+        write_results(result, out, {"vehicle": str(path)})
+        raise AiauvError(
+            f"simulation diverged: {cause}; partial results up to t = {partial.t[-1]:.6g} s "
+            f"({len(partial.t)} samples) written to {out}"
+        ) from None
     content = write_results(result, out, {"vehicle": str(path)})
     if not args.no_html:
         from .playback import write_playback
@@ -110,9 +144,30 @@ def _run_build(args) -> int:
     return 0
 
 
+def _add_check(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "check",
+        help="validate a vehicle URDF and print its parameters",
+        description="Validate a vehicle URDF and print a table of its links (mass, volume, "
+        "buoyancy margin, CG, CB, added-mass diagonal), joints and thrusters. Exit status 0 for a "
+        "usable vehicle, even with warnings (e.g. not neutrally buoyant, no surge thruster); "
+        "1 with a one-line reason otherwise.",
+    )
+    parser.add_argument("urdf", type=Path, help="URDF file")
+    parser.set_defaults(handler=_run_check)
+
+
+def _run_check(args) -> int:
+    from .check import check_vehicle, format_report
+
+    report = check_vehicle(args.urdf)
+    print(format_report(report))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``aiauv`` argument parser with every subcommand."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineArgumentParser(
         prog="aiauv",
         description="Simulation and control of articulated intervention AUVs.",
     )
@@ -124,8 +179,13 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-#: Subcommands registered by other modules (``check``, ``bench``, ...).
-_EXTRA_SUBCOMMANDS: list = []
+#: Subcommands registered by other modules (``check``, ``bench``, ...): functions taking the
+#: ``add_subparsers`` object.
+_EXTRA_SUBCOMMANDS: list = [_add_check]
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"aiauv: warning: {' '.join(str(message).split())}", file=sys.stderr)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -134,15 +194,31 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = build_parser()
     args = parser.parse_args(argv)
+    previous = warnings.showwarning
+    warnings.showwarning = _show_warning
     try:
         return int(args.handler(args) or 0)
     except KeyboardInterrupt:
         print("aiauv: interrupted", file=sys.stderr)
         return 130
-    except (AiauvError, ValueError, OSError) as exc:
+    except (AiauvError, ValueError, OSError, MemoryError, RecursionError) as exc:
         message = " ".join(str(exc).split()) or exc.__class__.__name__
+        if isinstance(exc, (MemoryError, RecursionError)):
+            message = f"{exc.__class__.__name__}: {message} (input too large or too deep)"
         print(f"aiauv: error: {message}", file=sys.stderr)
         return EXIT_FAILED
+    except Exception as exc:  # noqa: BLE001 - the promise is: no traceback, one line
+        if os.environ.get("AIAUV_DEBUG"):
+            raise
+        message = " ".join(str(exc).split())
+        print(
+            f"aiauv: error: internal error ({exc.__class__.__name__}: {message}); "
+            "rerun with AIAUV_DEBUG=1 for the traceback",
+            file=sys.stderr,
+        )
+        return EXIT_FAILED
+    finally:
+        warnings.showwarning = previous
 
 
 if __name__ == "__main__":

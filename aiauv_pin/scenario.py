@@ -5,11 +5,10 @@ Choices the paper leaves open, documented here and in the README:
 * the path is the world x-axis; the vehicle starts straight, at rest, parallel to the path, with its
   end-effector at ``(0, 2, 2)`` m (a few metres off in y and z, PAPER_DATA "Start");
 * 300 s of simulated time (the lineage code's duration), step ``dt = 0.01`` s (RK4); the guidance,
-  base-angle and surge loops are sampled every ``control_period = 0.05`` s (a 20 Hz digital loop,
-  zero-order hold of the commanded generalised force; the step-to-step thruster mapping ``B(q)`` is
-  therefore held too) and the joint PD (eq. 24) runs as a continuous servo evaluated at every
-  integrator stage (see :class:`aiauv_pin.path_following.VehiclePathFollowing`); states are logged at
-  the controller's rate;
+  base-angle and surge loops are sampled every step (zero-order hold; ``control_period`` samples them
+  more slowly, with states logged at the controller's rate) and the joint PD (eq. 24) runs as a
+  continuous servo evaluated at every integrator stage (see
+  :class:`aiauv_pin.path_following.VehiclePathFollowing`);
 * the base-angle saturation ``q_max`` is :class:`control.path_following.PathFollowingGains`' default.
 """
 
@@ -57,7 +56,7 @@ class PaperScenario:
     current: tuple[float, float, float] = (0.0, 0.0, 0.0)
     gains: PathFollowingGains | None = None
     continuous_joints: bool = True
-    control_period: float | None = 0.05
+    control_period: float | None = None
 
     def __post_init__(self) -> None:
         if self.case not in CASES:
