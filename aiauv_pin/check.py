@@ -132,7 +132,7 @@ def check_vehicle(path: str | os.PathLike) -> CheckReport:
         if cb is not None:
             weighted_cb += volume * placement.act(cb)
         diagonal = np.diag(link.added_mass).copy() if link is not None else np.zeros(6)
-        rows.append(LinkRow(name, mass, volume, (rho * volume - mass) * g, cg, cb, diagonal))
+        rows.append(LinkRow(name, mass, volume, _margin(rho * volume, mass, g), cg, cb, diagonal))
         if link is None and mass > 0.0:
             warnings.append(f"link '{name}' has mass but no hydrodynamic parameters")
         if inertial is not None:
@@ -141,7 +141,7 @@ def check_vehicle(path: str | os.PathLike) -> CheckReport:
                 warnings.append(f"link '{name}': inertia breaks the triangle inequality")
     total_mass = sum(row.mass for row in rows)
     total_volume = sum(row.volume for row in rows)
-    margin = (rho * total_volume - total_mass) * g
+    margin = _margin(rho * total_volume, total_mass, g)
     if abs(margin) > BUOYANCY_TOLERANCE * total_mass * g:
         state = "positively" if margin > 0 else "negatively"
         warnings.append(
@@ -184,6 +184,12 @@ def check_vehicle(path: str | os.PathLike) -> CheckReport:
     )
 
 
+def _margin(displaced: float, mass: float, gravity: float) -> float:
+    """``(rho V - m) g`` [N], with round-off (below 1e-9 of the larger term) shown as zero."""
+    margin = (displaced - mass) * gravity
+    return 0.0 if abs(margin) <= 1e-9 * max(displaced, mass) * gravity else margin
+
+
 def _joint_axis_labels(structure: UrdfStructure) -> list[str] | None:
     labels = []
     for joint in structure.joints:
@@ -203,7 +209,7 @@ def _vector(values) -> str:
 
 
 def _limit(value: float | None) -> str:
-    return "-" if value is None else f"{value:+.3f}"
+    return "-" if value is None else f"{value:+.4g}"
 
 
 def format_report(report: CheckReport) -> str:
@@ -225,9 +231,7 @@ def format_report(report: CheckReport) -> str:
             f"{_vector(row.center_of_gravity):>22} {cb:>22}  "
             + " ".join(f"{v:.4g}" for v in row.added_mass_diagonal)
         )
-    cb_total = (
-        _vector(report.center_of_buoyancy) if report.center_of_buoyancy is not None else "-"
-    )
+    cb_total = _vector(report.center_of_buoyancy) if report.center_of_buoyancy is not None else "-"
     lines += [
         f"{'total':<20} {report.total_mass:>9.4g} {report.total_volume:>10.4g} "
         f"{report.buoyancy_margin:>+10.4g} {_vector(report.center_of_gravity):>22} "
@@ -254,7 +258,9 @@ def format_report(report: CheckReport) -> str:
             f"{max_thrust:>7.4g}"
         )
     lines.append("")
-    lines.append(f"smallest eigenvalue of M(q) at q = neutral: {report.smallest_mass_eigenvalue:.4g}")
+    lines.append(
+        f"smallest eigenvalue of M(q) at q = neutral: {report.smallest_mass_eigenvalue:.4g}"
+    )
     lines += [f"warning: {w}" for w in report.warnings]
     suffix = f" ({len(report.warnings)} warnings)" if report.warnings else ""
     lines.append(f"OK: usable vehicle{suffix}")

@@ -46,7 +46,9 @@ def bundled_urdf(case: str = "uniform") -> Path:
         case: ``"uniform"`` (uniform density links) or ``"stabilised"`` (passively roll-stabilised).
     """
     if case not in BUNDLED_CASES:
-        raise VehicleLoadError(f"unknown case '{case}' (expected one of {', '.join(BUNDLED_CASES)})")
+        raise VehicleLoadError(
+            f"unknown case '{case}' (expected one of {', '.join(BUNDLED_CASES)})"
+        )
     resource = importlib.resources.files("aiauv_pin.urdf") / f"paper_{case}.urdf"
     return Path(str(resource))
 
@@ -122,7 +124,9 @@ def _cross_check(model: pin.Model, structure: UrdfStructure, source: Path) -> No
     """The Pinocchio model carries what the validated URDF says."""
     for joint in model.joints[2:]:
         if joint.nq != 1 or joint.nv != 1:
-            raise VehicleLoadError(f"{source}: joint '{model.names[joint.id]}' is not a 1-DOF joint")
+            raise VehicleLoadError(
+                f"{source}: joint '{model.names[joint.id]}' is not a 1-DOF joint"
+            )
     urdf_mass = math.fsum(inertial.mass for inertial in structure.inertials.values())
     model_mass = math.fsum(inertia.mass for inertia in model.inertias[1:])
     if not math.isclose(model_mass, urdf_mass, rel_tol=1e-9, abs_tol=1e-12):
@@ -157,11 +161,14 @@ def load_vehicle(
         The vehicle, with a free-flyer joint on the URDF's root link.
 
     Raises:
-        VehicleLoadError: One line naming the problem (missing file, not XML, not a URDF, unsafe XML,
-            broken tree, unknown link, non-physical parameter, unsupported joint, ...).
+        VehicleLoadError: One line naming the problem (missing file, not XML, not a URDF, unsafe
+            XML, broken tree, unknown link, non-physical parameter, unsupported joint, ...).
     """
     source = bundled_urdf("uniform") if path is None else Path(path)
-    text = _read_text(source)
+    text = _read_text(source).removeprefix("\ufeff")
+    if not text.lstrip().startswith("<"):
+        # never hand such text on: hydro.urdf_block.parse_robot would take it for a file name
+        raise VehicleLoadError(f"{source}: is not well-formed XML (it does not start with '<')")
     try:
         root = parse_robot(text)
     except HydroError as exc:

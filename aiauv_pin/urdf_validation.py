@@ -181,7 +181,10 @@ def _geometry(element: Element, what: str) -> None:
         sizes = _numbers(shape.get("size"), 3, f"{what} box size")
     elif shape.tag == "cylinder":
         sizes = np.array(
-            [_number(shape, "radius", f"{what} cylinder"), _number(shape, "length", f"{what} cylinder")]
+            [
+                _number(shape, "radius", f"{what} cylinder"),
+                _number(shape, "length", f"{what} cylinder"),
+            ]
         )
     elif shape.tag == "sphere":
         sizes = np.array([_number(shape, "radius", f"{what} sphere")])

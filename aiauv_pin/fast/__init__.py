@@ -1,12 +1,12 @@
 """Compiled (numba) evaluation of a vehicle's dynamics and fixed-step integration.
 
-The Pinocchio path of :class:`aiauv_pin.Vehicle` stays the reference: every kernel here is tested
-against it (tests/test_fast.py). The kernels cover a free-flyer root with 1-DOF revolute or prismatic
-joints, which is every vehicle :func:`aiauv_pin.load_vehicle` accepts except URDFs with other joint
-types; those, and machines without numba, fall back to Pinocchio.
+The Pinocchio path of :class:`aiauv_pin.Vehicle` stays the reference: every kernel here is
+tested against it (tests/test_fast.py). The kernels cover a free-flyer root with 1-DOF revolute or
+prismatic joints, which is every vehicle :func:`aiauv_pin.load_vehicle` accepts except URDFs with
+other joint types; those, and machines without numba, fall back to Pinocchio.
 
-Set-up cost: the first use in a fresh installation compiles the kernels (about half a minute); they are
-cached on disk (numba ``cache=True``) so later processes start in well under a second.
+Set-up cost: the first use in a fresh installation compiles the kernels (about half a minute);
+they are cached on disk (numba ``cache=True``) so later processes start in well under a second.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Numba kernels: kinematics, articulated-body dynamics with general body inertias, hydro, RK4 on SE(3).
+"""Numba kernels: kinematics, articulated-body dynamics with general inertias, hydro, RK4 on SE(3).
 
 Everything here works on the flat arrays of :class:`aiauv_pin.fast.model.FastModel` (a tuple ``M``):
 
@@ -8,9 +8,10 @@ Everything here works on the flat arrays of :class:`aiauv_pin.fast.model.FastMod
 * ``axis`` (nb, 6): motion subspace ``S`` of the 1-DOF joint in the child frame;
 * ``inertia`` (nb, 3, 6, 6): ``[0]`` rigid + added inertia, ``[1]`` added mass ``M_A``,
   ``[2]`` rigid inertia, all about the body origin in body axes;
-* ``restore`` (nb, 4): ``(B - W, B c_B - W c_W)`` per body (weight ``W`` at ``c_W``, buoyancy ``B`` at
-  ``c_B``) so that the hydrostatic wrench on the body is ``((B - W) e, (B c_B - W c_W) x e)`` with
-  ``e`` the world's up axis in body axes (Fossen 2021, eq. (4.6));
+* ``restore`` (nb, 4): ``(B - W, B c_B - W c_W)`` per body (weight ``W`` at ``c_W``, buoyancy
+  ``B`` at ``c_B``) so that the hydrostatic wrench on the body is
+  ``((B - W) e, (B c_B - W c_W) x e)`` with ``e`` the world's up axis in body axes
+  (Fossen 2021, eq. (4.6));
 * ``link_i`` (nl, 2) int64: body of the link, 1 if it has crossflow drag;
 * ``link_m`` (nl, 4, 6, 6): link-from-body motion transform, ``D_L``, ``D_Q``, cylinder-from-link
   motion transform;
@@ -19,9 +20,9 @@ Everything here works on the flat arrays of :class:`aiauv_pin.fast.model.FastMod
 * ``thrust`` (m, 7): body index, unit-thrust wrench in the body frame (6).
 
 Spatial vectors are ``(linear, angular)`` as in Pinocchio. The articulated-body algorithm is
-Featherstone's (2008, Table 7.1) with the rigid inertia replaced by the full 6x6 ``I = I_RB + M_A`` of
-each body, so that the added-mass inertia and Coriolis terms enter exactly as in
-:meth:`aiauv_pin.Vehicle.acceleration` (Kirchhoff: ``M nu_dot + nu x* (M nu)``, Fossen 2021,
+Featherstone's (2008, Table 7.1) with the rigid inertia replaced by the full 6x6
+``I = I_RB + M_A`` of each body, so that the added-mass inertia and Coriolis terms enter exactly as
+in :meth:`aiauv_pin.Vehicle.acceleration` (Kirchhoff: ``M nu_dot + nu x* (M nu)``, Fossen 2021,
 eq. (6.43)); with a current the added mass acts on the relative twist (Fossen 2021, eq. (10.5)).
 """
 
@@ -32,7 +33,14 @@ import math
 import numpy as np
 from numba import njit
 
-_OPTS = dict(cache=True, nogil=True, fastmath=False, error_model="numpy")
+_OPTS = dict(
+    cache=True,
+    nogil=True,
+    # reassociation and FMA contraction only: NaN and infinity semantics are kept (divergence
+    # checks)
+    fastmath={"reassoc", "contract", "arcp", "nsz"},
+    error_model="numpy",
+)
 
 FREE_FLYER, REVOLUTE, PRISMATIC = 0, 1, 2
 
@@ -113,7 +121,7 @@ def _matTvec6(m, x, out):
 
 @njit(**_OPTS)
 def _motion_transform(rot, trans, out):
-    """``X`` mapping parent twists to the child frame at ``(R, p)`` (Featherstone 2008, eq. (2.24))."""
+    """``X``: parent twists to the child frame at ``(R, p)`` (Featherstone 2008, eq. (2.24))."""
     px, py, pz = trans[0], trans[1], trans[2]
     for i in range(3):
         r0, r1, r2 = rot[0, i], rot[1, i], rot[2, i]  # row i of R^T
@@ -233,7 +241,7 @@ def kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc, m3
 # ---------------------------------------------------------------------- hydrodynamics
 @njit(**_OPTS)
 def _crossflow(vel, length, coefficient, gauss, out):
-    """Strip-theory crossflow wrench about the cylinder origin (as :func:`hydro.crossflow.crossflow_wrench`).
+    """Crossflow wrench about the cylinder origin (as :func:`hydro.crossflow.crossflow_wrench`).
 
     ``f(x) = -k |v_n| v_n`` with ``v_n(x) = (v + r x, w - q x)`` integrated over ``[0, L]`` with
     Gauss-Legendre on each side of the point where ``|v_n|`` is smallest (Fossen 2021, Sec. 6.4.3).
@@ -309,7 +317,8 @@ def body_bias(M, rot_w, twist, current, bias, relative, v6):
             relative[b, 0] -= vc0
             relative[b, 1] -= vc1
             relative[b, 2] -= vc2
-            # M_A (w x v_c, 0): d/dt of the current seen from the rotating body   (Fossen 2021, eq. (10.5))
+            # M_A (w x v_c, 0): d/dt of the current seen from the rotating body
+            # (Fossen 2021, eq. (10.5))
             tmp[0] = nu[4] * vc2 - nu[5] * vc1
             tmp[1] = nu[5] * vc0 - nu[3] * vc2
             tmp[2] = nu[3] * vc1 - nu[4] * vc0
@@ -437,7 +446,7 @@ def _articulated(M, tau, xform, bias_acc, bias, out, art, pa, u_vec, scal, acc, 
 
 @njit(**_OPTS)
 def _backward_generalized(ints, axis, xform, body_wrench, out, tmp):
-    """Generalised force ``sum_b J_b^T w_b`` of body wrenches (in body frames); consumes ``body_wrench``."""
+    """Generalised force ``sum_b J_b^T w_b`` of body wrenches (body frames); consumes them."""
     nb = ints.shape[0]
     for b in range(nb - 1, -1, -1):
         iv = ints[b, 3]
@@ -565,7 +574,9 @@ def _acceleration_ws(M, q, v, tau, current, servo, W, out):
         else:
             g[:] = 0.0
         for k in range(n_joint):
-            tau_all[6 + k] += -servo[0, k] * (q[7 + k] - servo[2, k]) - servo[1, k] * v[6 + k] + g[6 + k]
+            tau_all[6 + k] += (
+                -servo[0, k] * (q[7 + k] - servo[2, k]) - servo[1, k] * v[6 + k] + g[6 + k]
+            )
     _articulated(M, tau_all, W[2], W[4], W[5], out, W[7], W[8], W[9], W[10], W[11], W[12], W[13])
 
 
@@ -580,7 +591,7 @@ def acceleration(M, q, v, tau, current, servo, out):
     _acceleration_ws(M, q, v, tau, current, servo, W, out)
 
 
-# ---------------------------------------------------------------------- SE(3) x R^n group operations
+# ------------------------------------------------------------------ SE(3) x R^n group operations
 @njit(**_OPTS)
 def integrate(q, xi, out):
     """``out = q * exp(xi)``: free flyer by the exact SE(3) exponential, joints by addition.
@@ -650,7 +661,7 @@ def _cross(a0, a1, a2, b0, b1, b2):
 def tangent_rate(xi, vel, out):
     """``out = J_r(xi)^-1 vel``: the rate of ``xi`` for ``integrate(q0, xi)`` moving with ``vel``.
 
-    ``J_r`` is the right Jacobian of ``exp`` (Pinocchio's ``dIntegrate`` w.r.t. its second argument):
+    ``J_r`` is the right Jacobian of ``exp`` (Pinocchio's ``dIntegrate`` w.r.t. its 2nd argument):
     on SE(3), ``J_r(rho, phi) = J_l(-rho, -phi) = [[J3, Q], [0, J3]]`` with ``Q = Q_l(-rho, -phi)``
     (Barfoot 2017, eq. (7.86)); its inverse is ``[[J3^-1, -J3^-1 Q J3^-1], [0, J3^-1]]`` with
     ``J3^-1 = I - [p]/2 + d [p]^2`` at ``p = -phi``, ``d = 1/t^2 - (1 + cos t)/(2 t sin t)``
@@ -690,12 +701,24 @@ def tangent_rate(xi, vel, out):
     rppa0, rppa1, rppa2 = _cross(r0, r1, r2, ppa0, ppa1, ppa2)
     prppa0, prppa1, prppa2 = _cross(p0, p1, p2, rppa0, rppa1, rppa2)
     pprpa0, pprpa1, pprpa2 = _cross(p0, p1, p2, prpa0, prpa1, prpa2)
-    q0 = (0.5 * ra0 + c1 * (pra0 + rpa0 + prpa0) + c2 * (ppra0 + rppa0 - 3.0 * prpa0)
-          + c3 * (prppa0 + pprpa0))
-    q1 = (0.5 * ra1 + c1 * (pra1 + rpa1 + prpa1) + c2 * (ppra1 + rppa1 - 3.0 * prpa1)
-          + c3 * (prppa1 + pprpa1))
-    q2 = (0.5 * ra2 + c1 * (pra2 + rpa2 + prpa2) + c2 * (ppra2 + rppa2 - 3.0 * prpa2)
-          + c3 * (prppa2 + pprpa2))
+    q0 = (
+        0.5 * ra0
+        + c1 * (pra0 + rpa0 + prpa0)
+        + c2 * (ppra0 + rppa0 - 3.0 * prpa0)
+        + c3 * (prppa0 + pprpa0)
+    )
+    q1 = (
+        0.5 * ra1
+        + c1 * (pra1 + rpa1 + prpa1)
+        + c2 * (ppra1 + rppa1 - 3.0 * prpa1)
+        + c3 * (prppa1 + pprpa1)
+    )
+    q2 = (
+        0.5 * ra2
+        + c1 * (pra2 + rpa2 + prpa2)
+        + c2 * (ppra2 + rppa2 - 3.0 * prpa2)
+        + c3 * (prppa2 + pprpa2)
+    )
     # linear part: J3^-1 (v - Q a)
     l0, l1, l2 = vel[0] - q0, vel[1] - q1, vel[2] - q2
     x0, x1, x2 = _cross(p0, p1, p2, l0, l1, l2)
@@ -717,7 +740,17 @@ def _rk4_ws(M, q, v, tau, current, servo, dt, W, q_out, v_out):
     nv = v.shape[0]
     half = 0.5 * dt
     st = W[16]
-    a1, a2, a3, a4, k2, k3, k4, xi, vs = st[0], st[1], st[2], st[3], st[4], st[5], st[6], st[7], st[8]
+    a1, a2, a3, a4, k2, k3, k4, xi, vs = (
+        st[0],
+        st[1],
+        st[2],
+        st[3],
+        st[4],
+        st[5],
+        st[6],
+        st[7],
+        st[8],
+    )
     qs = W[17][0]
     _acceleration_ws(M, q, v, tau, current, servo, W, a1)
     for i in range(nv):
@@ -796,7 +829,7 @@ def run_steps(M, q, v, tau, current, servo, dt, n_steps, method):
 
 @njit(**_OPTS)
 def time_accelerations(M, q, v, tau, current, servo, repeats):
-    """Evaluate the dynamics ``repeats`` times inside compiled code (benchmarking); returns the last."""
+    """Evaluate the dynamics ``repeats`` times in compiled code (benchmarking); returns the last."""
     W = workspace(M[0].shape[0], q.shape[0], v.shape[0])
     out = np.empty(v.shape[0])
     for _ in range(repeats):

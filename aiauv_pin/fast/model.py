@@ -1,8 +1,9 @@
 """Flat arrays of a :class:`aiauv_pin.Vehicle` for the numba kernels, and thin Python wrappers.
 
-The arrays are built from the same per-body data the Pinocchio path uses (the model's joint placements
-and inertias, :class:`~aiauv_pin.Vehicle`'s added mass per body, link transforms, damping matrices,
-crossflow cylinders, buoyancy and thrusters), so both paths describe one set of equations.
+The arrays are built from the same per-body data the Pinocchio path uses (the model's joint
+placements and inertias, :class:`~aiauv_pin.Vehicle`'s added mass per body, link transforms,
+damping matrices, crossflow cylinders, buoyancy and thrusters), so both paths describe one set of
+equations.
 """
 
 from __future__ import annotations
@@ -23,7 +24,8 @@ METHOD_CODES = {"rk4": 0, "euler": 1}
 def unsupported_reason(model: pin.Model) -> str | None:
     """Why the kernels cannot run this model (``None`` if they can).
 
-    Supported: a free-flyer root (identity placement) and 1-DOF revolute or prismatic joints below it.
+    Supported: a free-flyer root (identity placement) and 1-DOF revolute or prismatic joints below
+    it.
     """
     if model.njoints < 2 or model.joints[1].shortname() != "JointModelFreeFlyer":
         return "the root joint is not a free flyer"
@@ -57,7 +59,8 @@ class FastModel:
     """A vehicle's equations of motion as flat arrays, with compiled evaluation.
 
     Args:
-        vehicle: The vehicle (its ``added_mass``, ``damping`` and ``restoring`` switches are honoured).
+        vehicle: The vehicle (its ``added_mass``, ``damping`` and ``restoring`` switches are
+            honoured; they are read once, here).
 
     Raises:
         ValueError: The model is not supported (see :func:`unsupported_reason`).
@@ -129,7 +132,19 @@ class FastModel:
             thrust[k, 0] = vehicle._thruster_bodies[vehicle._thruster_body_of[k]] - 1
             thrust[k, 1:] = vehicle._thruster_wrench[k]
         meta = np.array([model.nq, model.nv], dtype=np.int64)
-        self.arrays = (ints, place, axis, inertia, restore, link_i, link_m, link_f, gauss, thrust, meta)
+        self.arrays = (
+            ints,
+            place,
+            axis,
+            inertia,
+            restore,
+            link_i,
+            link_m,
+            link_f,
+            gauss,
+            thrust,
+            meta,
+        )
         self.no_servo = np.zeros((5, 0))
         self.zero_current = np.zeros(3)
         self._frames: dict[int, tuple[int, np.ndarray, np.ndarray]] = {}
@@ -146,7 +161,7 @@ class FastModel:
 
     # ------------------------------------------------------------------ evaluation
     def acceleration(self, q, v, tau, current=None, servo: np.ndarray | None = None) -> np.ndarray:
-        """``dv`` (nv,), as :meth:`aiauv_pin.Vehicle.acceleration` (plus an optional packed servo)."""
+        """``dv`` (nv,), as :meth:`aiauv_pin.Vehicle.acceleration` (plus an optional servo)."""
         out = np.empty(self.nv)
         kernels.acceleration(
             self.arrays,

@@ -1,0 +1,416 @@
+"""``aiauv bench``: speed and accuracy of the dynamics, the integrators and the paper scenario.
+
+Measures, in one run on the paper vehicle:
+
+* microseconds per forward-dynamics evaluation on both backends (Pinocchio reference, compiled
+  numba, called from Python and inside compiled code);
+* microseconds per RK4 and semi-implicit Euler step;
+* the real-time factor of the paper scenario end to end (simulation plus ``timeseries.csv``,
+  ``summary.json`` and figures; no HTML);
+* an accuracy table: the largest end-effector distance, over the whole path, between a run at ``dt``
+  and one at ``dt / 4``;
+* MuJoCo's ``mj_forward`` and ``mj_step`` (Euler, RK4) on the equivalent 9-body model generated
+  from the URDF (:func:`mjcf_from_vehicle`), when the optional ``mujoco`` package is installed.
+
+The results are printed as a table and written atomically to JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .atomic import write_text
+from .cli import _EXTRA_SUBCOMMANDS, positive_seconds
+
+#: Where ``aiauv bench`` writes its JSON by default.
+DEFAULT_OUTPUT = Path("benchmarks") / "results.json"
+
+
+# ---------------------------------------------------------------------- MuJoCo model
+def _numbers(values) -> str:
+    return " ".join(f"{float(x):.9g}" for x in np.ravel(values))
+
+
+def mjcf_from_vehicle(vehicle, *, timestep: float = 0.01, integrator: str = "RK4") -> str:
+    """MJCF of a vehicle's rigid bodies with MuJoCo's ellipsoid fluid model, for benchmarking.
+
+    Same kinematic tree, masses and inertias as the Pinocchio model (free joint at the root, hinge
+    or slide joints), one cylinder geom per link with crossflow data (its length and radius;
+    otherwise a small sphere), no contacts, fluid density 1000 kg/m^3 and
+    ``fluidshape="ellipsoid"``. MuJoCo's fluid model is not ours (no Fossen matrices), so only the
+    cost is comparable, not the motion.
+
+    Args:
+        vehicle: The vehicle (free-flyer root, 1-DOF joints).
+        timestep: ``<option timestep>`` [s].
+        integrator: ``"Euler"`` or ``"RK4"``.
+    """
+    import pinocchio as pin
+
+    model = vehicle.model
+    children: dict[int, list[int]] = {}
+    for j in range(2, model.njoints):
+        children.setdefault(model.parents[j], []).append(j)
+    geoms: dict[int, list[str]] = {}
+    for k, link in enumerate(vehicle.hydro.links):
+        joint, placement = vehicle._link_placement(link.link)
+        if link.crossflow is not None:
+            c = link.crossflow
+            start = placement.act(c.translation)
+            end = start + placement.rotation @ c.rotation @ np.array([c.length, 0.0, 0.0])
+            geom = (
+                f'<geom name="g{k}" type="cylinder" fromto="{_numbers(start)} {_numbers(end)}" '
+                f'size="{c.radius:.9g}"'
+            )
+        else:
+            centre = _numbers(placement.translation)
+            geom = f'<geom name="g{k}" type="sphere" pos="{centre}" size="0.1"'
+        geoms.setdefault(joint, []).append(
+            geom + ' density="0" contype="0" conaffinity="0" fluidshape="ellipsoid"/>'
+        )
+
+    def body(j: int, indent: str) -> list[str]:
+        placement = model.jointPlacements[j]
+        quat = pin.Quaternion(placement.rotation)
+        inertia = model.inertias[j]
+        mass = max(float(inertia.mass), 1e-6)
+        i3 = inertia.inertia
+        lines = [
+            f'{indent}<body name="b{j}" pos="{_numbers(placement.translation)}" '
+            f'quat="{quat.w:.12g} {quat.x:.12g} {quat.y:.12g} {quat.z:.12g}">'
+        ]
+        if j == 1:
+            lines.append(f'{indent}  <freejoint name="root"/>')
+        else:
+            kind = model.joints[j].shortname().removeprefix("JointModel")
+            axis = {"X": "1 0 0", "Y": "0 1 0", "Z": "0 0 1"}.get(kind[-1:], "1 0 0")
+            if kind.endswith("Unaligned"):
+                axis = _numbers(model.joints[j].extract().axis)
+            joint_type = "slide" if kind.startswith("P") else "hinge"
+            lines.append(
+                f'{indent}  <joint name="{model.names[j]}" type="{joint_type}" axis="{axis}"/>'
+            )
+        fullinertia = (i3[0, 0], i3[1, 1], i3[2, 2], i3[0, 1], i3[0, 2], i3[1, 2])
+        lines.append(
+            f'{indent}  <inertial pos="{_numbers(inertia.lever)}" mass="{mass:.9g}" '
+            f'fullinertia="{_numbers(fullinertia)}"/>'
+        )
+        lines += [f"{indent}  {g}" for g in geoms.get(j, [])]
+        for child in children.get(j, []):
+            lines += body(child, indent + "  ")
+        lines.append(f"{indent}</body>")
+        return lines
+
+    gravity = vehicle.hydro.gravity if vehicle.restoring else 0.0
+    return "\n".join(
+        [
+            f'<mujoco model="{vehicle.name}">',
+            f'  <option timestep="{timestep:g}" integrator="{integrator}" density="1000" '
+            f'viscosity="0" gravity="0 0 {-gravity:g}"/>',
+            "  <worldbody>",
+            *body(1, "    "),
+            "  </worldbody>",
+            "</mujoco>",
+        ]
+    )
+
+
+# ---------------------------------------------------------------------- timing helpers
+# Micro-benchmarks use the process's CPU time (best of several rounds), which other processes on
+# a busy machine disturb much less than wall-clock time; the scenario's real-time factor is
+# wall-clock.
+_clock = time.process_time
+
+
+def _per_call(function, repeats: int, rounds: int = 7) -> float:
+    """Best-of-rounds CPU microseconds per call of ``function()``."""
+    function()
+    best = float("inf")
+    for _ in range(rounds):
+        start = _clock()
+        for _ in range(repeats):
+            function()
+        best = min(best, (_clock() - start) / repeats)
+    return best * 1e6
+
+
+def _per_unit(function, units: int, rounds: int = 7) -> float:
+    """Best-of-rounds CPU microseconds per unit of ``function()`` (``units`` units of work)."""
+    function()
+    best = float("inf")
+    for _ in range(rounds):
+        start = _clock()
+        function()
+        best = min(best, (_clock() - start) / units)
+    return best * 1e6
+
+
+def _random_state(model, rng):
+    import pinocchio as pin
+
+    q = pin.neutral(model)
+    q[:3] = rng.uniform(-1.0, 1.0, 3)
+    quaternion = rng.normal(size=4)
+    q[3:7] = quaternion / np.linalg.norm(quaternion)
+    q[7:] = rng.uniform(-0.5, 0.5, model.nq - 7)
+    return q, 0.3 * rng.normal(size=model.nv)
+
+
+def dynamics_timings(vehicle, quick: bool = False) -> dict:
+    """Microseconds per dynamics evaluation and per integrator step on each backend."""
+    from .integrators import rk4_step, semi_implicit_euler_step
+
+    rng = np.random.default_rng(5)
+    q, v = _random_state(vehicle.model, rng)
+    tau = rng.normal(size=vehicle.nv)
+    n = 200 if quick else 2000
+    requested = vehicle.backend
+    results: dict = {}
+    try:
+        vehicle.backend = "pinocchio"
+        results["pinocchio_acceleration_us"] = _per_call(
+            lambda: vehicle.acceleration(q, v, tau), n // 10
+        )
+
+        def dyn(qq, vv):
+            return vehicle.acceleration(qq, vv, tau)
+
+        results["pinocchio_rk4_step_us"] = _per_call(
+            lambda: rk4_step(vehicle.model, dyn, q, v, 0.01), n // 40
+        )
+        results["pinocchio_euler_step_us"] = _per_call(
+            lambda: semi_implicit_euler_step(vehicle.model, dyn, q, v, 0.01), n // 10
+        )
+        vehicle.backend = "auto"
+        fast = vehicle.fast
+        if fast is None:
+            results["numba_note"] = f"numba backend unavailable: {vehicle._fast_reason}"
+            return results
+        from .fast import kernels
+
+        results["numba_acceleration_python_call_us"] = _per_call(
+            lambda: fast.acceleration(q, v, tau), n
+        )
+        zero, servo = fast.zero_current, fast.no_servo
+        m = 20 * n
+        results["numba_acceleration_in_kernel_us"] = _per_unit(
+            lambda: kernels.time_accelerations(fast.arrays, q, v, tau, zero, servo, m), m
+        )
+        for method in ("rk4", "euler"):
+            steps = 5 * n
+
+            def run(method=method, steps=steps):
+                qq, vv = q.copy(), v.copy()
+                fast.run(qq, vv, tau, 0.001, steps, method=method)
+
+            results[f"numba_{method}_step_us"] = _per_unit(run, steps)
+    finally:
+        vehicle.backend = requested
+    return results
+
+
+def mujoco_timings(vehicle, quick: bool = False) -> dict:
+    """MuJoCo's ``mj_forward`` and ``mj_step`` on the equivalent model (``note`` if unavailable)."""
+    try:
+        import mujoco
+    except ImportError:
+        return {"note": "mujoco not installed (pip install 'aiauv-pin[bench]'); rows skipped"}
+    n = 200 if quick else 2000
+    results: dict = {"version": mujoco.__version__}
+    for integrator in ("Euler", "RK4"):
+        model = mujoco.MjModel.from_xml_string(mjcf_from_vehicle(vehicle, integrator=integrator))
+        data = mujoco.MjData(model)
+        rng = np.random.default_rng(5)
+        data.qvel[:] = 0.3 * rng.normal(size=model.nv)
+        data.qpos[7:] = rng.uniform(-0.5, 0.5, model.nq - 7)
+        mujoco.mj_forward(model, data)
+        if integrator == "Euler":
+            results["mj_forward_us"] = _per_call(
+                lambda model=model, data=data: mujoco.mj_forward(model, data), n
+            )
+            results["n_bodies"] = int(model.nbody - 1)
+            results["nv"] = int(model.nv)
+        qpos, qvel = data.qpos.copy(), data.qvel.copy()
+
+        def step(model=model, data=data, qpos=qpos, qvel=qvel):
+            data.qpos[:] = qpos
+            data.qvel[:] = qvel
+            for _ in range(n):
+                mujoco.mj_step(model, data)
+
+        results[f"mj_step_{integrator.lower()}_us"] = _per_unit(step, n)
+    return results
+
+
+# ---------------------------------------------------------------------- scenario
+def scenario_timing(case: str, duration: float, out_dir: Path) -> dict:
+    """Wall time and real-time factor of the paper scenario including its result files (no HTML)."""
+    from . import loading
+    from .outputs import write_results
+    from .scenario import PaperScenario, run_paper_scenario
+
+    vehicle = loading.load_vehicle(loading.bundled_urdf(case))
+    run_paper_scenario(vehicle, PaperScenario(case=case, duration=1.0))  # warm-up (compilation)
+    start = time.perf_counter()
+    result = run_paper_scenario(vehicle, PaperScenario(case=case, duration=duration))
+    simulated = time.perf_counter()
+    write_results(result, out_dir)
+    end = time.perf_counter()
+    return {
+        "case": case,
+        "backend": vehicle.active_backend,
+        "simulated_time_s": float(result.trajectory.t[-1]),
+        "simulation_wall_s": simulated - start,
+        "outputs_wall_s": end - simulated,
+        "real_time_factor": float(result.trajectory.t[-1]) / (end - start),
+    }
+
+
+def accuracy_table(case: str, duration: float, dts: tuple[float, ...]) -> list[dict]:
+    """Largest end-effector distance over the path between runs at ``dt`` and ``dt / 4``."""
+    from . import loading
+    from .errors import SimulationDiverged
+    from .scenario import PaperScenario, run_paper_scenario
+
+    vehicle = loading.load_vehicle(loading.bundled_urdf(case))
+    rows = []
+    for dt in dts:
+        try:
+            coarse = run_paper_scenario(vehicle, PaperScenario(case=case, duration=duration, dt=dt))
+        except SimulationDiverged:
+            rows.append({"dt": dt, "reference_dt": dt / 4, "max_end_effector_error_m": None})
+            continue
+        fine = run_paper_scenario(vehicle, PaperScenario(case=case, duration=duration, dt=dt / 4))
+        p_coarse = coarse.trajectory.info["p"]
+        p_fine = fine.trajectory.info["p"][::4]
+        n = min(len(p_coarse), len(p_fine))
+        if not np.allclose(coarse.trajectory.t[:n], fine.trajectory.t[::4][:n], atol=1e-9):
+            raise RuntimeError("accuracy table: log times of the two runs do not coincide")
+        error = np.linalg.norm(p_coarse[:n] - p_fine[:n], axis=1)
+        rows.append(
+            {"dt": dt, "reference_dt": dt / 4, "max_end_effector_error_m": float(error.max())}
+        )
+    return rows
+
+
+# ---------------------------------------------------------------------- command
+def run_bench(quick: bool = False, case: str = "uniform", duration: float | None = None) -> dict:
+    """Every measurement of ``aiauv bench``; see the module docstring."""
+    from . import loading
+
+    vehicle = loading.load_vehicle(loading.bundled_urdf(case))
+    scenario_duration = duration if duration is not None else (20.0 if quick else 300.0)
+    accuracy_duration = 10.0 if quick else 60.0
+    results: dict = {
+        "machine": {
+            "python": platform.python_version(),
+            "processor": platform.processor() or platform.machine(),
+        },
+        "quick": quick,
+        "vehicle": {"case": case, "nq": vehicle.nq, "nv": vehicle.nv},
+        "dynamics": dynamics_timings(vehicle, quick),
+        "mujoco": mujoco_timings(vehicle, quick),
+    }
+    with tempfile.TemporaryDirectory() as folder:
+        results["scenario"] = scenario_timing(case, scenario_duration, Path(folder))
+    results["accuracy"] = {
+        "case": case,
+        "duration_s": accuracy_duration,
+        "rows": accuracy_table(case, accuracy_duration, (0.01,) if quick else (0.02, 0.01, 0.005)),
+    }
+    dyn, mj = results["dynamics"], results["mujoco"]
+    if "mj_forward_us" in mj and "numba_acceleration_python_call_us" in dyn:
+        results["ratio_numba_python_call_to_mj_forward"] = (
+            dyn["numba_acceleration_python_call_us"] / mj["mj_forward_us"]
+        )
+        results["ratio_numba_in_kernel_to_mj_forward"] = (
+            dyn["numba_acceleration_in_kernel_us"] / mj["mj_forward_us"]
+        )
+    return results
+
+
+def format_table(results: dict) -> str:
+    """Human-readable summary of :func:`run_bench`'s results."""
+    dyn, mj, sc = results["dynamics"], results["mujoco"], results["scenario"]
+    lines = ["quantity                                         value"]
+
+    def row(label: str, value, unit: str = "us") -> None:
+        if value is not None:
+            lines.append(f"{label:<48} {value:10.2f} {unit}")
+
+    row("Pinocchio acceleration", dyn.get("pinocchio_acceleration_us"))
+    row("numba acceleration (Python call)", dyn.get("numba_acceleration_python_call_us"))
+    row("numba acceleration (inside compiled code)", dyn.get("numba_acceleration_in_kernel_us"))
+    row("Pinocchio RK4 step", dyn.get("pinocchio_rk4_step_us"))
+    row("Pinocchio Euler step", dyn.get("pinocchio_euler_step_us"))
+    row("numba RK4 step", dyn.get("numba_rk4_step_us"))
+    row("numba Euler step", dyn.get("numba_euler_step_us"))
+    if "note" in mj:
+        lines.append(f"MuJoCo: {mj['note']}")
+    else:
+        row(f"MuJoCo {mj['version']} mj_forward ({mj['n_bodies']} bodies)", mj["mj_forward_us"])
+        row("MuJoCo mj_step Euler", mj["mj_step_euler_us"])
+        row("MuJoCo mj_step RK4", mj["mj_step_rk4_us"])
+        row(
+            "ratio numba (Python call) / mj_forward",
+            results.get("ratio_numba_python_call_to_mj_forward"),
+            "",
+        )
+        row(
+            "ratio numba (in kernel) / mj_forward",
+            results.get("ratio_numba_in_kernel_to_mj_forward"),
+            "",
+        )
+    row(
+        f"scenario {sc['case']} {sc['simulated_time_s']:.0f} s [{sc['backend']}] real-time factor",
+        sc["real_time_factor"],
+        "x",
+    )
+    acc = results["accuracy"]
+    for r in acc["rows"]:
+        if r["max_end_effector_error_m"] is None:
+            lines.append(f"dt={r['dt']:g}: the scenario diverges (joint servo too stiff for RK4)")
+            continue
+        row(
+            f"max EE error dt={r['dt']:g} vs {r['reference_dt']:g} ({acc['duration_s']:.0f} s)",
+            1000.0 * r["max_end_effector_error_m"],
+            "mm",
+        )
+    return "\n".join(lines)
+
+
+def _add_bench(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "bench",
+        help="measure dynamics, integrator and scenario speed (and MuJoCo's, if installed)",
+        description="Benchmark both dynamics backends, the integrators, the paper scenario end to "
+        "end and its time-step accuracy, and MuJoCo on the equivalent model; print a table and "
+        "write JSON.",
+    )
+    parser.add_argument("--quick", action="store_true", help="short CI-friendly run")
+    parser.add_argument("--case", choices=("uniform", "stabilised"), default="uniform")
+    parser.add_argument(
+        "--duration",
+        type=positive_seconds,
+        default=None,
+        help="scenario duration [s] (300; 20 with --quick)",
+    )
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUTPUT, help="JSON file to write")
+    parser.set_defaults(handler=_run_bench_command)
+
+
+def _run_bench_command(args) -> int:
+    results = run_bench(quick=args.quick, case=args.case, duration=args.duration)
+    write_text(args.out, json.dumps(results, indent=2) + "\n")
+    print(format_table(results))
+    print(f"-> {args.out}")
+    return 0
+
+
+_EXTRA_SUBCOMMANDS.append(_add_bench)

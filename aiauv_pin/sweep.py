@@ -1,0 +1,740 @@
+"""Parameter sweeps and Monte Carlo studies of the path-following scenario on Dask.
+
+:func:`run_sweep` expands a spec (:mod:`aiauv_pin.sweep_spec`) into runs, skips those already in the
+output folder, and runs the others on Dask: by default a ``LocalCluster`` of single-threaded worker
+processes on this machine (the simulation is CPU-bound Python, so threads would share one core), or
+an existing cluster given by its scheduler address. The output folder holds
+
+* ``runs/<run_id>.json``: one record per finished run, written atomically by the client as soon as
+  the run finishes; these files are the source of truth, so an interrupted sweep loses at most the
+  runs in flight, and running the same spec again executes only the runs without a record;
+* ``results.csv``: one row per run of the spec (parameters, final errors, settling times, thruster
+  and joint work, wall time, status, message), rebuilt from the records and replaced atomically
+  while the sweep runs (at most once a second) and at its end;
+* ``sweep.json``: the run ids of the spec in order and the count of each status;
+* ``spec.toml``: a copy of the spec file; ``figures/``: summary plots (:func:`plot_sweep`).
+
+A run ends with one of :data:`STATUSES`: ``complete``; ``diverged`` (the state became non-finite;
+the message names the time); ``error`` (the simulation raised; the message is the exception); or
+``lost`` (the worker died or the task could not run). ``lost`` runs are run again by the next
+invocation; the other three are deterministic and kept.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import datetime
+import io
+import json
+import math
+import os
+import socket
+import sys
+import tempfile
+import time
+import uuid
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .atomic import atomic_path, write_text
+from .errors import AiauvError, SimulationDiverged
+from .sweep_spec import (
+    PARAMETERS,
+    RESOLVED_NAMES,
+    VECTORS,
+    SweepPoint,
+    SweepSpec,
+    load_sweep_spec,
+)
+
+#: Every status a run record can have.
+STATUSES = ("complete", "diverged", "error", "lost")
+#: Statuses whose runs are executed again when the sweep is run again.
+RETRIED_STATUSES = ("lost",)
+#: Metric columns of ``results.csv`` before the per-thruster and per-joint work.
+METRIC_COLUMNS = (
+    "final.p_y",
+    "final.p_z",
+    "final.cross_track_error",
+    "final.u",
+    "final.phi_tilde",
+    "final.omega_tilde.0",
+    "final.omega_tilde.1",
+    "final.max_abs_u_error_last_30s",
+    "final.max_phi_tilde_last_30s",
+    "settling_time.p_y_5cm",
+    "settling_time.p_z_5cm",
+    "settling_time.cross_track_5cm",
+    "settling_time.u_1cm_s",
+    "settling_time.phi_tilde_0.02rad",
+    "total_thruster_work",
+    "total_joint_work",
+    "simulated_time",
+    "steps",
+    "wall_time",
+    "real_time_factor",
+)
+_LEADING_COLUMNS = ("run_id", "status", "message", "index", "sample", "vehicle")
+_TRAILING_COLUMNS = ("worker", "started_at", "finished_at", "task_time")
+
+
+class SweepError(AiauvError, RuntimeError):
+    """A sweep that cannot run (no scheduler, no workers); the message is one line."""
+
+
+def _one_line(text: str, limit: int = 500) -> str:
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _now() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="milliseconds")
+
+
+# --- the task (runs on a worker) -----------------------------------------------------------------
+
+_VEHICLES: dict[str, object] = {}
+
+
+def _vehicle_from_text(urdf_text: str, sha256: str):
+    """Load (once per worker process) the vehicle whose URDF text has this SHA-256."""
+    if sha256 not in _VEHICLES:
+        from .loading import load_vehicle
+
+        folder = Path(tempfile.gettempdir()) / "aiauv-sweep-vehicles"
+        path = folder / f"{sha256}.urdf"
+        if not path.exists():
+            write_text(path, urdf_text)
+        _VEHICLES[sha256] = load_vehicle(path)
+    return _VEHICLES[sha256]
+
+
+def flatten_summary(summary: dict) -> dict:
+    """The metrics of :func:`aiauv_pin.scenario.summary` as flat ``a.b`` keys (no parameters).
+
+    Adds ``final.cross_track_error`` (``hypot(p_y, p_z)`` [m]) and
+    ``settling_time.cross_track_5cm`` (the later of the ``p_y`` and ``p_z`` settling times [s],
+    ``None`` if either never settles).
+    """
+    flat: dict = {}
+    skip = {"parameters", "case", "status", "message", "dt", "method"}
+
+    def walk(prefix: str, value) -> None:
+        if isinstance(value, dict):
+            for key, item in value.items():
+                walk(f"{prefix}.{key}" if prefix else str(key), item)
+        elif isinstance(value, (list, tuple)):
+            for k, item in enumerate(value):
+                walk(f"{prefix}.{k}", item)
+        else:
+            flat[prefix] = value
+
+    for key, value in summary.items():
+        if key not in skip:
+            walk(key, value)
+    flat["final.cross_track_error"] = math.hypot(flat["final.p_y"], flat["final.p_z"])
+    settle = (flat["settling_time.p_y_5cm"], flat["settling_time.p_z_5cm"])
+    flat["settling_time.cross_track_5cm"] = None if None in settle else max(settle)
+    return flat
+
+
+def execute_run(run_id: str, parameters: dict, urdf_text: str, urdf_sha256: str) -> dict:
+    """Simulate one run and return its record; never raises for a failing simulation.
+
+    Args:
+        run_id: Key of the run.
+        parameters: Resolved parameters (:data:`aiauv_pin.sweep_spec.RESOLVED_NAMES`).
+        urdf_text: The vehicle's URDF (sent to the worker, which may not share our files).
+        urdf_sha256: Its SHA-256 (the worker loads each vehicle once).
+
+    Returns:
+        ``run_id``, ``status``, ``message``, ``parameters``, ``metrics`` (flat, SI units),
+        ``worker`` (``host:pid``), ``started_at``, ``finished_at`` (ISO 8601, UTC), ``task_time``
+        [s].
+    """
+    from .scenario import run_paper_scenario, summary
+    from .sweep_spec import scenario_from_parameters
+
+    started_at, start = _now(), time.perf_counter()
+    metrics: dict = {}
+    try:
+        vehicle = _vehicle_from_text(urdf_text, urdf_sha256)
+        scenario = scenario_from_parameters(parameters)
+        simulation_start = time.perf_counter()
+        try:
+            result = run_paper_scenario(vehicle, scenario)
+        except SimulationDiverged as exc:
+            status, message = "diverged", _one_line(exc)
+            metrics = {
+                "simulated_time": float(exc.time),
+                "wall_time": time.perf_counter() - simulation_start,
+            }
+        else:
+            status, message = "complete", ""
+            metrics = flatten_summary(summary(result))
+    except Exception as exc:
+        status, message = "error", _one_line(f"{exc.__class__.__name__}: {exc}")
+    return {
+        "run_id": run_id,
+        "status": status,
+        "message": message,
+        "parameters": dict(parameters),
+        "metrics": metrics,
+        "worker": f"{socket.gethostname()}:{os.getpid()}",
+        "started_at": started_at,
+        "finished_at": _now(),
+        "task_time": time.perf_counter() - start,
+    }
+
+
+# --- records and the table -----------------------------------------------------------------------
+
+
+def runs_folder(out: str | os.PathLike) -> Path:
+    """Folder of the per-run records of a sweep's output folder."""
+    return Path(out) / "runs"
+
+
+def write_record(out: str | os.PathLike, record: dict) -> Path:
+    """Write one run record atomically to ``runs/<run_id>.json``."""
+    path = runs_folder(out) / f"{record['run_id']}.json"
+    write_text(path, json.dumps(record, indent=1, allow_nan=True) + "\n")
+    return path
+
+
+def read_records(out: str | os.PathLike) -> dict[str, dict]:
+    """Every run record of an output folder, by run id (unreadable files are skipped)."""
+    records: dict[str, dict] = {}
+    folder = runs_folder(out)
+    if not folder.is_dir():
+        return records
+    for path in sorted(folder.glob("*.json")):
+        try:
+            record = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+            continue
+        if isinstance(record, dict) and record.get("run_id") == path.stem:
+            records[path.stem] = record
+    return records
+
+
+def _cell(value) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def table_rows(points: Sequence[SweepPoint], records: dict[str, dict]) -> list[dict]:
+    """One flat row per point that has a record (in sweep order)."""
+    rows = []
+    for point in points:
+        record = records.get(point.run_id)
+        if record is None:
+            continue
+        row = {
+            "run_id": point.run_id,
+            "status": record["status"],
+            "message": record["message"],
+            "index": point.index,
+            "sample": point.sample,
+            "vehicle": str(point.vehicle),
+            **point.parameters,
+            **record.get("metrics", {}),
+        }
+        for key in _TRAILING_COLUMNS:
+            row[key] = record.get(key)
+        rows.append(row)
+    return rows
+
+
+def write_table(rows: Sequence[dict], path: str | os.PathLike) -> Path:
+    """Write rows as CSV atomically: fixed columns first, then per-thruster and per-joint work."""
+    columns = [*_LEADING_COLUMNS, *RESOLVED_NAMES, *METRIC_COLUMNS]
+    extra = dict.fromkeys(key for row in rows for key in row if key not in columns)
+    extra = [key for key in extra if key not in _TRAILING_COLUMNS]
+    columns += [*extra, *_TRAILING_COLUMNS]
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(columns)
+    for row in rows:
+        writer.writerow([_cell(row.get(column)) for column in columns])
+    return write_text(path, buffer.getvalue())
+
+
+def read_table(path: str | os.PathLike) -> list[dict[str, str]]:
+    """The rows of a ``results.csv`` (values as strings; empty for none)."""
+    with open(path, newline="", encoding="utf-8") as handle:
+        return list(csv.DictReader(handle))
+
+
+# --- plots ---------------------------------------------------------------------------------------
+
+_PLOTTED = (
+    ("settling_time.cross_track_5cm", "cross-track settling time (5 cm) [s]"),
+    ("final.cross_track_error", "final cross-track error [m]"),
+    ("total_thruster_work", "thruster work [J]"),
+)
+
+
+def _number(value) -> float:
+    return (
+        float(value)
+        if isinstance(value, (int, float)) and not isinstance(value, bool)
+        else math.nan
+    )
+
+
+def _plot_axes(spec: SweepSpec, rows: Sequence[dict]) -> list[tuple[str, str, bool]]:
+    """Swept numeric quantities that vary across ``rows``: (column, label, from the grid).
+
+    A vector swept as a scalar (``k_e = [...]``, every component equal in every row) is one
+    quantity, the column of its first component labelled with the vector's name.
+    """
+    found: list[tuple[str, str, bool]] = []
+    sections = [(name, True) for name in spec.grid_names]
+    sections += [(name, False) for name in spec.random_names]
+    for name, in_grid in sections:
+        components = VECTORS.get(name, (name,))
+        if PARAMETERS.get(components[0], ("",))[0] != "number":
+            continue
+        if len(components) > 1 and all(len({row.get(c) for c in components}) == 1 for row in rows):
+            candidates = [(components[0], name)]
+        else:
+            candidates = [(c, c) for c in components]
+        for column, label in candidates:
+            if len({row.get(column) for row in rows}) > 1 and column not in (f[0] for f in found):
+                found.append((column, label, in_grid))
+    return found
+
+
+def plot_sweep(spec: SweepSpec, rows: Sequence[dict], folder: str | os.PathLike) -> list[Path]:
+    """Summary plots of a sweep (matplotlib, Agg; each file written atomically).
+
+    * ``metrics_vs_parameters.png``: settling time, final cross-track error and thruster work
+      against each swept numeric parameter (runs that never settle drawn at the duration as open
+      triangles, diverged and failed runs as red crosses on the axis);
+    * ``settling_time_<a>_<b>.png`` and ``cross_track_error_<a>_<b>.png`` for the first two swept
+      numeric grid parameters: the mean over the other parameters in each cell of the plane (grey:
+      no run settled; ``D``: a run diverged or failed there).
+
+    Returns:
+        The files written.
+    """
+    from matplotlib.figure import Figure
+
+    folder = Path(folder)
+    written: list[Path] = []
+
+    def save(fig, name: str) -> None:
+        with atomic_path(folder / name) as temporary:
+            fig.savefig(temporary, dpi=110, format="png")
+        written.append(folder / name)
+
+    axes_of = _plot_axes(spec, rows)
+    numeric = [key for key, _, _ in axes_of]
+    labels = {key: label for key, label, _ in axes_of}
+    if not rows or not numeric:
+        return written
+    failed = [row["status"] not in ("complete",) for row in rows]
+
+    fig = Figure(figsize=(3.6 * len(numeric), 2.8 * len(_PLOTTED)), layout="constrained")
+    axes = fig.subplots(len(_PLOTTED), len(numeric), squeeze=False)
+    for j, name in enumerate(numeric):
+        x = np.array([_number(row.get(name)) for row in rows])
+        for i, (metric, label) in enumerate(_PLOTTED):
+            ax = axes[i, j]
+            y = np.array([_number(row.get(metric)) for row in rows])
+            ok = ~np.array(failed) & np.isfinite(y)
+            ax.plot(x[ok], y[ok], "o", ms=4, alpha=0.7, color="C0")
+            if metric.startswith("settling_time"):
+                never = ~np.array(failed) & ~np.isfinite(y)
+                durations = np.array([_number(row.get("duration")) for row in rows])
+                ax.plot(
+                    x[never], durations[never], "^", mfc="none", color="C1", label="not settled"
+                )
+            bad = np.array(failed)
+            if bad.any():
+                bottom = np.nanmin(y[ok]) if ok.any() else 0.0
+                ax.plot(
+                    x[bad], np.full(bad.sum(), bottom), "x", color="red", label="diverged/error"
+                )
+            if i == len(_PLOTTED) - 1:
+                ax.set_xlabel(labels[name])
+            if j == 0:
+                ax.set_ylabel(label)
+            ax.grid(True, alpha=0.3)
+            if i == 0 and j == 0 and ax.get_legend_handles_labels()[0]:
+                ax.legend(fontsize=7)
+    counts = {s: sum(row["status"] == s for row in rows) for s in STATUSES}
+    fig.suptitle(", ".join(f"{n} {s}" for s, n in counts.items() if n))
+    save(fig, "metrics_vs_parameters.png")
+
+    grid_numeric = [key for key, _, in_grid in axes_of if in_grid]
+    if len(grid_numeric) >= 2:
+        a, b = grid_numeric[:2]
+        xs = sorted({row[a] for row in rows})
+        ys = sorted({row[b] for row in rows})
+        for metric, label, name in (
+            ("settling_time.cross_track_5cm", _PLOTTED[0][1], "settling_time"),
+            ("final.cross_track_error", _PLOTTED[1][1], "cross_track_error"),
+        ):
+            values = np.full((len(ys), len(xs)), math.nan)
+            diverged = np.zeros((len(ys), len(xs)), dtype=bool)
+            cells: dict[tuple[int, int], list[float]] = {}
+            for row, bad in zip(rows, failed, strict=True):
+                key = (ys.index(row[b]), xs.index(row[a]))
+                if bad:
+                    diverged[key] = True
+                elif math.isfinite(_number(row.get(metric))):
+                    cells.setdefault(key, []).append(_number(row[metric]))
+            for key, items in cells.items():
+                values[key] = float(np.mean(items))
+            fig = Figure(figsize=(6.0, 4.6), layout="constrained")
+            ax = fig.subplots()
+            ax.set_facecolor("0.8")
+            mesh = ax.pcolormesh(np.arange(len(xs)), np.arange(len(ys)), values, shading="nearest")
+            fig.colorbar(mesh, ax=ax, label=f"{label} (mean)")
+            for (r, c), flag in np.ndenumerate(diverged):
+                if flag:
+                    ax.text(c, r, "D", ha="center", va="center", color="red", fontweight="bold")
+            ax.set_xticks(range(len(xs)), [f"{v:.4g}" for v in xs])
+            ax.set_yticks(range(len(ys)), [f"{v:.4g}" for v in ys])
+            ax.set_xlabel(labels[a])
+            ax.set_ylabel(labels[b])
+            ax.set_title(f"{label} over ({labels[a]}, {labels[b]})", fontsize=9)
+            save(fig, f"{name}_{labels[a]}_{labels[b]}.png")
+    return written
+
+
+# --- running -------------------------------------------------------------------------------------
+
+
+@dataclass
+class SweepReport:
+    """What :func:`run_sweep` did.
+
+    Attributes:
+        out: Output folder.
+        total: Runs of the spec.
+        skipped: Runs that already had a record and were not executed again.
+        executed: Runs executed by this call (records written).
+        counts: Runs of the spec per status (after this call).
+        table: The ``results.csv`` written.
+        figures: Plots written.
+        executed_ids: Run ids executed by this call, in order of completion.
+    """
+
+    out: Path
+    total: int
+    skipped: int
+    executed: int
+    counts: dict[str, int]
+    table: Path
+    figures: list[Path] = field(default_factory=list)
+    executed_ids: list[str] = field(default_factory=list)
+
+
+@contextlib.contextmanager
+def dask_client(
+    scheduler: str | None = None, workers: int | None = None, worker_timeout: float = 60.0
+):
+    """A Dask client: on an existing scheduler, or on a new ``LocalCluster`` of worker processes.
+
+    Args:
+        scheduler: Scheduler address (``tcp://host:8786``); ``None`` starts a ``LocalCluster``.
+        workers: Worker processes of the local cluster (default: the usable cores), one thread each.
+        worker_timeout: How long to wait for a first worker on an existing scheduler [s].
+
+    Raises:
+        SweepError: The scheduler cannot be reached or no worker joins it in time.
+    """
+    import logging
+
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler is None:
+        count = workers if workers is not None else len(os.sched_getaffinity(0))
+        if not (isinstance(count, int) and count >= 1):
+            raise SweepError(f"workers must be a whole number >= 1, got {count!r}")
+        cluster = LocalCluster(
+            n_workers=count,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
+        try:
+            with Client(cluster) as client:
+                yield client
+        finally:
+            cluster.close()
+        return
+    try:
+        client = Client(scheduler, timeout="15s")
+    except (OSError, ValueError, TypeError) as exc:
+        raise SweepError(
+            f"cannot reach the Dask scheduler at {scheduler}: {_one_line(exc)}"
+        ) from None
+    try:
+        try:
+            client.wait_for_workers(1, timeout=worker_timeout)
+        except (TimeoutError, OSError):
+            raise SweepError(
+                f"no Dask worker joined the scheduler at {scheduler} within {worker_timeout:g} s"
+            ) from None
+        yield client
+    finally:
+        client.close()
+
+
+def _lost_record(point: SweepPoint, reason: str) -> dict:
+    return {
+        "run_id": point.run_id,
+        "status": "lost",
+        "message": _one_line(reason),
+        "parameters": point.parameters,
+        "metrics": {},
+        "worker": None,
+        "started_at": None,
+        "finished_at": _now(),
+        "task_time": None,
+    }
+
+
+def _write_outputs(out: Path, points, spec_text: str | None) -> tuple[Path, dict[str, int]]:
+    records = read_records(out)
+    rows = table_rows(points, records)
+    table = write_table(rows, out / "results.csv")
+    counts = {s: sum(r["status"] == s for r in rows) for s in STATUSES}
+    counts["pending"] = len(points) - len(rows)
+    manifest = {"runs": [p.run_id for p in points], "counts": counts}
+    write_text(out / "sweep.json", json.dumps(manifest, indent=1) + "\n")
+    if spec_text is not None:
+        write_text(out / "spec.toml", spec_text)
+    return table, counts
+
+
+def run_sweep(
+    spec: SweepSpec | str | os.PathLike,
+    out: str | os.PathLike,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    progress: bool = True,
+    plots: bool = True,
+    on_record: Callable[[dict], None] | None = None,
+) -> SweepReport:
+    """Run every run of a spec that has no record in ``out`` yet, on Dask.
+
+    Records are written as runs finish, and ``results.csv`` is rewritten (atomically) at most once a
+    second and at the end, also when interrupted; interrupting loses only the runs in flight.
+
+    Args:
+        spec: A parsed spec, or the path of a spec TOML file (copied to ``out/spec.toml``).
+        out: Output folder (created).
+        scheduler: Address of an existing Dask scheduler; ``None`` starts a local cluster.
+        workers: Worker processes of the local cluster (default: the usable cores).
+        progress: Show a progress bar over the runs (tqdm, on standard error).
+        plots: Write the summary plots into ``out/figures``.
+        on_record: Called with each record after it is written (in the client process).
+
+    Returns:
+        What was done.
+
+    Raises:
+        SweepSpecError: A bad spec (one line).
+        VehicleLoadError: A vehicle that cannot be loaded.
+        SweepError: No scheduler or no worker.
+    """
+    from .loading import load_vehicle
+
+    spec_text = None
+    if not isinstance(spec, SweepSpec):
+        spec_text = Path(spec).read_text(encoding="utf-8")
+        spec = load_sweep_spec(spec)
+    out = Path(out)
+    points = spec.points()
+    existing = read_records(out)
+    done = {key for key, record in existing.items() if record.get("status") not in RETRIED_STATUSES}
+    todo = [p for p in points if p.run_id not in done]
+    executed: list[str] = []
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        if todo:
+            texts: dict[str, str] = {}
+            for point in todo:
+                sha = point.parameters["vehicle_sha256"]
+                if sha not in texts:
+                    load_vehicle(point.vehicle)  # one-line error here, not on every worker
+                    texts[sha] = point.vehicle.read_text(encoding="utf-8")
+            _run_points(
+                todo,
+                texts,
+                out,
+                scheduler,
+                workers,
+                progress,
+                len(points),
+                on_record,
+                executed,
+                lambda: _write_outputs(out, points, None),
+            )
+    finally:
+        table, counts = _write_outputs(out, points, spec_text)
+    figures: list[Path] = []
+    if plots:
+        figures = plot_sweep(spec, table_rows(points, read_records(out)), out / "figures")
+    return SweepReport(
+        out=out,
+        total=len(points),
+        skipped=len(points) - len(todo),
+        executed=len(executed),
+        counts=counts,
+        table=table,
+        figures=figures,
+        executed_ids=executed,
+    )
+
+
+def _run_points(
+    todo: Sequence[SweepPoint],
+    texts: dict[str, str],
+    out: Path,
+    scheduler: str | None,
+    workers: int | None,
+    progress: bool,
+    total: int,
+    on_record,
+    executed: list[str],
+    write_index: Callable[[], object],
+) -> None:
+    from dask.distributed import as_completed
+    from tqdm import tqdm
+
+    token = uuid.uuid4().hex[:8]  # fresh task keys: a cancelled earlier attempt cannot collide
+    with dask_client(scheduler, workers) as client:
+        shared = {sha: client.scatter(text, broadcast=True) for sha, text in texts.items()}
+        by_key = {}
+        futures = []
+        for point in todo:
+            sha = point.parameters["vehicle_sha256"]
+            future = client.submit(
+                execute_run,
+                point.run_id,
+                point.parameters,
+                shared[sha],
+                sha,
+                key=f"aiauv-run-{point.run_id}-{token}",
+                pure=False,
+            )
+            by_key[future.key] = point
+            futures.append(future)
+        bar = tqdm(
+            total=total,
+            initial=total - len(todo),
+            unit="run",
+            desc="sweep",
+            disable=not progress,
+            file=sys.stderr,
+        )
+        last_table = time.monotonic()
+        try:
+            for future in as_completed(futures):
+                point = by_key[future.key]
+                if future.status == "finished":
+                    try:
+                        record = future.result()
+                    except Exception as exc:
+                        record = _lost_record(point, f"{exc.__class__.__name__}: {exc}")
+                elif future.status == "cancelled":
+                    record = _lost_record(point, "cancelled")
+                else:
+                    exc = future.exception()
+                    record = _lost_record(point, f"{exc.__class__.__name__}: {exc}")
+                write_record(out, record)
+                executed.append(point.run_id)
+                bar.update(1)
+                if time.monotonic() - last_table > 1.0:
+                    write_index()
+                    last_table = time.monotonic()
+                if on_record is not None:
+                    on_record(record)
+        finally:
+            bar.close()
+            client.cancel(futures)
+
+
+# --- command line --------------------------------------------------------------------------------
+
+
+def _worker_count(text: str) -> int:
+    import argparse
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
+def add_sweep_subcommand(subparsers) -> None:
+    """Register ``aiauv sweep SPEC [--scheduler ADDRESS] [--out DIR]`` on ``add_subparsers()``."""
+    parser = subparsers.add_parser(
+        "sweep",
+        help="run a parameter sweep / Monte Carlo study on Dask",
+        description="Run every point of a sweep spec (grid and/or random sample over scenario and "
+        "controller parameters) on a Dask cluster: by default a local cluster of worker processes "
+        "on this machine's cores, or an existing one with --scheduler. Writes runs/<run_id>.json "
+        "as runs finish, results.csv (one row per run), sweep.json and figures/ into the output "
+        "folder. Running the same spec again executes only the runs not yet recorded.",
+    )
+    parser.add_argument("spec", type=Path, help="sweep spec (TOML)")
+    parser.add_argument(
+        "--scheduler", metavar="ADDRESS", help="existing Dask scheduler, e.g. tcp://host:8786"
+    )
+    parser.add_argument(
+        "--workers", type=_worker_count, help="worker processes of the local cluster (all cores)"
+    )
+    parser.add_argument("--out", type=Path, help="output folder (results/sweeps/<spec name>/)")
+    parser.add_argument("--no-plots", action="store_true", help="do not write figures/")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.set_defaults(handler=run_sweep_command)
+
+
+def run_sweep_command(args) -> int:
+    """Handler of ``aiauv sweep``: run the sweep, print one summary line.
+
+    Raises:
+        SweepError: ``--workers`` with ``--scheduler``, or runs lost (after writing the results).
+    """
+    if args.scheduler is not None and args.workers is not None:
+        raise SweepError("--workers applies to the local cluster only, not with --scheduler")
+    out = args.out if args.out is not None else Path("results") / "sweeps" / args.spec.stem
+    report = run_sweep(
+        args.spec,
+        out,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        progress=not args.quiet,
+        plots=not args.no_plots,
+    )
+    counts = ", ".join(f"{n} {s}" for s, n in report.counts.items() if n)
+    print(
+        f"{report.total} runs ({counts}); {report.executed} executed, {report.skipped} already "
+        f"done -> {report.table}"
+    )
+    lost = report.counts["lost"]
+    if lost:
+        raise SweepError(
+            f"{lost} run(s) lost (worker died or task failed to run); run the same command again "
+            "to retry them"
+        )
+    return 0

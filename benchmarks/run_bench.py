@@ -1,0 +1,14 @@
+"""Reproduce the README's performance figures: ``python benchmarks/run_bench.py [--quick]``.
+
+Same as ``aiauv bench``; writes ``benchmarks/results.json`` (or ``--out``).
+"""
+
+from __future__ import annotations
+
+import sys
+
+from aiauv_pin import bench  # noqa: F401  (registers the ``bench`` subcommand)
+from aiauv_pin.cli import main
+
+if __name__ == "__main__":
+    sys.exit(main(["bench", *sys.argv[1:]]))
