@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import write_text
-from .cli import _EXTRA_SUBCOMMANDS, positive_seconds
+from .cli import positive_seconds
 
 #: Where ``aiauv bench`` writes its JSON by default.
 DEFAULT_OUTPUT = Path("benchmarks") / "results.json"
@@ -385,7 +385,7 @@ def format_table(results: dict) -> str:
     return "\n".join(lines)
 
 
-def _add_bench(subparsers) -> None:
+def add_bench_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "bench",
         help="measure dynamics, integrator and scenario speed (and MuJoCo's, if installed)",
@@ -413,4 +413,3 @@ def _run_bench_command(args) -> int:
     return 0
 
 
-_EXTRA_SUBCOMMANDS.append(_add_bench)

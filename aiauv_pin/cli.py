@@ -174,16 +174,13 @@ def build_parser() -> argparse.ArgumentParser:
         description="Simulation and control of articulated intervention AUVs.",
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    from .bench import add_bench_parser
+
     _add_simulate(subparsers)
     _add_build(subparsers)
-    for extra in _EXTRA_SUBCOMMANDS:
-        extra(subparsers)
+    _add_check(subparsers)
+    add_bench_parser(subparsers)
     return parser
-
-
-#: Subcommands registered by other modules (``check``, ``bench``, ...): functions taking the
-#: ``add_subparsers`` object.
-_EXTRA_SUBCOMMANDS: list = [_add_check]
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
