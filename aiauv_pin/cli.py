@@ -175,11 +175,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     from .bench import add_bench_parser
+    from .sweep import add_sweep_subcommand
 
     _add_simulate(subparsers)
     _add_build(subparsers)
     _add_check(subparsers)
     add_bench_parser(subparsers)
+    add_sweep_subcommand(subparsers)
     return parser
 
 

@@ -58,6 +58,7 @@ from xml.etree.ElementTree import Element
 import numpy as np
 from scipy.special import elliprd
 
+from hydro.spatial import motion_transform
 from hydro.urdf_block import parse_robot, rpy_matrix
 
 from .errors import VehicleLoadError
@@ -191,21 +192,6 @@ def primitive_ellipsoid(shape: Element, xyz: np.ndarray, rpy: np.ndarray) -> Ell
         return None
     scale = (volume / (4.0 / 3.0 * math.pi * float(np.prod(half)))) ** (1.0 / 3.0)
     return Ellipsoid(scale * half, rotation, xyz)
-
-
-def motion_transform(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
-    """``X`` (6x6) with ``nu_B = X nu_A`` for frame B at ``(R, p)`` in A.
-
-    Featherstone 2008, eq. (2.24).
-    """
-    rt = np.asarray(rotation).T
-    p = np.asarray(translation, dtype=float)
-    skew = np.array([[0.0, -p[2], p[1]], [p[2], 0.0, -p[0]], [-p[1], p[0], 0.0]])
-    transform = np.zeros((6, 6))
-    transform[:3, :3] = rt
-    transform[:3, 3:] = -rt @ skew
-    transform[3:, 3:] = rt
-    return transform
 
 
 @dataclass(frozen=True)

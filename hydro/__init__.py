@@ -10,11 +10,11 @@ from hydro.slender_cylinder import (
     DEFAULT_COEFFICIENTS,
     SlenderCylinderCoefficients,
     added_mass_matrix,
-    cylinder_motion_transform,
     linear_damping_matrix,
     quadratic_damping_matrix,
     slender_cylinder_link,
 )
+from hydro.spatial import motion_transform, skew
 from hydro.spec import CrossflowDrag, HydroError, HydroSpec, LinkHydrodynamics, Thruster
 from hydro.urdf_block import CylinderGeometry, cylinder_frame, link_cylinders, read_hydrodynamics
 from hydro.uuv_simulator import FRD_TO_FLU, convert_fossen_matrices, read_uuv_simulator
@@ -34,12 +34,13 @@ __all__ = [
     "convert_fossen_matrices",
     "crossflow_wrench",
     "cylinder_frame",
-    "cylinder_motion_transform",
     "gauss_legendre_unit",
     "linear_damping_matrix",
     "link_cylinders",
+    "motion_transform",
     "quadratic_damping_matrix",
     "read_hydrodynamics",
     "read_uuv_simulator",
+    "skew",
     "slender_cylinder_link",
 ]

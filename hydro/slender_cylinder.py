@@ -26,6 +26,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from hydro.spatial import motion_transform
 from hydro.spec import CrossflowDrag, HydroError, LinkHydrodynamics
 
 #: Tolerance used to decide whether a transformed axial/roll quadratic damping is still diagonal.
@@ -186,36 +187,6 @@ def quadratic_damping_matrix(
     return matrix
 
 
-def skew(vector: np.ndarray) -> np.ndarray:
-    """Cross-product matrix ``S(a)`` with ``S(a) b = a x b``."""
-    x, y, z = np.asarray(vector, dtype=float)
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-
-
-def cylinder_motion_transform(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
-    """Spatial motion transform from link coordinates to cylinder coordinates.
-
-    With the cylinder frame placed in the link frame by ``(R, p)`` (a point with cylinder
-    coordinates ``x_c`` has link coordinates ``R x_c + p``), a twist ``(v, w)`` of the link at the
-    link origin has cylinder coordinates at the cylinder origin ``(R^T (v + w x p), R^T w)``
-    (Featherstone 2008, Ch. 2). Wrenches go back with the transpose: ``f_link = X^T f_c``.
-
-    Args:
-        rotation: ``R``, orientation of the cylinder frame in the link frame (3x3).
-        translation: ``p``, cylinder-frame origin in the link frame [m].
-
-    Returns:
-        ``X`` (6x6) with ``nu_c = X nu_link``.
-    """
-    rotation_t = np.asarray(rotation, dtype=float).T
-    transform = np.zeros((6, 6))
-    transform[:3, :3] = rotation_t
-    # v_c = R^T (v - p x w) = R^T v - R^T S(p) w
-    transform[:3, 3:] = -rotation_t @ skew(translation)
-    transform[3:, 3:] = rotation_t
-    return transform
-
-
 def _is_signed_unit_row(row: np.ndarray) -> bool:
     magnitudes = np.abs(row)
     big = magnitudes > _EXACT_TOLERANCE
@@ -270,7 +241,7 @@ def slender_cylinder_link(
     linear = linear_damping_matrix(length, radius, fluid_density, coefficients)
     quadratic = quadratic_damping_matrix(length, radius, fluid_density, coefficients)
 
-    transform = cylinder_motion_transform(rotation, translation)
+    transform = motion_transform(rotation, translation)
     if not np.array_equal(transform, np.eye(6)):
         # M_link = X^T M_c X and D_link = X^T D_c X: same power / kinetic energy in both frames
         # (Featherstone 2008, Ch. 2; Fossen 2021, Sec. 3.3).

@@ -64,16 +64,16 @@ def single_body_urdf() -> tuple[str, dict]:
 <robot name="single_body">
   <link name="hull">
     <inertial>
-      <origin xyz="{numbers(p['r_g'])}" rpy="0 0 0"/>
-      <mass value="{float(p['mass'])!r}"/>
+      <origin xyz="{numbers(p["r_g"])}" rpy="0 0 0"/>
+      <mass value="{float(p["mass"])!r}"/>
       <inertia ixx="{i[0][0]!r}" ixy="{i[0][1]!r}" ixz="{i[0][2]!r}" iyy="{i[1][1]!r}"
                iyz="{i[1][2]!r}" izz="{i[2][2]!r}"/>
     </inertial>
   </link>
-  <hydrodynamics fluid_density="{p['rho']!r}" gravity="{p['g']!r}">
+  <hydrodynamics fluid_density="{p["rho"]!r}" gravity="{p["g"]!r}">
     <link name="hull" model="fossen">
-      <volume>{p['volume']!r}</volume>
-      <center_of_buoyancy>{numbers(p['r_b'])}</center_of_buoyancy>
+      <volume>{p["volume"]!r}</volume>
+      <center_of_buoyancy>{numbers(p["r_b"])}</center_of_buoyancy>
       <added_mass>{numbers(added)}</added_mass>
       <linear_damping>{numbers(linear)}</linear_damping>
       <quadratic_damping>{numbers(quadratic)}</quadratic_damping>

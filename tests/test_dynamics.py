@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import fossen_reference as fossen
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -9,8 +10,6 @@ from conftest import random_state
 
 import aiauv_pin
 from aiauv_pin.robots import example_robot_urdf
-
-import fossen_reference as fossen
 
 EXAMPLE_ROBOTS = ["ur_description/urdf/ur5_robot.urdf", "panda_description/urdf/panda.urdf"]
 
@@ -80,7 +79,7 @@ def _potential_energy(vehicle, q) -> float:
     weight = pin.computePotentialEnergy(model, model.createData(), q)
     rho, g = vehicle.hydro.fluid_density, vehicle.hydro.gravity
     buoyancy = 0.0
-    for link, pose in zip(vehicle.hydro.links, vehicle.link_placements(q)):
+    for link, pose in zip(vehicle.hydro.links, vehicle.link_placements(q), strict=False):
         buoyancy += rho * link.volume * g * pose.act(link.center_of_buoyancy)[2]
     return weight - buoyancy
 
@@ -103,10 +102,15 @@ def test_ideal_fluid_conserves_energy_and_impulse(rng):
     vehicle = aiauv_pin.load_vehicle(damping=False, restoring=False)
     q, v = random_state(vehicle.model, rng, speed=0.3)
     trajectory = aiauv_pin.simulate(vehicle, q, v, duration=10.0, dt=0.005, log_every=100)
-    energy = [vehicle.kinetic_energy(qq, vv) for qq, vv in zip(trajectory.q, trajectory.v)]
+    energy = [
+        vehicle.kinetic_energy(qq, vv) for qq, vv in zip(trajectory.q, trajectory.v, strict=False)
+    ]
     assert max(abs(e - energy[0]) for e in energy) < 1e-7 * energy[0]
     impulse = np.array(
-        [vehicle.momentum_in_world(qq, vv) for qq, vv in zip(trajectory.q, trajectory.v)]
+        [
+            vehicle.momentum_in_world(qq, vv)
+            for qq, vv in zip(trajectory.q, trajectory.v, strict=False)
+        ]
     )
     scale = np.linalg.norm(impulse[0])
     assert np.abs(impulse - impulse[0]).max() < 1e-7 * scale
@@ -121,16 +125,14 @@ def test_damping_never_adds_energy(rng):
     for _ in range(20):
         q, v = random_state(vehicle.model, rng, speed=1.0)
         # power of the damping forces, from the difference of the two models' bias terms
-        damping_power = v @ (
-            undamped.fluid_forces(q, v).bias - vehicle.fluid_forces(q, v).bias
-        )
+        damping_power = v @ (undamped.fluid_forces(q, v).bias - vehicle.fluid_forces(q, v).bias)
         assert damping_power < 0.0
     q, v = random_state(vehicle.model, rng, speed=0.5)
     trajectory = aiauv_pin.simulate(vehicle, q, v, duration=5.0, dt=0.01, log_every=5)
     energy = np.array(
         [
             vehicle.kinetic_energy(qq, vv) + _potential_energy(vehicle, qq)
-            for qq, vv in zip(trajectory.q, trajectory.v)
+            for qq, vv in zip(trajectory.q, trajectory.v, strict=False)
         ]
     )
     assert np.diff(energy).max() < 1e-9 * np.ptp(energy)

@@ -13,8 +13,8 @@ from hydro import (
     HydroSpec,
     SlenderCylinderCoefficients,
     cylinder_frame,
-    cylinder_motion_transform,
     link_cylinders,
+    motion_transform,
     quadratic_damping_matrix,
     read_hydrodynamics,
     slender_cylinder_link,
@@ -169,7 +169,7 @@ def test_cylinder_across_the_link_starts_at_the_end_nearer_the_origin():
       <geometry><cylinder length="0.4" radius="0.05"/></geometry></collision></link>"""
     block = '<hydrodynamics><link name="arm" model="slender_cylinder"/></hydrodynamics>'
     link = read_hydrodynamics(robot(block, links)).links[0]
-    transform = cylinder_motion_transform(frame.rotation, frame.translation)
+    transform = motion_transform(frame.rotation, frame.translation)
     cylinder = slender_cylinder_link("c", 0.4, 0.05, 1025.0)
     np.testing.assert_allclose(
         link.added_mass, transform.T @ cylinder.added_mass @ transform, atol=1e-12

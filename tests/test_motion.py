@@ -74,7 +74,11 @@ def test_stabilised_roll_period_matches_linearisation():
 def test_stabilised_vehicle_rights_itself():
     vehicle = aiauv_pin.load_vehicle(aiauv_pin.bundled_urdf("stabilised"))
     trajectory = aiauv_pin.simulate(
-        vehicle, rolled(vehicle, np.deg2rad(10.0)), np.zeros(vehicle.nv), 120.0, 0.02,
+        vehicle,
+        rolled(vehicle, np.deg2rad(10.0)),
+        np.zeros(vehicle.nv),
+        120.0,
+        0.02,
         log_every=5,
     )
     roll = np.abs([roll_angle(q) for q in trajectory.q])
