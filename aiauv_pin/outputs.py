@@ -1,8 +1,15 @@
-"""Result files of a path-following run: ``timeseries.csv``, ``summary.json`` and ``figures/``."""
+"""Result files of a path-following run: ``timeseries.csv``, ``summary.json`` and ``figures/``.
+
+The run is logged at every controller sample (every step by default) and ``summary.json``'s
+integrals (work) and settling times use every logged sample. ``timeseries.csv`` holds every
+``csv_period`` of the scenario (0.05 s by default, rounded to a whole number of logged samples;
+the last sample is always included; ``None`` writes every sample). The figures draw, per curve,
+the minimum and maximum of each of at most :data:`PLOT_BUCKETS` consecutive runs of samples (in
+time order), which at their size is indistinguishable from drawing every sample.
+"""
 
 from __future__ import annotations
 
-import io
 import json
 from pathlib import Path
 
@@ -46,13 +53,63 @@ def timeseries_columns(result: ScenarioResult) -> dict[str, np.ndarray]:
     return columns
 
 
+#: Largest number of min/max buckets per plotted curve (each contributes two points).
+PLOT_BUCKETS = 2000
+
+
+def csv_rows(result: ScenarioResult) -> np.ndarray:
+    """Indices of the logged samples written to ``timeseries.csv`` (every ``csv_period``)."""
+    t = result.trajectory.t
+    n = len(t)
+    period = getattr(result.scenario, "csv_period", None)
+    if period is None or n < 2:
+        return np.arange(n)
+    stride = max(1, round(period / float(t[1] - t[0])))
+    rows = np.arange(0, n, stride)
+    if rows[-1] != n - 1:
+        rows = np.append(rows, n - 1)
+    return rows
+
+
+def format_table(header: list[str], table: np.ndarray, fmt: str = "%.9g") -> str:
+    """CSV text of a 2-D float table (same text as ``np.savetxt(..., delimiter=",")``)."""
+    n_rows, n_columns = table.shape
+    line = ",".join([fmt] * n_columns) + "\n"
+    body = (line * n_rows) % tuple(table.ravel().tolist()) if n_rows else ""
+    return ",".join(header) + "\n" + body
+
+
 def write_timeseries(result: ScenarioResult, path: Path) -> Path:
-    """Write ``timeseries.csv`` (one row per logged step, SI units, radians)."""
+    """Write ``timeseries.csv`` (one row per ``csv_period``, see the module docstring; SI, rad)."""
     columns = timeseries_columns(result)
-    table = np.column_stack(list(columns.values()))
-    buffer = io.StringIO()
-    np.savetxt(buffer, table, delimiter=",", header=",".join(columns), comments="", fmt="%.9g")
-    return write_text(path, buffer.getvalue())
+    rows = csv_rows(result)
+    table = np.column_stack([column[rows] for column in columns.values()])
+    return write_text(path, format_table(list(columns), table))
+
+
+def envelope(t: np.ndarray, y: np.ndarray, buckets: int = PLOT_BUCKETS):
+    """``(t, y)`` reduced to the minimum and maximum of each of ``buckets`` runs of samples.
+
+    The points keep their time order, so a line through them covers the same pixels as one
+    through every sample when a bucket is narrower than a pixel. Short series are returned as is.
+    """
+    n = len(y)
+    if n <= 2 * buckets:
+        return t, y
+    size = -(-n // buckets)
+    padded = size * buckets
+    index = np.arange(padded).reshape(buckets, size)
+    index = np.minimum(index, n - 1)
+    values = y[index]
+    low = index[np.arange(buckets), np.argmin(values, axis=1)]
+    high = index[np.arange(buckets), np.argmax(values, axis=1)]
+    keep = np.unique(np.concatenate((low, high, [0, n - 1])))
+    return t[keep], y[keep]
+
+
+def _plot(ax, t, y, *args, **kwargs):
+    """``ax.plot`` of the :func:`envelope` of ``(t, y)``."""
+    return ax.plot(*envelope(np.asarray(t), np.asarray(y)), *args, **kwargs)
 
 
 def write_summary(result: ScenarioResult, path: Path, extra: dict | None = None) -> dict:
@@ -85,43 +142,43 @@ def write_figures(result: ScenarioResult, folder: Path) -> list[Path]:
         written.append(folder / name)
 
     fig, ax = plt.subplots(figsize=(6, 3.2))
-    ax.plot(t, info["p"][:, 1], label="$p_y$")
-    ax.plot(t, info["p"][:, 2], label="$p_z$")
+    _plot(ax, t, info["p"][:, 1], label="$p_y$")
+    _plot(ax, t, info["p"][:, 2], label="$p_z$")
     ax.set(xlabel="t [s]", ylabel="cross-track error [m]", title=f"Cross-track errors ({case})")
     ax.axhline(0.0, color="k", lw=0.5)
     ax.legend()
     save(fig, "fig2_cross_track.png")
 
     fig, ax = plt.subplots(figsize=(6, 3.2))
-    ax.plot(t, info["u"], label="$u$")
+    _plot(ax, t, info["u"], label="$u$")
     ax.axhline(u_d, color="k", ls="--", lw=0.8, label="$u_d$")
     ax.set(xlabel="t [s]", ylabel="surge velocity [m/s]", title=f"Surge velocity ({case})")
     ax.legend()
     save(fig, "fig3_surge.png")
 
     fig, ax = plt.subplots(figsize=(6, 3.2))
-    ax.plot(t, info["phi_tilde"])
+    _plot(ax, t, info["phi_tilde"])
     ax.set(xlabel="t [s]", ylabel=r"$\tilde\phi$ [rad]", title=f"Pointing error ({case})")
     save(fig, "fig4_phi_tilde.png")
 
     fig, ax = plt.subplots(figsize=(6, 3.2))
-    ax.plot(t, info["omega_tilde"][:, 0], label=r"$\tilde\omega_y$")
-    ax.plot(t, info["omega_tilde"][:, 1], label=r"$\tilde\omega_z$")
+    _plot(ax, t, info["omega_tilde"][:, 0], label=r"$\tilde\omega_y$")
+    _plot(ax, t, info["omega_tilde"][:, 1], label=r"$\tilde\omega_z$")
     ax.set(xlabel="t [s]", ylabel="[rad/s]", title=f"Angular velocity error ({case})")
     ax.legend()
     save(fig, "fig5_omega_tilde.png")
 
     fig, ax = plt.subplots(figsize=(6, 3.2))
-    ax.plot(t, info["base_angles"][:, 0], label="$q_{y,0}$")
-    ax.plot(t, info["base_angles"][:, 1], label="$q_{z,0}$")
+    _plot(ax, t, info["base_angles"][:, 0], label="$q_{y,0}$")
+    _plot(ax, t, info["base_angles"][:, 1], label="$q_{z,0}$")
     ax.set(xlabel="t [s]", ylabel="[rad]", title=f"Base angles ({case})")
     ax.legend()
     save(fig, "fig6_base_angles.png")
 
     fig, axes = plt.subplots(3, 1, figsize=(6, 5), sharex=True)
     for k, axis in enumerate("xyz"):
-        axes[k].plot(t, info["pointing"][:, k], label=f"$x^I_{axis}$")
-        axes[k].plot(t, info["x_ref"][:, k], ls="--", label=rf"$x_{{ref,{axis}}}$")
+        _plot(axes[k], t, info["pointing"][:, k], label=f"$x^I_{axis}$")
+        _plot(axes[k], t, info["x_ref"][:, k], ls="--", label=rf"$x_{{ref,{axis}}}$")
         axes[k].legend(loc="right")
     axes[-1].set_xlabel("t [s]")
     axes[0].set_title(f"End-effector and reference pointing direction ({case})")
@@ -130,7 +187,9 @@ def write_figures(result: ScenarioResult, folder: Path) -> list[Path]:
     fig = plt.figure(figsize=(6, 4.5))
     ax = fig.add_subplot(projection="3d")
     p = info["p"]
-    ax.plot(p[:, 0], p[:, 1], p[:, 2], label="end-effector")
+    stride = max(1, len(p) // (2 * PLOT_BUCKETS))  # a smooth space curve: every stride-th point
+    path = np.concatenate((p[::stride], p[-1:]))
+    ax.plot(path[:, 0], path[:, 1], path[:, 2], label="end-effector")
     ax.plot([p[0, 0], p[-1, 0]], [0, 0], [0, 0], "k--", lw=0.8, label="path")
     ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"Path ({case})")
     ax.legend()

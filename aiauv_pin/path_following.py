@@ -15,6 +15,7 @@ from control.path_following import (
     PathFollowingGains,
     PathFollowingMeasurement,
 )
+from control.surge import SurgePIController
 
 from .simulation import JointServo
 from .vehicle import Vehicle
@@ -43,13 +44,35 @@ def joint_axis_labels(vehicle: Vehicle) -> tuple[str, ...]:
             if abs(abs(axis[k]) - 1.0) < 1e-9:
                 labels.append("xyz"[k])
                 continue
-        raise ValueError(f"joint '{vehicle.model.names[joint.id]}' is not revolute about a link axis")
+        raise ValueError(
+            f"joint '{vehicle.model.names[joint.id]}' is not revolute about a link axis"
+        )
     return tuple(labels)
 
 
 def surge_thruster_indices(vehicle: Vehicle) -> list[int]:
     """Indices of the thrusters that push along their link's x-axis (the paper's "X" thrusters)."""
     return [k for k, t in enumerate(vehicle.hydro.thrusters) if abs(t.direction[0]) > 0.999]
+
+
+def compiled_path_following_reason(adapter) -> str | None:
+    """Why ``adapter`` cannot run in compiled code (``None`` if it can).
+
+    The compiled path (:mod:`aiauv_pin.fast.path_following`) re-implements exactly the paper's
+    controller; it runs only for a plain :class:`VehiclePathFollowing` around a plain
+    :class:`control.path_following.PathFollowingController` on a vehicle with the numba backend.
+    """
+    if type(adapter) is not VehiclePathFollowing:
+        return f"the controller is a {type(adapter).__name__}, not VehiclePathFollowing"
+    if type(adapter.controller) is not PathFollowingController:
+        return f"the controller law is a {type(adapter.controller).__name__}"
+    if type(adapter.controller._surge) is not SurgePIController:
+        return "the surge controller is not control.surge.SurgePIController"
+    if adapter.vehicle.fast is None:
+        return f"the vehicle runs on the {adapter.vehicle.active_backend} backend"
+    if adapter.controller.n_joints != adapter.vehicle.nv - 6:
+        return "the controller's joints are not the vehicle's"
+    return None
 
 
 class VehiclePathFollowing:

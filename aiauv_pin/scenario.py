@@ -9,6 +9,8 @@ Choices the paper leaves open, documented here and in the README:
   more slowly, with states logged at the controller's rate) and the joint PD (eq. 24) runs as a
   continuous servo evaluated at every integrator stage (see
   :class:`aiauv_pin.path_following.VehiclePathFollowing`);
+* ``timeseries.csv`` holds one row every ``csv_period = 0.05`` s (every fifth step); the summary's
+  integrals and settling times use every step;
 * the base-angle saturation ``q_max`` is :class:`control.path_following.PathFollowingGains`' default.
 """
 
@@ -22,7 +24,7 @@ import numpy as np
 
 from control.path_following import PathFollowingGains
 
-from .path_following import END_EFFECTOR, VehiclePathFollowing
+from .path_following import END_EFFECTOR, VehiclePathFollowing, compiled_path_following_reason
 from .simulation import Trajectory, simulate
 from .vehicle import Vehicle
 
@@ -45,6 +47,9 @@ class PaperScenario:
         continuous_joints: Joint PD as a continuous servo (True) or sampled with the controller.
         control_period: Sampling period of the guidance, base-angle and surge loops [s], a whole
             multiple of ``dt``; ``None`` samples them every step.
+        csv_period: Time between rows of ``timeseries.csv`` [s], rounded to a whole number of
+            logged samples (at least one); ``None`` writes every logged sample. The run is still
+            logged at every sample and ``summary.json`` uses them all.
     """
 
     case: str = "uniform"
@@ -57,6 +62,7 @@ class PaperScenario:
     gains: PathFollowingGains | None = None
     continuous_joints: bool = True
     control_period: float | None = None
+    csv_period: float | None = 0.05
 
     def __post_init__(self) -> None:
         if self.case not in CASES:
@@ -68,13 +74,25 @@ class PaperScenario:
         if self.control_period is not None:
             period = self.control_period
             ratio = period / self.dt if isinstance(period, (int, float)) else math.nan
-            if not (math.isfinite(ratio) and period > 0 and abs(ratio - round(ratio)) < 1e-9 * ratio):
+            if not (
+                math.isfinite(ratio) and period > 0 and abs(ratio - round(ratio)) < 1e-9 * ratio
+            ):
                 raise ValueError(
                     f"control_period must be a positive whole multiple of dt = {self.dt:g} s, "
                     f"got {period!r}"
                 )
+        if self.csv_period is not None and not (
+            isinstance(self.csv_period, (int, float))
+            and math.isfinite(self.csv_period)
+            and self.csv_period > 0
+        ):
+            raise ValueError(
+                f"csv_period must be a positive number of seconds or None, got {self.csv_period!r}"
+            )
         if self.dt > self.duration:
-            raise ValueError(f"dt ({self.dt:g} s) must not exceed the duration ({self.duration:g} s)")
+            raise ValueError(
+                f"dt ({self.dt:g} s) must not exceed the duration ({self.duration:g} s)"
+            )
         if len(self.initial_offset) != 2 or not all(map(math.isfinite, self.initial_offset)):
             raise ValueError("initial_offset must be two finite numbers (p_y, p_z) [m]")
         if not math.isfinite(self.initial_surge):
@@ -126,42 +144,81 @@ class ScenarioResult:
 
 
 def run_paper_scenario(
-    vehicle: Vehicle, scenario: PaperScenario, *, progress: bool = False, on_log=None
+    vehicle: Vehicle,
+    scenario: PaperScenario,
+    *,
+    progress: bool = False,
+    on_log=None,
+    controller: VehiclePathFollowing | None = None,
+    compiled: bool | None = None,
 ) -> ScenarioResult:
     """Simulate the path-following scenario on a vehicle.
 
     ``on_log(t, q, info)`` is called at every logged sample (see :func:`aiauv_pin.simulate`).
 
+    With the numba backend and the paper's controller the whole run (dynamics, controller every
+    step, logging) executes in compiled code (:func:`aiauv_pin.fast.path_following.
+    run_path_following`), in chunks of one simulated second between which the progress bar and
+    ``on_log`` run; otherwise (Pinocchio backend, a subclass of :class:`VehiclePathFollowing` or
+    of its controller) the Python controller is called every step. Both give the same trajectory
+    and the same logged keys.
+
+    Args:
+        vehicle: The vehicle.
+        scenario: What to run.
+        progress: Show a progress bar.
+        on_log: Callback at every logged sample.
+        controller: The controller callback; ``None`` builds the paper's for ``scenario``.
+        compiled: ``True`` requires the compiled path, ``False`` forbids it, ``None`` (default)
+            uses it when :func:`compiled_path_following_reason` allows.
+
     Raises:
         SimulationDiverged: With the partial trajectory, if the state became non-finite.
+        ValueError: ``compiled=True`` but the compiled path cannot run this controller.
     """
-    controller = VehiclePathFollowing(
-        vehicle, scenario.controller_gains, continuous_joints=scenario.continuous_joints
-    )
+    if controller is None:
+        controller = VehiclePathFollowing(
+            vehicle, scenario.controller_gains, continuous_joints=scenario.continuous_joints
+        )
+    reason = compiled_path_following_reason(controller)
+    if compiled and reason is not None:
+        raise ValueError(f"compiled path following unavailable: {reason}")
+    use_compiled = reason is None and compiled is not False
     q0, v0 = initial_state(vehicle, scenario)
     current = np.asarray(scenario.current, dtype=float)
-    start = time.perf_counter()
-    trajectory = simulate(
-        vehicle,
-        q0,
-        v0,
-        scenario.duration,
-        scenario.dt,
-        controller,
+    options = dict(
         method=scenario.method,
         current=current if np.any(current) else None,
-        servo=controller.joint_servo if scenario.continuous_joints else None,
         progress=progress,
         control_period=scenario.control_period,
         log_every=scenario.steps_per_control,
         on_log=on_log,
     )
+    start = time.perf_counter()
+    if use_compiled:
+        from .fast.path_following import run_path_following
+
+        trajectory = run_path_following(
+            controller, q0, v0, scenario.duration, scenario.dt, **options
+        )
+    else:
+        trajectory = simulate(
+            vehicle,
+            q0,
+            v0,
+            scenario.duration,
+            scenario.dt,
+            controller,
+            servo=controller.joint_servo if controller.continuous_joints else None,
+            **options,
+        )
     return ScenarioResult(
         scenario=scenario,
         trajectory=trajectory,
         wall_time=time.perf_counter() - start,
         joint_names=vehicle.joint_names,
         thruster_names=vehicle.thruster_names,
+        extra={"compiled_controller": use_compiled},
     )
 
 

@@ -53,7 +53,9 @@ class JointServo:
         damping = np.array(self.damping, dtype=float).reshape(-1)
         references = np.array(self.references, dtype=float).reshape(-1)
         if not (stiffness.shape == damping.shape == references.shape):
-            raise ValueError("joint servo: stiffness, damping and references must have one entry per joint")
+            raise ValueError(
+                "joint servo: stiffness, damping and references must have one entry per joint"
+            )
         if not (np.all(np.isfinite(stiffness)) and np.all(np.isfinite(damping))):
             raise ValueError("joint servo: gains must be finite")
         object.__setattr__(self, "stiffness", stiffness)
@@ -120,6 +122,34 @@ def _split(output) -> tuple[np.ndarray, Mapping[str, object]]:
     return np.asarray(output, dtype=float), {}
 
 
+def check_run_arguments(
+    duration: float, dt: float, method: str, log_every: int, control_period: float | None
+) -> tuple[int, int]:
+    """Validate :func:`simulate`'s timing arguments; return ``(n_steps, steps_per_control)``.
+
+    Raises:
+        ValueError: A bad argument (one line).
+    """
+    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration must be a positive number of seconds, got {duration!r}")
+    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
+    if method not in INTEGRATORS:
+        raise ValueError(f"unknown method '{method}' (expected one of {', '.join(INTEGRATORS)})")
+    if int(log_every) < 1:
+        raise ValueError(f"log_every must be >= 1, got {log_every!r}")
+    steps_per_control = 1
+    if control_period is not None:
+        ratio = control_period / dt if math.isfinite(control_period) else math.nan
+        if not (control_period > 0 and abs(ratio - round(ratio)) < 1e-9 * max(1.0, ratio)):
+            raise ValueError(
+                f"control_period must be a positive whole multiple of dt = {dt:g} s, "
+                f"got {control_period!r}"
+            )
+        steps_per_control = max(1, round(ratio))
+    return max(1, round(duration / dt)), steps_per_control
+
+
 def simulate(
     vehicle: Vehicle,
     q0: np.ndarray,
@@ -167,23 +197,9 @@ def simulate(
         SimulationDiverged: The state became NaN or infinite; the error carries the time and the
             trajectory computed so far.
     """
-    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
-        raise ValueError(f"duration must be a positive number of seconds, got {duration!r}")
-    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
-    if method not in INTEGRATORS:
-        raise ValueError(f"unknown method '{method}' (expected one of {', '.join(INTEGRATORS)})")
-    if int(log_every) < 1:
-        raise ValueError(f"log_every must be >= 1, got {log_every!r}")
-    steps_per_control = 1
-    if control_period is not None:
-        ratio = control_period / dt if math.isfinite(control_period) else math.nan
-        if not (control_period > 0 and abs(ratio - round(ratio)) < 1e-9 * max(1.0, ratio)):
-            raise ValueError(
-                f"control_period must be a positive whole multiple of dt = {dt:g} s, "
-                f"got {control_period!r}"
-            )
-        steps_per_control = max(1, round(ratio))
+    n_steps, steps_per_control = check_run_arguments(
+        duration, dt, method, log_every, control_period
+    )
     step = INTEGRATORS[method]
     model = vehicle.model
     q = np.array(q0, dtype=float)
@@ -191,7 +207,6 @@ def simulate(
     if q.shape != (model.nq,) or v.shape != (model.nv,):
         raise ValueError(f"q0 must have {model.nq} and v0 {model.nv} entries")
     current = None if current is None else np.asarray(current, dtype=float).reshape(3)
-    n_steps = max(1, round(duration / dt))
     log_every = int(log_every)
     n_logs = n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
 

@@ -321,7 +321,8 @@ def plot_sweep(spec: SweepSpec, rows: Sequence[dict], folder: str | os.PathLike)
       triangles, diverged and failed runs as red crosses on the axis);
     * ``settling_time_<a>_<b>.png`` and ``cross_track_error_<a>_<b>.png`` for the first two swept
       numeric grid parameters: the mean over the other parameters in each cell of the plane (grey:
-      no run settled; ``D``: a run diverged or failed there).
+      no value; ``k/n``: only k of the n runs there have one, e.g. settled; ``D``: a run
+      diverged or failed there).
 
     Returns:
         The files written.
@@ -391,18 +392,24 @@ def plot_sweep(spec: SweepSpec, rows: Sequence[dict], folder: str | os.PathLike)
                 key = (ys.index(row[b]), xs.index(row[a]))
                 if bad:
                     diverged[key] = True
-                elif math.isfinite(_number(row.get(metric))):
-                    cells.setdefault(key, []).append(_number(row[metric]))
+                else:
+                    cells.setdefault(key, []).append(_number(row.get(metric)))
             for key, items in cells.items():
-                values[key] = float(np.mean(items))
+                finite = [x for x in items if math.isfinite(x)]
+                if finite:
+                    values[key] = float(np.mean(finite))
             fig = Figure(figsize=(6.0, 4.6), layout="constrained")
             ax = fig.subplots()
             ax.set_facecolor("0.8")
             mesh = ax.pcolormesh(np.arange(len(xs)), np.arange(len(ys)), values, shading="nearest")
             fig.colorbar(mesh, ax=ax, label=f"{label} (mean)")
             for (r, c), flag in np.ndenumerate(diverged):
-                if flag:
-                    ax.text(c, r, "D", ha="center", va="center", color="red", fontweight="bold")
+                items = cells.get((r, c), [])
+                finite = sum(math.isfinite(x) for x in items)
+                text = f"{finite}/{len(items)}" if finite < len(items) else ""
+                text = f"{text} D" if flag else text
+                if text:
+                    ax.text(c, r, text.strip(), ha="center", va="center", color="red", fontsize=8)
             ax.set_xticks(range(len(xs)), [f"{v:.4g}" for v in xs])
             ax.set_yticks(range(len(ys)), [f"{v:.4g}" for v in ys])
             ax.set_xlabel(labels[a])
@@ -459,7 +466,8 @@ def dask_client(
     from dask.distributed import Client, LocalCluster
 
     if scheduler is None:
-        count = workers if workers is not None else len(os.sched_getaffinity(0))
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+        count = workers if workers is not None else (cores or 1)
         if not (isinstance(count, int) and count >= 1):
             raise SweepError(f"workers must be a whole number >= 1, got {count!r}")
         cluster = LocalCluster(

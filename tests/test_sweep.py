@@ -147,10 +147,7 @@ def test_bad_specs_raise_one_line_errors(tmp_path, text, expected):
     assert isinstance(error.value, ValueError)
 
 
-def test_cli_reports_a_bad_spec_as_one_line(tmp_path, monkeypatch, capsys):
-    from aiauv_pin.sweep import add_sweep_subcommand
-
-    monkeypatch.setattr(cli, "_EXTRA_SUBCOMMANDS", [*cli._EXTRA_SUBCOMMANDS, add_sweep_subcommand])
+def test_cli_reports_a_bad_spec_as_one_line(tmp_path, capsys):
     spec = _spec(tmp_path, "[grid]\nk_p = [1.0]\nalpah = [0.5]\n")
     status = cli.main(["sweep", str(spec), "--out", str(tmp_path / "out"), "--quiet"])
     err = capsys.readouterr().err
