@@ -262,6 +262,7 @@ def format_report(report: CheckReport) -> str:
         f"smallest eigenvalue of M(q) at q = neutral: {report.smallest_mass_eigenvalue:.4g}"
     )
     lines += [f"warning: {w}" for w in report.warnings]
-    suffix = f" ({len(report.warnings)} warnings)" if report.warnings else ""
+    count = len(report.warnings)
+    suffix = f" ({count} warning{'s' if count != 1 else ''})" if count else ""
     lines.append(f"OK: usable vehicle{suffix}")
     return "\n".join(lines)

@@ -121,80 +121,130 @@ def write_summary(result: ScenarioResult, path: Path, extra: dict | None = None)
     return content
 
 
-def write_figures(result: ScenarioResult, folder: Path) -> list[Path]:
-    """PNG figures mirroring the paper's Figs. 2-7, plus the 3-D path."""
+FIGURES = (
+    "fig2_cross_track.png",
+    "fig3_surge.png",
+    "fig4_phi_tilde.png",
+    "fig5_omega_tilde.png",
+    "fig6_base_angles.png",
+    "fig7_pointing.png",
+    "path_3d.png",
+)
+"""File names of the figures, in drawing order."""
+
+
+def _draw(name: str, result: ScenarioResult, plt):
+    """The figure ``name`` of :data:`FIGURES`."""
+    tr = result.trajectory
+    info, t = tr.info, tr.t
+    case = result.scenario.case
+    if name == "fig2_cross_track.png":
+        fig, ax = plt.subplots(figsize=(6, 3.2))
+        _plot(ax, t, info["p"][:, 1], label="$p_y$")
+        _plot(ax, t, info["p"][:, 2], label="$p_z$")
+        ax.set(xlabel="t [s]", ylabel="cross-track error [m]", title=f"Cross-track errors ({case})")
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.legend()
+    elif name == "fig3_surge.png":
+        fig, ax = plt.subplots(figsize=(6, 3.2))
+        _plot(ax, t, info["u"], label="$u$")
+        u_d = result.scenario.controller_gains.u_d
+        ax.axhline(u_d, color="k", ls="--", lw=0.8, label="$u_d$")
+        ax.set(xlabel="t [s]", ylabel="surge velocity [m/s]", title=f"Surge velocity ({case})")
+        ax.legend()
+    elif name == "fig4_phi_tilde.png":
+        fig, ax = plt.subplots(figsize=(6, 3.2))
+        _plot(ax, t, info["phi_tilde"])
+        ax.set(xlabel="t [s]", ylabel=r"$\tilde\phi$ [rad]", title=f"Pointing error ({case})")
+    elif name == "fig5_omega_tilde.png":
+        fig, ax = plt.subplots(figsize=(6, 3.2))
+        _plot(ax, t, info["omega_tilde"][:, 0], label=r"$\tilde\omega_y$")
+        _plot(ax, t, info["omega_tilde"][:, 1], label=r"$\tilde\omega_z$")
+        ax.set(xlabel="t [s]", ylabel="[rad/s]", title=f"Angular velocity error ({case})")
+        ax.legend()
+    elif name == "fig6_base_angles.png":
+        fig, ax = plt.subplots(figsize=(6, 3.2))
+        _plot(ax, t, info["base_angles"][:, 0], label="$q_{y,0}$")
+        _plot(ax, t, info["base_angles"][:, 1], label="$q_{z,0}$")
+        ax.set(xlabel="t [s]", ylabel="[rad]", title=f"Base angles ({case})")
+        ax.legend()
+    elif name == "fig7_pointing.png":
+        fig, axes = plt.subplots(3, 1, figsize=(6, 5), sharex=True)
+        for k, axis in enumerate("xyz"):
+            _plot(axes[k], t, info["pointing"][:, k], label=f"$x^I_{axis}$")
+            _plot(axes[k], t, info["x_ref"][:, k], ls="--", label=rf"$x_{{ref,{axis}}}$")
+            axes[k].legend(loc="right")
+        axes[-1].set_xlabel("t [s]")
+        axes[0].set_title(f"End-effector and reference pointing direction ({case})")
+    elif name == "path_3d.png":
+        fig = plt.figure(figsize=(6, 4.5))
+        ax = fig.add_subplot(projection="3d")
+        p = info["p"]
+        stride = max(1, len(p) // (2 * PLOT_BUCKETS))  # a smooth space curve: every stride-th point
+        path = np.concatenate((p[::stride], p[-1:]))
+        ax.plot(path[:, 0], path[:, 1], path[:, 2], label="end-effector")
+        ax.plot([p[0, 0], p[-1, 0]], [0, 0], [0, 0], "k--", lw=0.8, label="path")
+        ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"Path ({case})")
+        ax.legend()
+    else:
+        raise ValueError(f"unknown figure {name!r}")
+    return fig
+
+
+def _render(result: ScenarioResult, folder: Path, names) -> list[Path]:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    tr = result.trajectory
-    info, t = tr.info, tr.t
-    case = result.scenario.case
-    u_d = result.scenario.controller_gains.u_d
-    written: list[Path] = []
-
-    def save(fig, name: str) -> None:
+    written = []
+    for name in names:
+        fig = _draw(name, result, plt)
         fig.tight_layout()
         with atomic_path(folder / name) as temporary:
             fig.savefig(temporary, dpi=110, format="png")
         plt.close(fig)
         written.append(folder / name)
-
-    fig, ax = plt.subplots(figsize=(6, 3.2))
-    _plot(ax, t, info["p"][:, 1], label="$p_y$")
-    _plot(ax, t, info["p"][:, 2], label="$p_z$")
-    ax.set(xlabel="t [s]", ylabel="cross-track error [m]", title=f"Cross-track errors ({case})")
-    ax.axhline(0.0, color="k", lw=0.5)
-    ax.legend()
-    save(fig, "fig2_cross_track.png")
-
-    fig, ax = plt.subplots(figsize=(6, 3.2))
-    _plot(ax, t, info["u"], label="$u$")
-    ax.axhline(u_d, color="k", ls="--", lw=0.8, label="$u_d$")
-    ax.set(xlabel="t [s]", ylabel="surge velocity [m/s]", title=f"Surge velocity ({case})")
-    ax.legend()
-    save(fig, "fig3_surge.png")
-
-    fig, ax = plt.subplots(figsize=(6, 3.2))
-    _plot(ax, t, info["phi_tilde"])
-    ax.set(xlabel="t [s]", ylabel=r"$\tilde\phi$ [rad]", title=f"Pointing error ({case})")
-    save(fig, "fig4_phi_tilde.png")
-
-    fig, ax = plt.subplots(figsize=(6, 3.2))
-    _plot(ax, t, info["omega_tilde"][:, 0], label=r"$\tilde\omega_y$")
-    _plot(ax, t, info["omega_tilde"][:, 1], label=r"$\tilde\omega_z$")
-    ax.set(xlabel="t [s]", ylabel="[rad/s]", title=f"Angular velocity error ({case})")
-    ax.legend()
-    save(fig, "fig5_omega_tilde.png")
-
-    fig, ax = plt.subplots(figsize=(6, 3.2))
-    _plot(ax, t, info["base_angles"][:, 0], label="$q_{y,0}$")
-    _plot(ax, t, info["base_angles"][:, 1], label="$q_{z,0}$")
-    ax.set(xlabel="t [s]", ylabel="[rad]", title=f"Base angles ({case})")
-    ax.legend()
-    save(fig, "fig6_base_angles.png")
-
-    fig, axes = plt.subplots(3, 1, figsize=(6, 5), sharex=True)
-    for k, axis in enumerate("xyz"):
-        _plot(axes[k], t, info["pointing"][:, k], label=f"$x^I_{axis}$")
-        _plot(axes[k], t, info["x_ref"][:, k], ls="--", label=rf"$x_{{ref,{axis}}}$")
-        axes[k].legend(loc="right")
-    axes[-1].set_xlabel("t [s]")
-    axes[0].set_title(f"End-effector and reference pointing direction ({case})")
-    save(fig, "fig7_pointing.png")
-
-    fig = plt.figure(figsize=(6, 4.5))
-    ax = fig.add_subplot(projection="3d")
-    p = info["p"]
-    stride = max(1, len(p) // (2 * PLOT_BUCKETS))  # a smooth space curve: every stride-th point
-    path = np.concatenate((p[::stride], p[-1:]))
-    ax.plot(path[:, 0], path[:, 1], path[:, 2], label="end-effector")
-    ax.plot([p[0, 0], p[-1, 0]], [0, 0], [0, 0], "k--", lw=0.8, label="path")
-    ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"Path ({case})")
-    ax.legend()
-    save(fig, "path_3d.png")
     return written
+
+
+def _fork_context():
+    """A ``fork`` multiprocessing context on Linux (cheap: the child shares the result), else None."""
+    import multiprocessing
+    import sys
+
+    if sys.platform != "linux" or "fork" not in multiprocessing.get_all_start_methods():
+        return None
+    return multiprocessing.get_context("fork")
+
+
+def write_figures(result: ScenarioResult, folder: Path, *, parallel: bool = True) -> list[Path]:
+    """PNG figures mirroring the paper's Figs. 2-7, plus the 3-D path (:data:`FIGURES`).
+
+    With ``parallel`` (on Linux, with more than one CPU) a forked process draws half of them
+    while this one draws the rest.
+    """
+    import os
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot  # noqa: F401  (imported once, before the fork)
+
+    folder = Path(folder)
+    context = _fork_context() if parallel and (os.cpu_count() or 1) > 1 else None
+    if context is None:
+        return _render(result, folder, FIGURES)
+    from concurrent.futures import ProcessPoolExecutor
+
+    # the 3-D path and the 3-panel figure are the slowest: split the work about evenly
+    mine = ("fig7_pointing.png", "fig2_cross_track.png", "fig4_phi_tilde.png")
+    theirs = tuple(name for name in FIGURES if name not in mine)
+    with ProcessPoolExecutor(max_workers=1, mp_context=context) as pool:
+        future = pool.submit(_render, result, folder, theirs)
+        _render(result, folder, mine)
+        future.result()
+    return [folder / name for name in FIGURES]
 
 
 def write_results(result: ScenarioResult, out_dir: Path, extra: dict | None = None) -> dict:
