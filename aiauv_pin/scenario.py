@@ -30,6 +30,11 @@ from .vehicle import Vehicle
 
 CASES = ("uniform", "stabilised")
 
+#: Callables run (without arguments) once the first chunk of a compiled scenario loop has run, for
+#: work that can overlap the rest in a background thread (the loop releases the GIL); see
+#: :func:`aiauv_pin.outputs.preload_plotting`.
+BEFORE_RUN: list = []
+
 
 @dataclass(frozen=True)
 class PaperScenario:
@@ -198,8 +203,12 @@ def run_paper_scenario(
     if use_compiled:
         from .fast.path_following import run_path_following
 
+        def prepare() -> None:
+            for function in BEFORE_RUN:
+                function()
+
         trajectory = run_path_following(
-            controller, q0, v0, scenario.duration, scenario.dt, **options
+            controller, q0, v0, scenario.duration, scenario.dt, after_first_chunk=prepare, **options
         )
     else:
         trajectory = simulate(

@@ -269,3 +269,47 @@ def test_custom_controllers_fall_back_to_python(numba_vehicle, paper_vehicle):
     pinocchio_vehicle = aiauv_pin.load_vehicle()
     pinocchio_vehicle.backend = "pinocchio"
     assert "pinocchio" in compiled_path_following_reason(VehiclePathFollowing(pinocchio_vehicle))
+
+
+# ---------------------------------------------------------------- result files (speed-ups)
+def test_csv_text_is_that_of_numpy_savetxt(rng):
+    import io
+
+    from aiauv_pin.outputs import format_table
+
+    table = rng.normal(size=(7, 5)) * np.logspace(-12, 12, 5)
+    table[0, 0] = 0.0
+    buffer = io.StringIO()
+    np.savetxt(buffer, table, delimiter=",", header="a,b,c,d,e", comments="", fmt="%.9g")
+    assert format_table(list("abcde"), table) == buffer.getvalue()
+
+
+def test_csv_keeps_every_csv_period_and_the_summary_every_step(numba_vehicle, tmp_path):
+    import json
+
+    from aiauv_pin.outputs import write_results
+
+    result = run_paper_scenario(numba_vehicle, PaperScenario(duration=1.03))
+    write_results(result, tmp_path)
+    rows = (tmp_path / "timeseries.csv").read_text().splitlines()[1:]
+    times = [float(row.split(",")[0]) for row in rows]
+    np.testing.assert_allclose(times, [*np.arange(0.0, 1.0001, 0.05), 1.03], atol=1e-12)
+    content = json.loads((tmp_path / "summary.json").read_text())
+    assert content["steps"] == 103  # integrals and settling times see every step
+
+
+def test_plot_envelope_keeps_each_buckets_extremes_in_time_order(rng):
+    from aiauv_pin.outputs import envelope
+
+    t = np.arange(10_001) * 0.01
+    y = np.cumsum(rng.normal(size=t.size)) + 5.0 * (rng.random(t.size) < 0.001)
+    t_kept, y_kept = envelope(t, y, buckets=100)
+    assert len(t_kept) <= 2 * 100 + 2 and np.all(np.diff(t_kept) > 0)
+    assert (t_kept[0], t_kept[-1]) == (t[0], t[-1])
+    size = -(-t.size // 100)
+    for start in range(0, t.size, size):
+        inside = (t_kept >= t[start]) & (t_kept <= t[min(start + size, t.size) - 1])
+        assert y_kept[inside].max() == y[start : start + size].max()
+        assert y_kept[inside].min() == y[start : start + size].min()
+    _, short_y = envelope(t[:150], y[:150], buckets=100)
+    assert np.array_equal(short_y, y[:150])

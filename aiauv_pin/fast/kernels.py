@@ -12,7 +12,9 @@ Everything here works on the flat arrays of :class:`aiauv_pin.fast.model.FastMod
   ``B`` at ``c_B``) so that the hydrostatic wrench on the body is
   ``((B - W) e, (B c_B - W c_W) x e)`` with ``e`` the world's up axis in body axes
   (Fossen 2021, eq. (4.6));
-* ``link_i`` (nl, 2) int64: body of the link, 1 if it has crossflow drag;
+* ``link_i`` (nl, 5) int64: body of the link, 1 if it has crossflow drag, 1 if the link frame is
+  the body frame, 1 if the cylinder frame is the link frame, 1 if ``D_Q`` is diagonal (these
+  three only skip multiplications by 0 and 1);
 * ``link_m`` (nl, 4, 6, 6): link-from-body motion transform, ``D_L``, ``D_Q``, cylinder-from-link
   motion transform;
 * ``link_f`` (nl, 2): cylinder length [m], strip coefficient ``rho r C_dC`` [kg/m^2];
@@ -141,6 +143,98 @@ def _motion_transform(rot, trans, out):
 
 
 @njit(**_OPTS)
+def _x_apply(xl, m, out):
+    """``out = X m``: a parent-frame motion vector in the child frame.
+
+    ``xl`` is the child's placement in its parent (rows 0-2 ``R``, row 3 ``p``), so
+    ``X = [[R^T, -R^T [p]], [0, R^T]]`` (Featherstone 2008, eq. (2.24)) and
+    ``X m = (R^T (v - p x w), R^T w)``.
+    """
+    p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
+    w0, w1, w2 = m[3], m[4], m[5]
+    a0 = m[0] - (p1 * w2 - p2 * w1)
+    a1 = m[1] - (p2 * w0 - p0 * w2)
+    a2 = m[2] - (p0 * w1 - p1 * w0)
+    for i in range(3):
+        r0, r1, r2 = xl[0, i], xl[1, i], xl[2, i]
+        out[i] = r0 * a0 + r1 * a1 + r2 * a2
+        out[3 + i] = r0 * w0 + r1 * w1 + r2 * w2
+
+
+@njit(**_OPTS)
+def _xT_add(xl, f, dst):
+    """``dst += X^T f``: a child-frame force vector in the parent frame, ``(R f, p x R f + R n)``."""
+    p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
+    f0 = xl[0, 0] * f[0] + xl[0, 1] * f[1] + xl[0, 2] * f[2]
+    f1 = xl[1, 0] * f[0] + xl[1, 1] * f[1] + xl[1, 2] * f[2]
+    f2 = xl[2, 0] * f[0] + xl[2, 1] * f[1] + xl[2, 2] * f[2]
+    dst[0] += f0
+    dst[1] += f1
+    dst[2] += f2
+    dst[3] += xl[0, 0] * f[3] + xl[0, 1] * f[4] + xl[0, 2] * f[5] + p1 * f2 - p2 * f1
+    dst[4] += xl[1, 0] * f[3] + xl[1, 1] * f[4] + xl[1, 2] * f[5] + p2 * f0 - p0 * f2
+    dst[5] += xl[2, 0] * f[3] + xl[2, 1] * f[4] + xl[2, 2] * f[5] + p0 * f1 - p1 * f0
+
+
+@njit(**_OPTS)
+def _add_transformed_inertia(xl, inertia, dst, half, rotated):
+    """``dst += X^T I X`` for a symmetric 6x6 ``I`` given in the child frame, in 3x3 blocks.
+
+    With ``I = [[A, B], [B^T, C]]`` rotated into the parent axes (``A' = R A R^T`` etc.) and
+    ``P = [p]``: ``X^T I X = [[A', B' - A' P], [sym., C' + P B' + (P B')^T - P A' P]]``, the
+    inertia transform of Featherstone 2008, eq. (2.66), written out for ``X`` of :func:`_x_apply`
+    (about half the work of two 6x6 products).
+    """
+    # half = I blockdiag(R, R)^T, rotated = blockdiag(R, R) half
+    for i in range(6):
+        for c in range(0, 6, 3):
+            a0, a1, a2 = inertia[i, c], inertia[i, c + 1], inertia[i, c + 2]
+            for j in range(3):
+                half[i, c + j] = a0 * xl[j, 0] + a1 * xl[j, 1] + a2 * xl[j, 2]
+    for r in range(0, 6, 3):
+        for col in range(6):
+            y0, y1, y2 = half[r, col], half[r + 1, col], half[r + 2, col]
+            for i in range(3):
+                rotated[r + i, col] = xl[i, 0] * y0 + xl[i, 1] * y1 + xl[i, 2] * y2
+    p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
+    # T = A' P (row i: a_i x p) stored in half[0:3, 0:3]; new B = B' - T
+    for i in range(3):
+        a0, a1, a2 = rotated[i, 0], rotated[i, 1], rotated[i, 2]
+        t0 = a1 * p2 - a2 * p1
+        t1 = a2 * p0 - a0 * p2
+        t2 = a0 * p1 - a1 * p0
+        half[i, 0] = t0
+        half[i, 1] = t1
+        half[i, 2] = t2
+        for j in range(3):
+            dst[i, j] += rotated[i, j]
+        b0 = rotated[i, 3] - t0
+        b1 = rotated[i, 4] - t1
+        b2 = rotated[i, 5] - t2
+        dst[i, 3] += b0
+        dst[i, 4] += b1
+        dst[i, 5] += b2
+        dst[3, i] += b0
+        dst[4, i] += b1
+        dst[5, i] += b2
+    # Q = P B' (column j: p x b'_j) in half[0:3, 3:6]; P T (column j: p x t_j) in half[3:6, 0:3]
+    for j in range(3):
+        b0, b1, b2 = rotated[0, 3 + j], rotated[1, 3 + j], rotated[2, 3 + j]
+        half[0, 3 + j] = p1 * b2 - p2 * b1
+        half[1, 3 + j] = p2 * b0 - p0 * b2
+        half[2, 3 + j] = p0 * b1 - p1 * b0
+        t0, t1, t2 = half[0, j], half[1, j], half[2, j]
+        half[3, j] = p1 * t2 - p2 * t1
+        half[4, j] = p2 * t0 - p0 * t2
+        half[5, j] = p0 * t1 - p1 * t0
+    for i in range(3):
+        for j in range(3):
+            dst[3 + i, 3 + j] += (
+                rotated[3 + i, 3 + j] + half[i, 3 + j] + half[j, 3 + i] - half[3 + i, j]
+            )
+
+
+@njit(**_OPTS)
 def _solve_spd6(a, b, out, low, y):
     """Solve ``a x = b`` for a symmetric positive-definite 6x6 ``a`` (Cholesky)."""
     for j in range(6):
@@ -169,7 +263,7 @@ def _solve_spd6(a, b, out, low, y):
 # ---------------------------------------------------------------------- kinematics
 @njit(**_OPTS)
 def kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc, m33, v6):
-    """Body poses in the world, parent-to-child motion transforms, body twists and ``v x S qd``."""
+    """Body poses in the world, placements in the parent (``xform``), twists and ``v x S qd``."""
     nb = ints.shape[0]
     rot_l = m33[0]
     rot_j = m33[1]
@@ -184,8 +278,8 @@ def kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc, m3
             for i in range(6):
                 twist[b, i] = v[iv + i]
                 bias_acc[b, i] = 0.0
-            for i in range(6):
-                for j in range(6):
+            for i in range(4):
+                for j in range(3):
                     xform[b, i, j] = 1.0 if i == j else 0.0
             continue
         qj = q[iq]
@@ -224,13 +318,17 @@ def kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc, m3
                         + rot_w[parent, i, 1] * rot_l[1, j]
                         + rot_w[parent, i, 2] * rot_l[2, j]
                     )
-        _motion_transform(rot_l, pos_l, xform[b])
+        xl = xform[b]
+        for i in range(3):
+            for j in range(3):
+                xl[i, j] = rot_l[i, j]
+            xl[3, i] = pos_l[i]
         qd = v[iv]
         if parent < 0:
             for i in range(6):
                 twist[b, i] = s[i] * qd
         else:
-            _matvec6(xform[b], twist[parent], twist[b])
+            _x_apply(xl, twist[parent], twist[b])
             for i in range(6):
                 twist[b, i] += s[i] * qd
         for i in range(6):
@@ -306,10 +404,15 @@ def body_bias(M, rot_w, twist, current, bias, relative, v6):
         for i in range(6):
             bias[b, i] = 0.0
             relative[b, i] = nu[i]
-        # rigid Coriolis-centripetal: nu x* (I_RB nu)   (Featherstone 2008, eq. (2.67))
-        _matvec6(inertia[b, 2], nu, mom)
-        _add_force_cross(nu, mom, bias[b])
-        if has_current:
+        if not has_current:
+            # nu x* (I_RB nu) + nu x* (M_A nu) = nu x* ((I_RB + M_A) nu): one product
+            # (Featherstone 2008, eq. (2.67); Fossen 2021, eq. (6.46))
+            _matvec6(inertia[b, 0], nu, mom)
+            _add_force_cross(nu, mom, bias[b])
+        else:
+            # rigid Coriolis-centripetal: nu x* (I_RB nu)   (Featherstone 2008, eq. (2.67))
+            _matvec6(inertia[b, 2], nu, mom)
+            _add_force_cross(nu, mom, bias[b])
             # current in body axes, v_c = R^T V_c; nu_r = nu - (v_c, 0)   (Fossen 2021, eq. (10.4))
             vc0 = rot[0, 0] * cur_x + rot[1, 0] * cur_y + rot[2, 0] * cur_z
             vc1 = rot[0, 1] * cur_x + rot[1, 1] * cur_y + rot[2, 1] * cur_z
@@ -328,9 +431,9 @@ def body_bias(M, rot_w, twist, current, bias, relative, v6):
             _matvec6(inertia[b, 1], tmp, tmp2)
             for i in range(6):
                 bias[b, i] += tmp2[i]
-        # added-mass Coriolis: nu_r x* (M_A nu_r)   (Fossen 2021, eq. (6.46))
-        _matvec6(inertia[b, 1], relative[b], mom)
-        _add_force_cross(relative[b], mom, bias[b])
+            # added-mass Coriolis: nu_r x* (M_A nu_r)   (Fossen 2021, eq. (6.46))
+            _matvec6(inertia[b, 1], relative[b], mom)
+            _add_force_cross(relative[b], mom, bias[b])
         # hydrostatics: ((B - W) e, (B c_B - W c_W) x e), e = R^T z   (Fossen 2021, eq. (4.6))
         e0, e1, e2 = rot[2, 0], rot[2, 1], rot[2, 2]
         sf, sx, sy, sz = restore[b, 0], restore[b, 1], restore[b, 2], restore[b, 3]
@@ -344,24 +447,47 @@ def body_bias(M, rot_w, twist, current, bias, relative, v6):
     for k in range(link_i.shape[0]):
         b = link_i[k, 0]
         x_link = link_m[k, 0]
-        _matvec6(x_link, relative[b], tmp)
-        for i in range(6):
-            tmp2[i] = abs(tmp[i]) * tmp[i]
-        for i in range(6):
-            s = 0.0
-            for j in range(6):
-                s += link_m[k, 1, i, j] * tmp[j] + link_m[k, 2, i, j] * tmp2[j]
-            wrench[i] = -s
+        same_frame = link_i[k, 2] != 0
+        if same_frame:
+            for i in range(6):
+                tmp[i] = relative[b, i]
+        else:
+            _matvec6(x_link, relative[b], tmp)
+        d_lin = link_m[k, 1]
+        d_quad = link_m[k, 2]
+        if link_i[k, 4] != 0:
+            for i in range(6):
+                s = 0.0
+                for j in range(6):
+                    s += d_lin[i, j] * tmp[j]
+                wrench[i] = -s - d_quad[i, i] * abs(tmp[i]) * tmp[i]
+        else:
+            for i in range(6):
+                tmp2[i] = abs(tmp[i]) * tmp[i]
+            for i in range(6):
+                s = 0.0
+                for j in range(6):
+                    s += d_lin[i, j] * tmp[j] + d_quad[i, j] * tmp2[j]
+                wrench[i] = -s
         if link_i[k, 1]:
             x_cyl = link_m[k, 3]
-            _matvec6(x_cyl, tmp, cyl)
-            _crossflow(cyl, link_f[k, 0], link_f[k, 1], gauss, cyl_w)
-            _matTvec6(x_cyl, cyl_w, tmp2)
+            if link_i[k, 3] != 0:
+                _crossflow(tmp, link_f[k, 0], link_f[k, 1], gauss, cyl_w)
+                for i in range(6):
+                    wrench[i] += cyl_w[i]
+            else:
+                _matvec6(x_cyl, tmp, cyl)
+                _crossflow(cyl, link_f[k, 0], link_f[k, 1], gauss, cyl_w)
+                _matTvec6(x_cyl, cyl_w, tmp2)
+                for i in range(6):
+                    wrench[i] += tmp2[i]
+        if same_frame:
             for i in range(6):
-                wrench[i] += tmp2[i]
-        _matTvec6(x_link, wrench, tmp2)
-        for i in range(6):
-            bias[b, i] -= tmp2[i]
+                bias[b, i] -= wrench[i]
+        else:
+            _matTvec6(x_link, wrench, tmp2)
+            for i in range(6):
+                bias[b, i] -= tmp2[i]
 
 
 # ---------------------------------------------------------------------- articulated-body algorithm
@@ -401,23 +527,9 @@ def _articulated(M, tau, xform, bias_acc, bias, out, art, pa, u_vec, scal, acc, 
         _matvec6(ia, bias_acc[b], p_loc)
         for i in range(6):
             p_loc[i] += pa[b, i] + u_vec[b, i] * u_sc[b] * d_inv[b]
-        x = xform[b]
         # parent += X^T I^a X, X^T p^a
-        for i in range(6):
-            for j in range(6):
-                acc_ij = 0.0
-                for k in range(6):
-                    acc_ij += ia[i, k] * x[k, j]
-                t66[i, j] = acc_ij
-        for i in range(6):
-            for j in range(6):
-                acc_ij = 0.0
-                for k in range(6):
-                    acc_ij += x[k, i] * t66[k, j]
-                art[parent, i, j] += acc_ij
-        _matTvec6(x, p_loc, tmp)
-        for i in range(6):
-            pa[parent, i] += tmp[i]
+        _add_transformed_inertia(xform[b], ia, art[parent], t66, m66[2])
+        _xT_add(xform[b], p_loc, pa[parent])
     # root: free flyer (6 DOF, S = identity)
     iv0 = ints[0, 3]
     for i in range(6):
@@ -432,7 +544,7 @@ def _articulated(M, tau, xform, bias_acc, bias, out, art, pa, u_vec, scal, acc, 
             for i in range(6):
                 tmp[i] = bias_acc[b, i]
         else:
-            _matvec6(xform[b], acc[parent], tmp)
+            _x_apply(xform[b], acc[parent], tmp)
             for i in range(6):
                 tmp[i] += bias_acc[b, i]
         ua = 0.0
@@ -460,9 +572,7 @@ def _backward_generalized(ints, axis, xform, body_wrench, out, tmp):
             out[iv] = s
         parent = ints[b, 0]
         if parent >= 0:
-            _matTvec6(xform[b], body_wrench[b], tmp)
-            for i in range(6):
-                body_wrench[parent, i] += tmp[i]
+            _xT_add(xform[b], body_wrench[b], body_wrench[parent])
 
 
 @njit(**_OPTS)
@@ -486,7 +596,7 @@ def workspace(nb, nq, nv):
     return (
         np.empty((nb, 3, 3)),  # 0 rot_w
         np.empty((nb, 3)),  # 1 pos_w
-        np.empty((nb, 6, 6)),  # 2 xform
+        np.empty((nb, 4, 3)),  # 2 placements in the parent (rows 0-2 R, row 3 p)
         np.empty((nb, 6)),  # 3 twist
         np.empty((nb, 6)),  # 4 bias_acc
         np.empty((nb, 6)),  # 5 bias

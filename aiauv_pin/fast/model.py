@@ -112,7 +112,7 @@ class FastModel:
                 restore[joint - 1, 1:] += buoyancy * placement.act(link.center_of_buoyancy)
         links = vehicle.hydro.links if vehicle.damping else ()
         nl = len(links)
-        link_i = np.zeros((nl, 2), dtype=np.int64)
+        link_i = np.zeros((nl, 5), dtype=np.int64)
         link_m = np.zeros((nl, 4, 6, 6))
         link_f = np.zeros((nl, 2))
         crossflow_index = {int(k): n for n, k in enumerate(vehicle._crossflow_links)}
@@ -126,6 +126,11 @@ class FastModel:
                 link_i[k, 1] = 1
                 link_m[k, 3] = vehicle._cylinder_from_link[n]
                 link_f[k] = (vehicle._crossflow_length[n], vehicle._crossflow_coefficient[n])
+            # shortcuts that leave the arithmetic exact: identity transforms, diagonal D_Q
+            identity = np.eye(6)
+            link_i[k, 2] = int(np.array_equal(link_m[k, 0], identity))
+            link_i[k, 3] = int(np.array_equal(link_m[k, 3], identity))
+            link_i[k, 4] = int(np.count_nonzero(link_m[k, 2] - np.diag(np.diag(link_m[k, 2]))) == 0)
         gauss = np.array(gauss_legendre_unit(DEFAULT_NODES))
         thrust = np.zeros((len(vehicle.hydro.thrusters), 7))
         for k in range(thrust.shape[0]):

@@ -704,14 +704,18 @@ def run_path_following(
     log_every: int = 1,
     progress: bool = False,
     on_log: Callable[[float, np.ndarray, Mapping[str, object]], None] | None = None,
-    chunk_seconds: float = 1.0,
+    chunk_seconds: float | None = None,
+    after_first_chunk: Callable[[], None] | None = None,
 ):
     """:func:`aiauv_pin.simulate` with the paper's controller, entirely in compiled code.
 
     Same arguments, sampling, logging and divergence behaviour as
     ``simulate(vehicle, q0, v0, duration, dt, adapter, servo=adapter.joint_servo, ...)`` (the servo
-    only with ``adapter.continuous_joints``); the run advances in chunks of about
-    ``chunk_seconds`` of simulated time, between which the progress bar and ``on_log`` run.
+    only with ``adapter.continuous_joints``); the run advances in chunks of ``chunk_seconds`` of
+    simulated time (default: 1 s with ``on_log``, for a smooth live view, else 10 s), between which
+    the progress bar and ``on_log`` run. ``after_first_chunk()`` is called once the first chunk
+    has returned (the compiled code is then loaded; later chunks release the GIL, so background
+    threads started there overlap them).
 
     Returns:
         The :class:`aiauv_pin.simulation.Trajectory`.
@@ -742,6 +746,8 @@ def run_path_following(
     log = np.empty((n_logs, width))
     tau = np.zeros(nv)
     info = np.full(compiled.width, np.nan)
+    if chunk_seconds is None:
+        chunk_seconds = 1.0 if on_log is not None else 10.0
     chunk = max(1, round(chunk_seconds / dt))
     bar = None
     if progress:
@@ -788,6 +794,8 @@ def run_path_following(
                     )
             if bar is not None:
                 bar.update(done)
+            if k == 0 and after_first_chunk is not None:
+                after_first_chunk()
             if k + done < stop:
                 diverged_at = k + done
                 break
