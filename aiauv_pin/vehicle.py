@@ -37,32 +37,13 @@ import pinocchio as pin
 from hydro.crossflow import crossflow_wrench
 from hydro.damping import linear_quadratic_wrench
 from hydro.kirchhoff import coriolis_wrench, cross, momentum_in_world
+from hydro.spatial import motion_transform
 from hydro.spec import HydroSpec
 
 _LOCAL = pin.ReferenceFrame.LOCAL
 
 #: Accepted values of ``Vehicle(backend=...)``.
 BACKENDS = ("auto", "numba", "pinocchio")
-
-
-def motion_transform(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
-    """Matrix mapping twists ``(v, omega)`` of a frame A to a frame B placed at ``(R, p)`` in A.
-
-    Args:
-        rotation: Orientation ``R`` of frame B in frame A (3x3).
-        translation: Origin ``p`` of frame B in frame A [m].
-
-    Returns:
-        ``X`` (6x6) with ``nu_B = X nu_A`` (Featherstone 2008, eq. (2.24)); the wrench map back to A
-        is ``X^T``.
-    """
-    rt = rotation.T
-    skew = pin.skew(translation)
-    transform = np.zeros((6, 6))
-    transform[:3, :3] = rt
-    transform[:3, 3:] = -rt @ skew
-    transform[3:, 3:] = rt
-    return transform
 
 
 @dataclass(frozen=True)
@@ -149,9 +130,7 @@ class Vehicle:
             link_from_body.append(motion_transform(placement.rotation, placement.translation))
         self._bodies = bodies
         self._body_of_link = np.array(body_of_link, dtype=int)
-        self._link_from_body = (
-            np.array(link_from_body) if links else np.zeros((0, 6, 6))
-        )
+        self._link_from_body = np.array(link_from_body) if links else np.zeros((0, 6, 6))
         n_bodies = len(bodies)
         added = np.zeros((n_bodies, 6, 6))
         for k, link in enumerate(links):
@@ -291,9 +270,7 @@ class Vehicle:
         mass = data.M.copy()
         bias = data.nle.copy()
         if self.restoring and self.hydro.links:
-            bias -= pin.computeGeneralizedGravity(
-                self._buoyancy_model, self._buoyancy_data, q
-            )
+            bias -= pin.computeGeneralizedGravity(self._buoyancy_model, self._buoyancy_data, q)
         if not self._bodies or not (self.added_mass or self.damping):
             return mass, bias
         bodies = self._bodies
@@ -316,17 +293,13 @@ class Vehicle:
             wrench += np.einsum("nij,nj->ni", added, accel) + coriolis_wrench(added, relative)
             mass += np.sum(jac.transpose(0, 2, 1) @ (added @ jac), axis=0)
         if self.damping and self.hydro.links:
-            link_twist = np.einsum(
-                "nij,nj->ni", self._link_from_body, relative[self._body_of_link]
-            )
+            link_twist = np.einsum("nij,nj->ni", self._link_from_body, relative[self._body_of_link])
             link_wrench = linear_quadratic_wrench(
                 self._linear_damping, self._quadratic_damping, link_twist
             )
             if self._crossflow_links.size:
                 cyl = self._cylinder_from_link
-                cyl_twist = np.einsum(
-                    "nij,nj->ni", cyl, link_twist[self._crossflow_links]
-                )
+                cyl_twist = np.einsum("nij,nj->ni", cyl, link_twist[self._crossflow_links])
                 cyl_wrench = crossflow_wrench(
                     cyl_twist, self._crossflow_length, self._crossflow_coefficient
                 )
@@ -385,9 +358,7 @@ class Vehicle:
         weight = pin.computeGeneralizedGravity(self.model, self.data, q)
         if not self.hydro.links:
             return weight
-        return weight - pin.computeGeneralizedGravity(
-            self._buoyancy_model, self._buoyancy_data, q
-        )
+        return weight - pin.computeGeneralizedGravity(self._buoyancy_model, self._buoyancy_data, q)
 
     def thrust_matrix(self, q: np.ndarray) -> np.ndarray:
         """``B(q)`` (nv x m): generalised forces of unit thrusts (the paper's eq. (20))."""

@@ -25,7 +25,14 @@ def rng() -> np.random.Generator:
     return np.random.default_rng(20261121)
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(params=["auto", "pinocchio"])
+def backend(request, monkeypatch) -> str:
+    """Run a test on the default (compiled when numba is present) and on the Pinocchio reference."""
+    monkeypatch.setenv("AIAUV_BACKEND", request.param)
+    return request.param
+
+
+@pytest.fixture
 def paper_vehicle() -> aiauv_pin.Vehicle:
     return aiauv_pin.load_vehicle()
 

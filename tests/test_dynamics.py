@@ -11,6 +11,9 @@ from conftest import random_state
 import aiauv_pin
 from aiauv_pin.robots import example_robot_urdf
 
+# every physics check runs on both backends (the compiled one and the Pinocchio reference)
+pytestmark = pytest.mark.usefixtures("backend")
+
 EXAMPLE_ROBOTS = ["ur_description/urdf/ur5_robot.urdf", "panda_description/urdf/panda.urdf"]
 
 

@@ -8,6 +8,9 @@ import pytest
 
 import aiauv_pin
 
+# every physics check runs on both backends (the compiled one and the Pinocchio reference)
+pytestmark = pytest.mark.usefixtures("backend")
+
 RHO, R, G = 1000.0, 0.085, 9.81
 LENGTHS = [0.62, 0.104, 0.584, 0.104, 0.726, 0.104, 0.584, 0.104, 0.37]
 MASS = 81.3
