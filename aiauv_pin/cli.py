@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import gc
 import math
 import os
 import sys
@@ -69,7 +70,7 @@ def _add_simulate(subparsers) -> None:
 def _run_simulate(args) -> int:
     from . import loading
     from .errors import AiauvError, SimulationDiverged
-    from .outputs import write_results
+    from .outputs import preload_plotting, write_results
     from .scenario import PaperScenario, ScenarioResult, run_paper_scenario
 
     options = {"dt": args.dt} if args.dt is not None else {}
@@ -92,7 +93,13 @@ def _run_simulate(args) -> int:
         on_log = live_view(vehicle)
     start = time.perf_counter()
     try:
-        result = run_paper_scenario(vehicle, scenario, progress=not args.quiet, on_log=on_log)
+        result = run_paper_scenario(
+            vehicle,
+            scenario,
+            progress=not args.quiet,
+            on_log=on_log,
+            after_first_chunk=preload_plotting,
+        )
     except SimulationDiverged as exc:
         cause = " ".join(str(exc).split())
         partial = exc.trajectory
@@ -222,5 +229,17 @@ def main(argv: list[str] | None = None) -> int:
         warnings.showwarning = previous
 
 
+def console_main() -> None:
+    """The ``aiauv`` console script: :func:`main`, then a quick interpreter exit.
+
+    Everything is written (atomically) before :func:`main` returns. Freezing the garbage collector's
+    generations then spares the interpreter's final collection over the many long-lived objects of
+    numba and Pinocchio, about 0.25 s of every run.
+    """
+    status = main()
+    gc.freeze()
+    sys.exit(status)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    console_main()

@@ -7,8 +7,8 @@ the last sample is always included; ``None`` writes every sample). The figures d
 the minimum and maximum of each of at most :data:`PLOT_BUCKETS` consecutive runs of samples (in
 time order), which at their size is indistinguishable from drawing every sample.
 
-Speed: importing this module registers :func:`preload_plotting` in
-:data:`aiauv_pin.scenario.BEFORE_RUN`, so matplotlib (about 0.3 s of imports) is imported in a
+Speed: pass :func:`preload_plotting` as ``after_first_chunk`` to
+:func:`aiauv_pin.scenario.run_paper_scenario` and matplotlib (about 0.3 s of imports) is imported in a
 background thread while the compiled scenario loop runs (its kernels release the GIL); no backend
 is selected until figures are written (Agg). The figures are drawn by two processes on Linux.
 """
@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_path, write_text
-from .scenario import BEFORE_RUN, ScenarioResult, summary
+from .scenario import ScenarioResult, summary
 
 _preload: threading.Thread | None = None
 
@@ -288,6 +288,3 @@ def write_results(result: ScenarioResult, out_dir: Path, extra: dict | None = No
     content = write_summary(result, out_dir / "summary.json", extra)
     write_figures(result, out_dir / "figures")
     return content
-
-
-BEFORE_RUN.append(preload_plotting)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -29,11 +30,6 @@ from .simulation import Trajectory, simulate
 from .vehicle import Vehicle
 
 CASES = ("uniform", "stabilised")
-
-#: Callables run (without arguments) once the first chunk of a compiled scenario loop has run, for
-#: work that can overlap the rest in a background thread (the loop releases the GIL); see
-#: :func:`aiauv_pin.outputs.preload_plotting`.
-BEFORE_RUN: list = []
 
 
 @dataclass(frozen=True)
@@ -156,6 +152,7 @@ def run_paper_scenario(
     on_log=None,
     controller: VehiclePathFollowing | None = None,
     compiled: bool | None = None,
+    after_first_chunk: Callable[[], None] | None = None,
 ) -> ScenarioResult:
     """Simulate the path-following scenario on a vehicle.
 
@@ -173,6 +170,9 @@ def run_paper_scenario(
         scenario: What to run.
         progress: Show a progress bar.
         on_log: Callback at every logged sample.
+        after_first_chunk: Called once the compiled loop's first chunk has run, for work that can
+            overlap the rest in a background thread (the loop releases the GIL), e.g.
+            :func:`aiauv_pin.outputs.preload_plotting`.
         controller: The controller callback; ``None`` builds the paper's for ``scenario``.
         compiled: ``True`` requires the compiled path, ``False`` forbids it, ``None`` (default)
             uses it when :func:`compiled_path_following_reason` allows.
@@ -203,12 +203,14 @@ def run_paper_scenario(
     if use_compiled:
         from .fast.path_following import run_path_following
 
-        def prepare() -> None:
-            for function in BEFORE_RUN:
-                function()
-
         trajectory = run_path_following(
-            controller, q0, v0, scenario.duration, scenario.dt, after_first_chunk=prepare, **options
+            controller,
+            q0,
+            v0,
+            scenario.duration,
+            scenario.dt,
+            after_first_chunk=after_first_chunk,
+            **options,
         )
     else:
         trajectory = simulate(
