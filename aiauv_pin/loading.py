@@ -145,6 +145,7 @@ def load_vehicle(
     added_mass: bool = True,
     damping: bool = True,
     restoring: bool = True,
+    backend: str | None = None,
 ) -> Vehicle:
     """Load an underwater vehicle from a URDF with an optional ``<hydrodynamics>`` block.
 
@@ -156,6 +157,8 @@ def load_vehicle(
         added_mass: Include added mass (and its Coriolis terms).
         damping: Include linear, quadratic and crossflow damping.
         restoring: Include weight and buoyancy.
+        backend: ``"auto"`` (compiled numba kernels when available, else Pinocchio), ``"numba"`` or
+            ``"pinocchio"`` (the reference); ``None`` takes ``AIAUV_BACKEND`` or ``"auto"``.
 
     Returns:
         The vehicle, with a free-flyer joint on the URDF's root link.
@@ -200,6 +203,7 @@ def load_vehicle(
         added_mass=added_mass,
         damping=damping,
         restoring=restoring,
+        backend=backend,
     )
     vehicle.urdf_path = source
     return vehicle
