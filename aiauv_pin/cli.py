@@ -83,6 +83,12 @@ def _run_simulate(args) -> int:
         )
     path = args.vehicle if args.vehicle is not None else loading.bundled_urdf(args.case)
     vehicle = loading.load_vehicle(path)
+    if vehicle.fallback_reason is not None:
+        print(
+            f"aiauv: warning: compiled backend unavailable ({vehicle.fallback_reason}); "
+            "using the Pinocchio reference, about 50x slower",
+            file=sys.stderr,
+        )
     gains = scenario.controller_gains.with_changes(feedforward=args.feedforward)
     scenario = dataclasses.replace(scenario, gains=gains)
     out = args.out if args.out is not None else Path("results") / args.case

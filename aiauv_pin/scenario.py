@@ -229,7 +229,7 @@ def run_paper_scenario(
         wall_time=time.perf_counter() - start,
         joint_names=vehicle.joint_names,
         thruster_names=vehicle.thruster_names,
-        extra={"compiled_controller": use_compiled},
+        extra={"backend": vehicle.active_backend, "compiled_controller": use_compiled},
     )
 
 
@@ -270,6 +270,8 @@ def summary(result: ScenarioResult) -> dict:
         "simulated_time": float(t[-1]),
         "wall_time": result.wall_time,
         "real_time_factor": float(t[-1] / result.wall_time) if result.wall_time > 0 else None,
+        "backend": result.extra.get("backend"),
+        "compiled_controller": result.extra.get("compiled_controller"),
         "final": {
             "p_y": float(p[-1, 1]),
             "p_z": float(p[-1, 2]),

@@ -226,6 +226,11 @@ class Vehicle:
         return "pinocchio" if self._fast is None else "numba"
 
     @property
+    def fallback_reason(self) -> str | None:
+        """Why ``backend="auto"`` fell back to Pinocchio (``None`` if it did not)."""
+        return self._fast_reason if self._fast is None else None
+
+    @property
     def fast(self):
         """The compiled model (:class:`aiauv_pin.fast.model.FastModel`) or ``None`` on Pinocchio."""
         return self._fast
