@@ -2,7 +2,7 @@
 
 A user's URDF goes through three gates, each ending in a one-line :class:`VehicleLoadError`:
 
-1. safe XML parsing (:func:`hydro.urdf_block.parse_robot`: no DTD, hence no entity expansion and no
+1. safe XML parsing (:func:`hydro.urdf_block.parse_robot_text`: no DTD, hence no entity expansion and no
    external entities) and the URDF structure check of :mod:`aiauv_pin.urdf_validation`;
 2. the ``<hydrodynamics>`` (and UUV Simulator) blocks (:func:`hydro.urdf_block.read_hydrodynamics`);
 3. Pinocchio's parser, with the process's standard error (file descriptor 2) redirected to a
@@ -25,7 +25,7 @@ from pathlib import Path
 import pinocchio as pin
 
 from hydro.spec import HydroError
-from hydro.urdf_block import parse_robot, read_hydrodynamics
+from hydro.urdf_block import parse_robot_text, read_hydrodynamics
 
 from .errors import VehicleLoadError
 from .urdf_validation import UrdfStructure, validate_urdf
@@ -169,14 +169,10 @@ def load_vehicle(
     """
     source = bundled_urdf("uniform") if path is None else Path(path)
     text = _read_text(source).removeprefix("\ufeff")
-    if not text.lstrip().startswith("<"):
-        # never hand such text on: hydro.urdf_block.parse_robot would take it for a file name
-        raise VehicleLoadError(f"{source}: is not well-formed XML (it does not start with '<')")
     try:
-        root = parse_robot(text)
+        root = parse_robot_text(text, str(source))
     except HydroError as exc:
-        message = str(exc).replace("URDF text ", "", 1)
-        raise VehicleLoadError(f"{source}: {message}") from None
+        raise VehicleLoadError(str(exc)) from None
     try:
         structure = validate_urdf(root)
     except VehicleLoadError as exc:
@@ -188,7 +184,7 @@ def load_vehicle(
                 f"(expected one of {', '.join(SUPPORTED_JOINT_TYPES)})"
             )
     try:
-        hydro = read_hydrodynamics(text)
+        hydro = read_hydrodynamics(root)
     except HydroError as exc:
         raise VehicleLoadError(f"{source}: {exc}") from None
     model = _build_model(text, source)

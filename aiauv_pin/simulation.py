@@ -238,16 +238,17 @@ def simulate(
 
     fast = vehicle.fast if (servo is None or isinstance(servo, JointServo)) else None
 
-    def advance(tau: np.ndarray, n: int, k: int) -> int:
-        """Take ``n`` steps from step ``k``; returns how many stayed finite."""
+    def advance(tau: np.ndarray, n: int) -> int:
+        """Take ``n`` steps with ``tau`` held; returns how many stayed finite."""
         nonlocal q, v
         if fast is not None:
             packed = servo.packed() if servo is not None else None
             tau_c = np.ascontiguousarray(tau, dtype=float)
             return fast.run(q, v, tau_c, dt, n, method=method, current=current, servo=packed)
+        dynamics = dynamics_with(tau)
         for i in range(n):
             try:
-                q_new, v_new = step(model, dynamics_with(tau), q, v, dt)
+                q_new, v_new = step(model, dynamics, q, v, dt)
             except np.linalg.LinAlgError:
                 return i
             if not (np.all(np.isfinite(q_new)) and np.all(np.isfinite(v_new))):
@@ -280,16 +281,10 @@ def simulate(
                 log_every - k % log_every,
                 n_steps - k,
             )
-            done = advance(tau, n, k)
+            done = advance(tau, n)
             if done < n:
-                t_bad = (k + done + 1) * dt
                 trajectory = _trajectory(t_log, q_log, v_log, tau_log, info_log, logged)
-                trajectory.status = "diverged"
-                trajectory.message = (
-                    f"state became non-finite at t = {t_bad:.6g} s (step {k + done + 1}); "
-                    f"try a smaller step than dt = {dt:g} s"
-                )
-                raise SimulationDiverged(trajectory.message, t_bad, trajectory)
+                raise diverged(trajectory, k + done + 1, dt)
             k += n
             if bar is not None:
                 bar.update(n)
@@ -297,6 +292,17 @@ def simulate(
         if bar is not None:
             bar.close()
     return _trajectory(t_log, q_log, v_log, tau_log, info_log, logged)
+
+
+def diverged(trajectory: Trajectory, step: int, dt: float) -> SimulationDiverged:
+    """Mark ``trajectory`` (the part computed so far) as diverged at ``step``; the error to raise."""
+    t_bad = step * dt
+    trajectory.status = "diverged"
+    trajectory.message = (
+        f"state became non-finite at t = {t_bad:.6g} s (step {step}); "
+        f"try a smaller step than dt = {dt:g} s"
+    )
+    return SimulationDiverged(trajectory.message, t_bad, trajectory)
 
 
 def _trajectory(t, q, v, tau, info, n) -> Trajectory:

@@ -148,10 +148,11 @@ class Vehicle:
         ).reshape(-1, 6, 6)
         self._crossflow_length = np.array([c.length for _, c in crossflow])
         self._crossflow_coefficient = np.array([c.strip_coefficient for _, c in crossflow])
-        # total generalised inertia per Pinocchio joint body (rigid + added), for momentum
+        # generalised inertia per Pinocchio joint body (rigid, plus added if on), for the momentum
         self._inertia_in_joint = np.array([inertia.matrix() for inertia in self.model.inertias])
-        for b, joint in enumerate(bodies):
-            self._inertia_in_joint[joint] += added[b]
+        if self.added_mass:
+            for b, joint in enumerate(bodies):
+                self._inertia_in_joint[joint] += added[b]
 
     def _setup_buoyancy(self) -> None:
         # Buoyancy as the weight of a "negative-mass" copy of the vehicle: each Pinocchio body gets
@@ -266,6 +267,16 @@ class Vehicle:
         return pin.neutral(self.model)
 
     # ------------------------------------------------------------------ dynamics
+    def _added_mass_matrix(self, jac: np.ndarray) -> np.ndarray:
+        """``sum_i J_i^T M_A,i J_i`` from the bodies' local Jacobians (n, 6, nv)."""
+        return np.sum(jac.transpose(0, 2, 1) @ (self._added_mass_in_body @ jac), axis=0)
+
+    def _body_jacobians(self) -> np.ndarray:
+        """Local Jacobians of the hydrodynamic bodies, after ``computeJointJacobians``."""
+        return np.array(
+            [pin.getJointJacobian(self.model, self.data, j, _LOCAL) for j in self._bodies]
+        )
+
     def _hydro_terms(
         self, q: np.ndarray, v: np.ndarray, current: np.ndarray | None
     ) -> tuple[np.ndarray, np.ndarray]:
@@ -279,7 +290,7 @@ class Vehicle:
         if not self._bodies or not (self.added_mass or self.damping):
             return mass, bias
         bodies = self._bodies
-        jac = np.array([pin.getJointJacobian(model, data, j, _LOCAL) for j in bodies])
+        jac = self._body_jacobians()
         twist = np.array([data.v[j].vector for j in bodies])
         if current is not None:
             current_in_body = np.array([data.oMi[j].rotation.T @ current for j in bodies])
@@ -296,7 +307,7 @@ class Vehicle:
                 # d/dt of the current seen in a rotating frame: nu_r_dot = nu_dot + (omega x v_c, 0)
                 accel[:, :3] += cross(twist[:, 3:], current_in_body)
             wrench += np.einsum("nij,nj->ni", added, accel) + coriolis_wrench(added, relative)
-            mass += np.sum(jac.transpose(0, 2, 1) @ (added @ jac), axis=0)
+            mass += self._added_mass_matrix(jac)
         if self.damping and self.hydro.links:
             link_twist = np.einsum("nij,nj->ni", self._link_from_body, relative[self._body_of_link])
             link_wrench = linear_quadratic_wrench(
@@ -347,7 +358,12 @@ class Vehicle:
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """``M(q) = M_RB(q) + sum_i J_i^T M_A,i J_i`` (nv x nv), symmetric positive definite."""
-        return self._hydro_terms(q, self._zero_v, None)[0]
+        mass = pin.crba(self.model, self.data, q)
+        mass = np.triu(mass) + np.triu(mass, 1).T  # CRBA fills the upper triangle
+        if self.added_mass and self._bodies:
+            pin.computeJointJacobians(self.model, self.data, q)
+            mass += self._added_mass_matrix(self._body_jacobians())
+        return mass
 
     def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """Kinetic energy of body and fluid, ``v^T M(q) v / 2`` [J] (water at rest)."""
@@ -389,8 +405,6 @@ class Vehicle:
         pin.forwardKinematics(self.model, self.data, q, v)
         joints = range(1, self.model.njoints)
         inertia = self._inertia_in_joint[1:]
-        if not self.added_mass:
-            inertia = np.array([self.model.inertias[j].matrix() for j in joints])
         twist = np.array([self.data.v[j].vector for j in joints])
         rotation = np.array([self.data.oMi[j].rotation for j in joints])
         translation = np.array([self.data.oMi[j].translation for j in joints])

@@ -309,10 +309,17 @@ def reduced_attitude_errors(R, omega, x_ref, x_ref_dot) -> tuple[float, np.ndarr
     omega = _vector(omega, 3, "omega")
     x_ref = _unit_vector(x_ref, "x_ref")
     x_ref_dot = _vector(x_ref_dot, 3, "x_ref_dot")
-    y = R.T @ x_ref
-    omega_ref_b = R.T @ _cross(x_ref, x_ref_dot)  # eq. (3)
-    omega_tilde = (omega - _minimal_rotation(y) @ omega_ref_b)[1:]  # eq. (8), H^T v = v[1:]
+    y, _, _, omega_tilde = _tracking_terms(R, omega, x_ref, x_ref_dot)
     return _error_angle(y), omega_tilde
+
+
+def _tracking_terms(R, omega, x_ref, x_ref_dot):
+    """``(y, R_tilde, omega_ref^b, omega_tilde)`` of eqs. (3), (5) and (8), from checked inputs."""
+    y = R.T @ x_ref
+    R_tilde = _minimal_rotation(y)
+    omega_ref_b = R.T @ _cross(x_ref, x_ref_dot)  # eq. (3)
+    omega_tilde = (omega - R_tilde @ omega_ref_b)[1:]  # eq. (8), H^T v = v[1:]
+    return y, R_tilde, omega_ref_b, omega_tilde
 
 
 class ReducedAttitudeOutput(NamedTuple):
@@ -374,10 +381,7 @@ class ReducedAttitudeLaw:
         x_ref_dot = _vector(x_ref_dot, 3, "x_ref_dot")
         x_ref_ddot = _vector(x_ref_ddot, 3, "x_ref_ddot")
 
-        y = R.T @ x_ref
-        R_tilde = _minimal_rotation(y)
-        omega_ref_b = R.T @ _cross(x_ref, x_ref_dot)  # eq. (3)
-        omega_tilde = (omega - R_tilde @ omega_ref_b)[1:]  # eq. (8), H^T v = v[1:]
+        y, R_tilde, omega_ref_b, omega_tilde = _tracking_terms(R, omega, x_ref, x_ref_dot)
         # Reference angular acceleration rotated into the tangent plane at e1 (eq. 9, finding 1).
         acceleration = R_tilde @ (R.T @ _cross(x_ref, x_ref_ddot))
         if self.feedforward == "exact":

@@ -73,11 +73,12 @@ def _one_line(text: str) -> str:
     return " ".join(str(text).split())
 
 
-def parse_robot(source: str | os.PathLike) -> Element:
+def parse_robot(source: str | os.PathLike | Element) -> Element:
     """Parse URDF text or a URDF file safely and return its ``<robot>`` element.
 
     Args:
-        source: A path, or the XML text itself (a string whose first non-blank character is ``<``).
+        source: A path, the XML text itself (a string whose first non-blank character is ``<``),
+            or an already parsed ``<robot>`` element (returned as is).
 
     Returns:
         The root ``<robot>`` element.
@@ -86,17 +87,30 @@ def parse_robot(source: str | os.PathLike) -> Element:
         HydroError: Unreadable file, not XML, XML with a DTD or entities, or a root that is not
             ``<robot>``.
     """
+    if isinstance(source, Element):
+        return source
     if isinstance(source, bytes):
         source = source.decode("utf-8", errors="replace")
     if isinstance(source, str) and source.lstrip().startswith("<"):
-        text, where = source, "URDF text"
-    else:
-        path = Path(source)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as error:
-            raise HydroError(f"cannot read URDF file {path}: {_one_line(error)}") from None
-        where = str(path)
+        return parse_robot_text(source)
+    path = Path(source)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        raise HydroError(f"cannot read URDF file {path}: {_one_line(error)}") from None
+    return parse_robot_text(text, str(path))
+
+
+def parse_robot_text(text: str, where: str = "URDF text") -> Element:
+    """Parse URDF text (never a file name) safely and return its ``<robot>`` element.
+
+    Args:
+        text: The XML text.
+        where: How error messages name the source.
+
+    Raises:
+        HydroError: Not XML, XML with a DTD or entities, or a root that is not ``<robot>``.
+    """
     try:
         root = SafeElementTree.fromstring(text, forbid_dtd=True)
     except defusedxml.DefusedXmlException:
@@ -316,11 +330,11 @@ def robot_links(root: Element) -> dict[str, UrdfLink]:
     return links
 
 
-def link_cylinders(source: str | os.PathLike) -> dict[str, CylinderGeometry]:
+def link_cylinders(source: str | os.PathLike | Element) -> dict[str, CylinderGeometry]:
     """Cylinder frames of the links that have a collision or visual cylinder.
 
     Args:
-        source: URDF path or text.
+        source: URDF path, text or parsed ``<robot>`` element.
 
     Returns:
         ``{link name: CylinderGeometry}``.
@@ -473,11 +487,11 @@ def _hydrodynamics_block(root: Element) -> Element | None:
     return blocks[0] if blocks else None
 
 
-def read_hydrodynamics(source: str | os.PathLike) -> HydroSpec:
+def read_hydrodynamics(source: str | os.PathLike | Element) -> HydroSpec:
     """Read a URDF's ``<hydrodynamics>`` block (and any UUV Simulator blocks).
 
     Args:
-        source: URDF path or text.
+        source: URDF path, text or parsed ``<robot>`` element (see :func:`parse_robot`).
 
     Returns:
         The vehicle's hydrodynamic parameters; ``HydroSpec()`` without links if the file has neither

@@ -343,11 +343,11 @@ def uuv_links(
     return result
 
 
-def read_uuv_simulator(source: str | os.PathLike) -> HydroSpec:
+def read_uuv_simulator(source: str | os.PathLike | Element) -> HydroSpec:
     """Read only the UUV Simulator blocks of a URDF.
 
     Args:
-        source: URDF path or text.
+        source: URDF path, text or parsed ``<robot>`` element.
 
     Returns:
         The converted parameters, with the plugins' fluid density (1028 if absent) and gravity 9.81.

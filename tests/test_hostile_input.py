@@ -111,6 +111,13 @@ def test_not_a_urdf(tmp_path, capfd, text, fragments):
     check_file(tmp_path, capfd, text, *fragments)
 
 
+def test_file_whose_text_is_a_path_is_not_followed(tmp_path, capfd):
+    """The content of a URDF file is XML or an error: never the name of another file to read."""
+    other = tmp_path / "other.urdf"
+    other.write_text(vehicle_urdf())
+    check_file(tmp_path, capfd, str(other), "not well-formed XML")
+
+
 def test_joint_naming_a_missing_link(tmp_path, capfd):
     check_file(tmp_path, capfd, vehicle_urdf(child="ghost"), "joint 'j'", "'ghost'")
 

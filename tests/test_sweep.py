@@ -52,8 +52,7 @@ def _spec(tmp_path: Path, text: str = SWEEP) -> Path:
 
 
 def test_grid_times_random_uses_the_same_draws_on_every_grid_point():
-    spec = sweep_spec_from_toml(
-        """
+    spec_text = """
         case = "stabilised"
         duration = 10
         [grid]
@@ -65,8 +64,7 @@ def test_grid_times_random_uses_the_same_draws_on_every_grid_point():
         "current.y" = { uniform = [-0.2, 0.2] }
         feedforward = { choice = ["exact", "paper"] }
         """
-    )
-    points = spec.points()
+    points = sweep_spec_from_toml(spec_text).points()
     assert len(points) == 2 * 3 * 4
     assert {p.parameters["initial_offset.y"] for p in points} == {1.0, 2.0, 3.0}
     assert all(p.parameters["k_d"] == 12.0 for p in points)  # the stabilised case's k_D
@@ -77,20 +75,7 @@ def test_grid_times_random_uses_the_same_draws_on_every_grid_point():
         draws.setdefault(p.sample, set()).add(draw)
     assert sorted(draws) == [0, 1, 2, 3]
     assert all(len(d) == 1 for d in draws.values())  # common random numbers across the grid
-    more = sweep_spec_from_toml(
-        """
-        case = "stabilised"
-        duration = 10
-        [grid]
-        k_p = [1.0, 2.0]
-        "initial_offset.y" = { linspace = [1.0, 3.0, 3] }
-        [random]
-        samples = 6
-        seed = 7
-        "current.y" = { uniform = [-0.2, 0.2] }
-        feedforward = { choice = ["exact", "paper"] }
-        """
-    ).points()
+    more = sweep_spec_from_toml(spec_text.replace("samples = 4", "samples = 6")).points()
     assert {p.run_id for p in points} < {p.run_id for p in more}  # more samples keep the first ones
 
 

@@ -102,20 +102,20 @@ class FastModel:
                 inertia[joint - 1, 1] = vehicle._added_mass_in_body[k]
         inertia[:, 0] = inertia[:, 2] + inertia[:, 1]
         if vehicle.restoring:
-            rho = vehicle.hydro.fluid_density
-            for link in vehicle.hydro.links:
-                if link.volume == 0.0:
-                    continue
-                joint, placement = vehicle._link_placement(link.link)
-                buoyancy = rho * link.volume * gravity  # Fossen 2021, eq. (4.6)
-                restore[joint - 1, 0] += buoyancy
-                restore[joint - 1, 1:] += buoyancy * placement.act(link.center_of_buoyancy)
+            # the displaced mass rho V of each body at its centre of buoyancy, as the vehicle's
+            # buoyancy model holds it (Fossen 2021, eq. (4.6))
+            for j in range(1, model.njoints):
+                displaced = vehicle._buoyancy_model.inertias[j]
+                buoyancy = displaced.mass * gravity
+                restore[j - 1, 0] += buoyancy
+                restore[j - 1, 1:] += buoyancy * displaced.lever
         links = vehicle.hydro.links if vehicle.damping else ()
         nl = len(links)
         link_i = np.zeros((nl, 5), dtype=np.int64)
         link_m = np.zeros((nl, 4, 6, 6))
         link_f = np.zeros((nl, 2))
         crossflow_index = {int(k): n for n, k in enumerate(vehicle._crossflow_links)}
+        identity = np.eye(6)
         for k in range(nl):
             link_i[k, 0] = vehicle._bodies[vehicle._body_of_link[k]] - 1
             link_m[k, 0] = vehicle._link_from_body[k]
@@ -127,7 +127,6 @@ class FastModel:
                 link_m[k, 3] = vehicle._cylinder_from_link[n]
                 link_f[k] = (vehicle._crossflow_length[n], vehicle._crossflow_coefficient[n])
             # shortcuts that leave the arithmetic exact: identity transforms, diagonal D_Q
-            identity = np.eye(6)
             link_i[k, 2] = int(np.array_equal(link_m[k, 0], identity))
             link_i[k, 3] = int(np.array_equal(link_m[k, 3], identity))
             link_i[k, 4] = int(np.count_nonzero(link_m[k, 2] - np.diag(np.diag(link_m[k, 2]))) == 0)

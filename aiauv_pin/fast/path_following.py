@@ -723,8 +723,7 @@ def run_path_following(
     Raises:
         SimulationDiverged: As :func:`aiauv_pin.simulate`.
     """
-    from ..errors import SimulationDiverged
-    from ..simulation import Trajectory, check_run_arguments
+    from ..simulation import Trajectory, check_run_arguments, diverged
 
     n_steps, steps_per_control = check_run_arguments(
         duration, dt, method, log_every, control_period
@@ -815,11 +814,5 @@ def run_path_following(
         info=compiled.unpack(rows[:, 1 + nq + 2 * nv :]),
     )
     if diverged_at is not None:
-        t_bad = (diverged_at + 1) * dt
-        trajectory.status = "diverged"
-        trajectory.message = (
-            f"state became non-finite at t = {t_bad:.6g} s (step {diverged_at + 1}); "
-            f"try a smaller step than dt = {dt:g} s"
-        )
-        raise SimulationDiverged(trajectory.message, t_bad, trajectory)
+        raise diverged(trajectory, diverged_at + 1, dt)
     return trajectory
