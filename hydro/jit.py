@@ -1,0 +1,127 @@
+"""Compilation of the project's laws with numba, and the interpreted fallback without it.
+
+Every control law and fluid term of the project is written once, as a plain Python function on
+scalars and NumPy arrays, and decorated with :func:`compiled`:
+
+* with numba installed, the decorator returns a numba dispatcher (``nopython`` mode, cached on
+  disk, GIL released); the compiled simulation loop calls it from compiled code and the Python API
+  calls it from Python. Its original Python function stays reachable as ``.py_func`` (tests run
+  both and compare);
+* without numba (or with ``NUMBA_DISABLE_JIT=1``) the decorator returns the function unchanged, so
+  the same code runs interpreted.
+
+The on-disk cache is keyed on content. numba's own cache keys each compiled function on its own
+source file only, so a compiled loop that inlines a law from another file would keep serving stale
+machine code after that file changed. :class:`ProjectCacheLocator` replaces the source stamp of
+every function defined in this project's packages by one hash of all their ``.py`` files (read
+once per process), so any edit anywhere in ``hydro``, ``control`` or ``aiauv_pin`` recompiles
+everything that depends on it, and no manual cache flush is ever needed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from collections.abc import Callable
+from functools import lru_cache
+from pathlib import Path
+from typing import TypeVar
+
+F = TypeVar("F", bound=Callable)
+
+#: The packages whose compiled functions share one content-keyed cache stamp.
+PROJECT_PACKAGES = ("hydro", "control", "aiauv_pin")
+
+_ROOT = Path(__file__).resolve().parent.parent
+
+try:  # pragma: no cover - exercised by the no-numba test in a subprocess
+    import numba
+    from numba.core import caching as _caching
+except ImportError:  # numba missing: laws run interpreted
+    numba = None
+    _caching = None
+
+#: True when laws are compiled (numba importable and not disabled by ``NUMBA_DISABLE_JIT``).
+NUMBA_AVAILABLE = numba is not None and os.environ.get("NUMBA_DISABLE_JIT", "0") in ("", "0")
+
+
+def _project_files() -> list[Path]:
+    files: list[Path] = []
+    for package in PROJECT_PACKAGES:
+        folder = _ROOT / package
+        if folder.is_dir():
+            files.extend(sorted(folder.rglob("*.py")))
+    return files
+
+
+@lru_cache(maxsize=1)
+def source_hash() -> str:
+    """SHA-256 over the content of every ``.py`` file of the project's packages (hex digest)."""
+    digest = hashlib.sha256()
+    for path in _project_files():
+        digest.update(str(path.relative_to(_ROOT)).encode())
+        digest.update(b"\0")
+        digest.update(path.read_bytes())
+        digest.update(b"\0")
+    return digest.hexdigest()
+
+
+def _in_project(py_file: str) -> bool:
+    try:
+        relative = Path(py_file).resolve().relative_to(_ROOT)
+    except ValueError:
+        return False
+    return relative.parts[:1] in tuple((p,) for p in PROJECT_PACKAGES)
+
+
+if _caching is not None:
+
+    class _ProjectStampMixin:
+        """Source stamp = hash of the whole project's sources (see the module docstring)."""
+
+        def get_source_stamp(self):
+            return source_hash()
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if not _in_project(py_file):
+                return None
+            return super().from_function(py_func, py_file)
+
+    class ProjectCacheLocator(_ProjectStampMixin, _caching.InTreeCacheLocator):
+        """Cache next to the sources (``__pycache__``), keyed on the project's content."""
+
+    class ProjectUserWideCacheLocator(_ProjectStampMixin, _caching.UserWideCacheLocator):
+        """Cache in the user's cache folder when the source tree is read-only."""
+
+    _locators = _caching._CacheImpl._locator_classes
+    for _locator in (ProjectUserWideCacheLocator, ProjectCacheLocator):
+        if _locator not in _locators:
+            _locators.insert(0, _locator)
+
+
+def compiled(function: F | None = None, *, fastmath: bool = False) -> F:
+    """Compile ``function`` with numba (``nopython``, cached, ``nogil``), or return it unchanged.
+
+    Args:
+        function: A function on scalars, NumPy arrays, tuples and named tuples.
+        fastmath: Allow reassociation and FMA contraction (never NaN/infinity assumptions, so the
+            divergence checks still see non-finite states). Laws whose branches must take exactly
+            the decisions of their interpreted execution (saturations, anti-windup) keep the
+            default ``False``.
+    """
+
+    def wrap(fn: F) -> F:
+        if not NUMBA_AVAILABLE:
+            return fn
+        options = dict(cache=True, nogil=True, error_model="numpy")
+        if fastmath:
+            options["fastmath"] = {"reassoc", "contract", "arcp", "nsz"}
+        return numba.njit(**options)(fn)
+
+    return wrap if function is None else wrap(function)
+
+
+def interpreted(function: Callable) -> Callable:
+    """The plain Python function behind a :func:`compiled` law (itself if it was not compiled)."""
+    return getattr(function, "py_func", function)
