@@ -74,6 +74,11 @@ def _in_project(py_file: str) -> bool:
     return relative.parts[:1] in tuple((p,) for p in PROJECT_PACKAGES)
 
 
+def _numba_name(name: str):
+    """A numba caching class by its public name (numba >= 0.61) or its older private one."""
+    return getattr(_caching, name, None) or getattr(_caching, "_" + name)
+
+
 if _caching is not None:
 
     class _ProjectStampMixin:
@@ -88,14 +93,14 @@ if _caching is not None:
                 return None
             return super().from_function(py_func, py_file)
 
-    class ProjectCacheLocator(_ProjectStampMixin, _caching.InTreeCacheLocator):
+    class ProjectCacheLocator(_ProjectStampMixin, _numba_name("InTreeCacheLocator")):
         """Cache next to the sources (``__pycache__``), keyed on the project's content."""
 
-    class ProjectUserWideCacheLocator(_ProjectStampMixin, _caching.UserWideCacheLocator):
+    class ProjectUserWideCacheLocator(_ProjectStampMixin, _numba_name("UserWideCacheLocator")):
         """Cache in the user's cache folder when the source tree is read-only."""
 
-    _locators = _caching._CacheImpl._locator_classes
-    for _locator in (ProjectUserWideCacheLocator, ProjectCacheLocator):
+    _locators = _numba_name("CacheImpl")._locator_classes
+    for _locator in (ProjectUserWideCacheLocator, ProjectCacheLocator):  # in-tree first
         if _locator not in _locators:
             _locators.insert(0, _locator)
 
