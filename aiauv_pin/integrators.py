@@ -22,7 +22,8 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
-Dynamics = Callable[[np.ndarray, np.ndarray], np.ndarray]
+#: ``f(q, v) -> dv``, or ``f(q, v, t) -> dv`` when the step is given its start time ``t``.
+Dynamics = Callable[..., np.ndarray]
 
 _ARG1 = pin.ArgumentPosition.ARG1
 
@@ -33,41 +34,58 @@ def _tangent_rate(model: pin.Model, q0: np.ndarray, xi: np.ndarray, v: np.ndarra
     return np.linalg.solve(jacobian, v)
 
 
+def _timed(
+    dynamics: Dynamics, t: float | None
+) -> Callable[[np.ndarray, np.ndarray, float], np.ndarray]:
+    if t is None:
+        return lambda q, v, _t: dynamics(q, v)
+    return dynamics
+
+
 def rk4_step(
-    model: pin.Model, dynamics: Dynamics, q: np.ndarray, v: np.ndarray, dt: float
+    model: pin.Model,
+    dynamics: Dynamics,
+    q: np.ndarray,
+    v: np.ndarray,
+    dt: float,
+    t: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """One Runge-Kutta-Munthe-Kaas step of order 4.
 
     Args:
         model: Pinocchio model (defines the configuration group).
-        dynamics: ``f(q, v) -> dv``.
+        dynamics: ``f(q, v) -> dv``, or ``f(q, v, t) -> dv`` when ``t`` is given.
         q: Configuration at the step's start (nq,).
         v: Velocity at the step's start (nv,).
         dt: Step [s].
+        t: Time at the step's start [s]; the stages are then evaluated at ``t``, ``t + dt/2``
+            (twice) and ``t + dt``.
 
     Returns:
         ``(q, v)`` at the step's end.
     """
     half = 0.5 * dt
-    a1 = dynamics(q, v)
+    t0 = 0.0 if t is None else t
+    dynamics = _timed(dynamics, t)
+    a1 = dynamics(q, v, t0)
     k1 = v  # xi = 0: the Jacobian is the identity
 
     xi = half * k1
     q2 = pin.integrate(model, q, xi)
     v2 = v + half * a1
-    a2 = dynamics(q2, v2)
+    a2 = dynamics(q2, v2, t0 + half)
     k2 = _tangent_rate(model, q, xi, v2)
 
     xi = half * k2
     q3 = pin.integrate(model, q, xi)
     v3 = v + half * a2
-    a3 = dynamics(q3, v3)
+    a3 = dynamics(q3, v3, t0 + half)
     k3 = _tangent_rate(model, q, xi, v3)
 
     xi = dt * k3
     q4 = pin.integrate(model, q, xi)
     v4 = v + dt * a3
-    a4 = dynamics(q4, v4)
+    a4 = dynamics(q4, v4, t0 + dt)
     k4 = _tangent_rate(model, q, xi, v4)
 
     sixth = dt / 6.0
@@ -77,10 +95,15 @@ def rk4_step(
 
 
 def semi_implicit_euler_step(
-    model: pin.Model, dynamics: Dynamics, q: np.ndarray, v: np.ndarray, dt: float
+    model: pin.Model,
+    dynamics: Dynamics,
+    q: np.ndarray,
+    v: np.ndarray,
+    dt: float,
+    t: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """One semi-implicit (symplectic) Euler step: ``v += dt f(q, v)``, then ``q = q * exp(dt v)``."""
-    v_next = v + dt * dynamics(q, v)
+    v_next = v + dt * _timed(dynamics, t)(q, v, 0.0 if t is None else t)
     return pin.integrate(model, q, dt * v_next), v_next
 
 

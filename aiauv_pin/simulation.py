@@ -14,6 +14,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hydro.currents import as_current
+
+from .disturbances import Disturbance
 from .errors import SimulationDiverged
 from .integrators import INTEGRATORS
 from .vehicle import Vehicle
@@ -81,15 +84,20 @@ class JointServo:
             tau[6:] += vehicle.restoring_forces(q)[6:]
         return tau
 
-    def packed(self) -> np.ndarray:
-        """The (5, n) array the kernels read: ``k_p``, ``k_d``, ``q*``, then the two switches."""
-        n = self.references.size
-        packed = np.zeros((5, n))
-        packed[0], packed[1], packed[2] = self.stiffness, self.damping, self.references
-        if n:
-            packed[3, 0] = 1.0
-            packed[4, 0] = 1.0 if self.compensate_restoring else 0.0
-        return packed
+    def packed(self):
+        """The :class:`aiauv_pin.fast.records.Servo` record the kernels read.
+
+        It shares the ``references`` buffer, so updates made in place reach the kernels.
+        """
+        from .fast.records import Servo
+
+        return Servo(
+            self.stiffness,
+            self.damping,
+            self.references,
+            self.references.size > 0,
+            bool(self.compensate_restoring),
+        )
 
 
 @dataclass
@@ -159,7 +167,8 @@ def simulate(
     controller: Controller | None = None,
     *,
     method: str = "rk4",
-    current: np.ndarray | None = None,
+    current=None,
+    disturbance=None,
     servo: Servo | JointServo | None = None,
     log_every: int = 1,
     progress: bool = False,
@@ -180,7 +189,12 @@ def simulate(
         dt: Step [s] (> 0).
         controller: ``controller(t, q, v) -> tau | (tau, info)``; ``None`` applies no input.
         method: ``"rk4"`` (Runge-Kutta-Munthe-Kaas, order 4) or ``"euler"`` (semi-implicit, order 1).
-        current: Constant water velocity in the world frame (3,) [m/s].
+        current: Water velocity: ``None`` (still water), a constant world velocity (3,) [m/s], or a
+            :class:`hydro.currents.Current` (time- and space-varying, compiled), sampled at every
+            body at every integrator stage.
+        disturbance: External generalised force (nv,) [N, N m] at every integrator stage: a
+            :class:`aiauv_pin.disturbances.Disturbance` (compiled, runs inside the compiled loop) or
+            a Python callable ``fn(t, q, v) -> (nv,)`` (Python speed).
         servo: ``servo(q, v) -> tau`` or a :class:`JointServo`, added to the controller's output at
             every integrator stage.
         log_every: Log every this many steps (the final state is always logged).
@@ -206,7 +220,13 @@ def simulate(
     v = np.array(v0, dtype=float)
     if q.shape != (model.nq,) or v.shape != (model.nv,):
         raise ValueError(f"q0 must have {model.nq} and v0 {model.nv} entries")
-    current = None if current is None else np.asarray(current, dtype=float).reshape(3)
+    current = as_current(current)
+    compiled_disturbance = disturbance if isinstance(disturbance, Disturbance) else None
+    python_disturbance = None
+    if disturbance is not None and compiled_disturbance is None:
+        if not callable(disturbance):
+            raise ValueError("disturbance must be a Disturbance or a callable fn(t, q, v) -> (nv,)")
+        python_disturbance = disturbance
     log_every = int(log_every)
     n_logs = n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
 
@@ -232,23 +252,43 @@ def simulate(
     )
 
     def dynamics_with(tau: np.ndarray):
-        if servo_function is None:
-            return lambda qq, vv: vehicle.acceleration(qq, vv, tau, current)
-        return lambda qq, vv: vehicle.acceleration(qq, vv, tau + servo_function(qq, vv), current)
+        def dynamics(qq, vv, tt):
+            total = tau
+            if servo_function is not None:
+                total = total + servo_function(qq, vv)
+            if python_disturbance is not None:
+                total = total + _generalized(python_disturbance(tt, qq, vv), model.nv)
+            elif compiled_disturbance is not None:
+                total = total + compiled_disturbance.generalized_force(tt, qq, vv)
+            return vehicle.acceleration(qq, vv, total, current, t=tt)
 
-    fast = vehicle.fast if (servo is None or isinstance(servo, JointServo)) else None
+        return dynamics
 
-    def advance(tau: np.ndarray, n: int) -> int:
-        """Take ``n`` steps with ``tau`` held; returns how many stayed finite."""
+    compiled_ok = (servo is None or isinstance(servo, JointServo)) and python_disturbance is None
+    fast = vehicle.fast if compiled_ok else None
+
+    def advance(tau: np.ndarray, n: int, t0: float) -> int:
+        """Take ``n`` steps from ``t0`` with ``tau`` held; returns how many stayed finite."""
         nonlocal q, v
         if fast is not None:
             packed = servo.packed() if servo is not None else None
             tau_c = np.ascontiguousarray(tau, dtype=float)
-            return fast.run(q, v, tau_c, dt, n, method=method, current=current, servo=packed)
+            return fast.run(
+                q,
+                v,
+                tau_c,
+                dt,
+                n,
+                method=method,
+                current=current,
+                servo=packed,
+                t0=t0,
+                disturbance=compiled_disturbance,
+            )
         dynamics = dynamics_with(tau)
         for i in range(n):
             try:
-                q_new, v_new = step(model, dynamics, q, v, dt)
+                q_new, v_new = step(model, dynamics, q, v, dt, t0 + i * dt)
             except np.linalg.LinAlgError:
                 return i
             if not (np.all(np.isfinite(q_new)) and np.all(np.isfinite(v_new))):
@@ -281,7 +321,7 @@ def simulate(
                 log_every - k % log_every,
                 n_steps - k,
             )
-            done = advance(tau, n)
+            done = advance(tau, n, t)
             if done < n:
                 trajectory = _trajectory(t_log, q_log, v_log, tau_log, info_log, logged)
                 raise diverged(trajectory, k + done + 1, dt)
@@ -292,6 +332,15 @@ def simulate(
         if bar is not None:
             bar.close()
     return _trajectory(t_log, q_log, v_log, tau_log, info_log, logged)
+
+
+def _generalized(value, nv: int) -> np.ndarray:
+    force = np.asarray(value, dtype=float)
+    if force.shape != (nv,):
+        raise ValueError(
+            f"disturbance must return a generalised force of shape ({nv},), got {force.shape}"
+        )
+    return force
 
 
 def diverged(trajectory: Trajectory, step: int, dt: float) -> SimulationDiverged:

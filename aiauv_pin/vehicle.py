@@ -34,11 +34,14 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from hydro.crossflow import crossflow_wrench
-from hydro.damping import linear_quadratic_wrench
-from hydro.kirchhoff import coriolis_wrench, cross, momentum_in_world
+from hydro.crossflow import gauss_legendre_unit
+from hydro.currents import Current, as_current
+from hydro.kirchhoff import momentum_in_world
+from hydro.laws import CROSSFLOW_NODES, FluidModel, add_body_fluid_bias, hydrostatic_wrench
 from hydro.spatial import motion_transform
 from hydro.spec import HydroSpec
+
+from .fast.records import Model, Thrusters, rigid_bodies, unsupported_reason
 
 _LOCAL = pin.ReferenceFrame.LOCAL
 
@@ -100,10 +103,10 @@ class Vehicle:
             np.array([0.0, 0.0, -hydro.gravity if restoring else 0.0]), np.zeros(3)
         )
         self.data = model.createData()
-        self._zero_v = np.zeros(model.nv)
-        self._setup_links()
-        self._setup_buoyancy()
+        self._packed: Model | None = None
+        self._setup_fluid()
         self._setup_thrusters()
+        self._scratch = (np.zeros((model.njoints - 1, 6)), np.zeros((3, 6)))
         self._fast = None
         self._fast_reason: str | None = None
         self.backend = os.environ.get("AIAUV_BACKEND", "auto") if backend is None else backend
@@ -116,47 +119,105 @@ class Vehicle:
         frame = self.model.frames[frame_id]
         return int(frame.parentJoint), frame.placement
 
-    def _setup_links(self) -> None:
-        links = self.hydro.links
-        bodies: list[int] = []
-        body_of_link = []
-        link_from_body = []
-        for link in links:
-            joint, placement = self._link_placement(link.link)
-            if joint not in bodies:
-                bodies.append(joint)
-            body_of_link.append(bodies.index(joint))
-            # nu_link = X nu_joint with X the motion transform to the link frame
-            link_from_body.append(motion_transform(placement.rotation, placement.translation))
-        self._bodies = bodies
-        self._body_of_link = np.array(body_of_link, dtype=int)
-        self._link_from_body = np.array(link_from_body) if links else np.zeros((0, 6, 6))
-        n_bodies = len(bodies)
-        added = np.zeros((n_bodies, 6, 6))
-        for k, link in enumerate(links):
-            x = self._link_from_body[k]
-            added[self._body_of_link[k]] += x.T @ link.added_mass @ x
-        self._added_mass_in_body = added
-        self._linear_damping = np.array([link.linear_damping for link in links]).reshape(-1, 6, 6)
-        self._quadratic_damping = np.array([link.quadratic_damping for link in links]).reshape(
-            -1, 6, 6
-        )
-        crossflow = [(k, link.crossflow) for k, link in enumerate(links) if link.crossflow]
-        self._crossflow_links = np.array([k for k, _ in crossflow], dtype=int)
-        self._cylinder_from_link = np.array(
-            [motion_transform(c.rotation, c.translation) for _, c in crossflow]
-        ).reshape(-1, 6, 6)
-        self._crossflow_length = np.array([c.length for _, c in crossflow])
-        self._crossflow_coefficient = np.array([c.strip_coefficient for _, c in crossflow])
-        # generalised inertia per Pinocchio joint body (rigid, plus added if on), for the momentum
-        self._inertia_in_joint = np.array([inertia.matrix() for inertia in self.model.inertias])
-        if self.added_mass:
-            for b, joint in enumerate(bodies):
-                self._inertia_in_joint[joint] += added[b]
+    def _body_of(self, link: str) -> tuple[int, pin.SE3]:
+        """Index of the body (Pinocchio joint - 1) that carries ``link``, and its placement there."""
+        joint, placement = self._link_placement(link)
+        if joint < 1:
+            raise ValueError(f"link '{link}' is fixed to the world, not to the vehicle")
+        return joint - 1, placement
 
-    def _setup_buoyancy(self) -> None:
-        # Buoyancy as the weight of a "negative-mass" copy of the vehicle: each Pinocchio body gets
-        # the displaced mass rho V of its links at their centre of buoyancy (Fossen 2021, eq. (4.6)).
+    def _setup_fluid(self) -> None:
+        """Per-body and per-link fluid data, packed once as :class:`hydro.laws.FluidModel` records."""
+        model, hydro = self.model, self.hydro
+        nb = model.njoints - 1
+        gravity = hydro.gravity if self.restoring else 0.0
+        rho = hydro.fluid_density
+        added = np.zeros((nb, 6, 6))
+        buoyancy = np.zeros((nb, 4))  # (B, B c_B) per body [N, N m]
+        probe_moment = np.zeros((nb, 3))
+        probe_volume = np.zeros(nb)
+        link_body, link_from_body = [], []
+        for link in hydro.links:
+            b, placement = self._body_of(link.link)
+            x = motion_transform(placement.rotation, placement.translation)  # nu_link = X nu_body
+            link_body.append(b)
+            link_from_body.append(x)
+            if self.added_mass:
+                added[b] += x.T @ link.added_mass @ x  # M_A moves as X^T M_A X
+            if link.volume > 0.0:
+                centre = placement.act(np.asarray(link.center_of_buoyancy, dtype=float))
+                force = rho * link.volume * gravity  # Archimedes (Fossen 2021, eq. (4.5))
+                buoyancy[b, 0] += force
+                buoyancy[b, 1:] += force * centre
+                probe_moment[b] += link.volume * centre
+                probe_volume[b] += link.volume
+        weight = np.zeros((nb, 4))  # (W, W c_G) per body
+        for b in range(nb):
+            inertia = model.inertias[b + 1]
+            weight[b, 0] = inertia.mass * gravity
+            weight[b, 1:] = inertia.mass * gravity * inertia.lever
+        probe = np.zeros((nb, 3))
+        has_volume = probe_volume > 0.0
+        probe[has_volume] = probe_moment[has_volume] / probe_volume[has_volume, None]
+        links = hydro.links if self.damping else ()
+        nl = len(links)
+        identity = np.eye(6)
+        linear = np.array([link.linear_damping for link in links]).reshape(nl, 6, 6)
+        quadratic = np.array([link.quadratic_damping for link in links]).reshape(nl, 6, 6)
+        cylinder = np.tile(identity, (nl, 1, 1))
+        length = np.zeros(nl)
+        strip = np.zeros(nl)
+        has_crossflow = np.zeros(nl, dtype=np.int64)
+        for k, link in enumerate(links):
+            if link.crossflow:
+                c = link.crossflow
+                cylinder[k] = motion_transform(c.rotation, c.translation)
+                length[k], strip[k] = c.length, c.strip_coefficient
+                has_crossflow[k] = 1
+        link_from = np.array(link_from_body[:nl]).reshape(nl, 6, 6)
+        nodes, weights = gauss_legendre_unit(CROSSFLOW_NODES)
+
+        def pack(hydrostatics: np.ndarray) -> FluidModel:
+            return FluidModel(
+                added_mass=np.ascontiguousarray(added),
+                hydrostatics=np.ascontiguousarray(hydrostatics),
+                current_probe=probe,
+                link_body=np.array(link_body[:nl], dtype=np.int64),
+                link_from_body=np.ascontiguousarray(link_from),
+                link_is_body=np.array(
+                    [np.array_equal(x, identity) for x in link_from], dtype=np.int64
+                ),
+                linear_damping=np.ascontiguousarray(linear),
+                quadratic_damping=np.ascontiguousarray(quadratic),
+                quadratic_is_diagonal=np.array(
+                    [np.count_nonzero(d - np.diag(np.diag(d))) == 0 for d in quadratic],
+                    dtype=np.int64,
+                ),
+                has_crossflow=has_crossflow,
+                cylinder_from_link=np.ascontiguousarray(cylinder),
+                cylinder_is_link=np.array(
+                    [np.array_equal(x, identity) for x in cylinder], dtype=np.int64
+                ),
+                cylinder_length=length,
+                strip_coefficient=strip,
+                gauss_nodes=np.ascontiguousarray(nodes),
+                gauss_weights=np.ascontiguousarray(weights),
+            )
+
+        # The kernels take weight and buoyancy through hydro.laws.hydrostatic_wrench. The Pinocchio
+        # reference computes both independently, as Pinocchio's generalised gravity of the rigid
+        # model and of a copy carrying each body's displaced mass rho V at its centre of buoyancy
+        # (Fossen 2021, eq. (4.6)), so its fluid model has no hydrostatics.
+        self._fluid_reference = pack(np.zeros((nb, 4)))
+        self._fluid_net = pack(buoyancy - weight)
+        self._setup_buoyancy_model()
+        self._has_fluid = bool(added.any() or nl)
+        # generalised inertia per Pinocchio body (rigid plus added), for the momentum
+        self._inertia_in_body = (
+            np.array([model.inertias[b + 1].matrix() for b in range(nb)]) + added
+        )
+
+    def _setup_buoyancy_model(self) -> None:
         model = self.model
         buoyancy_model = pin.Model(model)
         for joint in range(model.njoints):
@@ -173,22 +234,48 @@ class Vehicle:
         buoyancy_model.gravity = model.gravity
         self._buoyancy_model = buoyancy_model
         self._buoyancy_data = buoyancy_model.createData()
+        self._has_buoyancy = any(link.volume != 0.0 for link in self.hydro.links)
 
     def _setup_thrusters(self) -> None:
-        bodies: list[int] = []
-        body_of = []
-        wrenches = []
+        body, wrenches = [], []
         for thruster in self.hydro.thrusters:
-            joint, placement = self._link_placement(thruster.link)
-            if joint not in bodies:
-                bodies.append(joint)
-            body_of.append(bodies.index(joint))
+            b, placement = self._body_of(thruster.link)
             direction = placement.rotation @ thruster.direction
             position = placement.act(thruster.position)
+            body.append(b)
             wrenches.append(np.concatenate((direction, np.cross(position, direction))))
-        self._thruster_bodies = bodies
-        self._thruster_body_of = np.array(body_of, dtype=int)
-        self._thruster_wrench = np.array(wrenches).reshape(-1, 6)
+        self._thrusters = Thrusters(
+            body=np.array(body, dtype=np.int64), unit_wrench=np.array(wrenches).reshape(-1, 6)
+        )
+
+    def fluid_model(self, include_hydrostatics: bool = True) -> FluidModel:
+        """The packed per-body and per-link fluid parameters the laws of :mod:`hydro.laws` take.
+
+        Args:
+            include_hydrostatics: With the hydrostatics (buoyancy minus weight, what the compiled kernels
+                use) or without (the Pinocchio reference computes them with Pinocchio).
+        """
+        return self._fluid_net if include_hydrostatics else self._fluid_reference
+
+    def packed_model(self) -> Model:
+        """The vehicle as the flat records of :mod:`aiauv_pin.fast.kernels` (a :class:`Model`).
+
+        Rigid data come from the Pinocchio model (joint placements, axes and inertias), fluid data
+        from :meth:`fluid_model`; both backends therefore describe one set of equations.
+
+        Raises:
+            ValueError: A joint the kernels do not support (see :func:`unsupported_reason`).
+        """
+        if self._packed is None:
+            reason = unsupported_reason(self.model)
+            if reason is not None:
+                raise ValueError(f"fast backend: {reason}")
+            self._packed = Model(
+                bodies=rigid_bodies(self.model, self._fluid_net.added_mass),
+                fluid=self._fluid_net,
+                thrusters=self._thrusters,
+            )
+        return self._packed
 
     # ------------------------------------------------------------------ backend
     @property
@@ -267,62 +354,74 @@ class Vehicle:
         return pin.neutral(self.model)
 
     # ------------------------------------------------------------------ dynamics
-    def _added_mass_matrix(self, jac: np.ndarray) -> np.ndarray:
-        """``sum_i J_i^T M_A,i J_i`` from the bodies' local Jacobians (n, 6, nv)."""
-        return np.sum(jac.transpose(0, 2, 1) @ (self._added_mass_in_body @ jac), axis=0)
+    def _body_states(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Rotations, origins and twists of every body after Pinocchio's forward kinematics."""
+        data = self.data
+        joints = range(1, self.model.njoints)
+        rotation = np.array([data.oMi[j].rotation for j in joints])
+        position = np.array([data.oMi[j].translation for j in joints])
+        twist = np.array([data.v[j].vector for j in joints])
+        return rotation, position, twist
+
+    def _currents_at_probes(
+        self, current: Current, t: float, rotation: np.ndarray, position: np.ndarray
+    ) -> np.ndarray:
+        """Water velocity at each body's probe point (nb, 3) [m/s], world axes."""
+        if current.is_zero:
+            return np.zeros((len(position), 3))
+        probe = position + np.einsum("nij,nj->ni", rotation, self._fluid_reference.current_probe)
+        return np.array([current.velocity(t, point) for point in probe])
 
     def _body_jacobians(self) -> np.ndarray:
-        """Local Jacobians of the hydrodynamic bodies, after ``computeJointJacobians``."""
+        """Local Jacobians of every body (nb, 6, nv), after ``computeJointJacobians``."""
         return np.array(
-            [pin.getJointJacobian(self.model, self.data, j, _LOCAL) for j in self._bodies]
+            [
+                pin.getJointJacobian(self.model, self.data, j, _LOCAL)
+                for j in range(1, self.model.njoints)
+            ]
         )
 
-    def _hydro_terms(
-        self, q: np.ndarray, v: np.ndarray, current: np.ndarray | None
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Rigid + fluid mass matrix and left-hand-side bias, after ``computeAllTerms``."""
+    def _added_mass_matrix(self, jac: np.ndarray) -> np.ndarray:
+        """``sum_i J_i^T M_A,i J_i``, accumulated body by body (no (nb, nv, nv) temporary)."""
+        mass = np.zeros((self.nv, self.nv))
+        for b, added in enumerate(self._fluid_reference.added_mass):
+            if added.any():
+                mass += jac[b].T @ added @ jac[b]
+        return mass
+
+    def _hydro_terms(self, q: np.ndarray, v: np.ndarray, current, t: float):
+        """Rigid + fluid mass matrix and left-hand-side bias (the Pinocchio reference path).
+
+        Pinocchio gives the rigid part (``computeAllTerms``: CRBA, RNEA bias with the weight,
+        Jacobians, bias accelerations); every fluid term comes from
+        :func:`hydro.laws.add_body_fluid_bias`, the function the compiled kernels call.
+        """
         model, data = self.model, self.data
         pin.computeAllTerms(model, data, q, v)
-        mass = data.M.copy()
+        mass = np.triu(data.M) + np.triu(data.M, 1).T
         bias = data.nle.copy()
-        if self.restoring and self.hydro.links:
-            bias -= pin.computeGeneralizedGravity(self._buoyancy_model, self._buoyancy_data, q)
-        if not self._bodies or not (self.added_mass or self.damping):
+        if not self._has_fluid:
+            if self.restoring and self._has_buoyancy:
+                bias -= pin.computeGeneralizedGravity(self._buoyancy_model, self._buoyancy_data, q)
             return mass, bias
-        bodies = self._bodies
+        rotation, position, twist = self._body_states()
+        currents = self._currents_at_probes(as_current(current), t, rotation, position)
+        if self.restoring and self._has_buoyancy:
+            bias -= pin.computeGeneralizedGravity(self._buoyancy_model, self._buoyancy_data, q)
+        fluid_bias, scratch = self._scratch
+        fluid_bias[:] = 0.0
+        relative = np.empty_like(twist)
+        add_body_fluid_bias(
+            self._fluid_reference, rotation, twist, currents, fluid_bias, relative, scratch
+        )
         jac = self._body_jacobians()
-        twist = np.array([data.v[j].vector for j in bodies])
-        if current is not None:
-            current_in_body = np.array([data.oMi[j].rotation.T @ current for j in bodies])
-            relative = twist.copy()
-            relative[:, :3] -= current_in_body
-        else:
-            current_in_body = None
-            relative = twist
-        wrench = np.zeros((len(bodies), 6))
         if self.added_mass:
-            added = self._added_mass_in_body
-            accel = np.array([data.a[j].vector for j in bodies])
-            if current_in_body is not None:
-                # d/dt of the current seen in a rotating frame: nu_r_dot = nu_dot + (omega x v_c, 0)
-                accel[:, :3] += cross(twist[:, 3:], current_in_body)
-            wrench += np.einsum("nij,nj->ni", added, accel) + coriolis_wrench(added, relative)
+            # M_A times the bias acceleration J_dot v (data.a with zero dv after computeAllTerms);
+            # M_A J dv goes into the mass matrix
+            accel = np.array([data.a[j].vector for j in range(1, model.njoints)])
+            fluid_bias += np.einsum("nij,nj->ni", self._fluid_reference.added_mass, accel)
             mass += self._added_mass_matrix(jac)
-        if self.damping and self.hydro.links:
-            link_twist = np.einsum("nij,nj->ni", self._link_from_body, relative[self._body_of_link])
-            link_wrench = linear_quadratic_wrench(
-                self._linear_damping, self._quadratic_damping, link_twist
-            )
-            if self._crossflow_links.size:
-                cyl = self._cylinder_from_link
-                cyl_twist = np.einsum("nij,nj->ni", cyl, link_twist[self._crossflow_links])
-                cyl_wrench = crossflow_wrench(
-                    cyl_twist, self._crossflow_length, self._crossflow_coefficient
-                )
-                link_wrench[self._crossflow_links] += np.einsum("nji,nj->ni", cyl, cyl_wrench)
-            body_wrench = np.einsum("nji,nj->ni", self._link_from_body, link_wrench)
-            np.add.at(wrench, self._body_of_link, -body_wrench)
-        bias += np.einsum("nji,nj->i", jac, wrench)
+        bias += np.einsum("nji,nj->i", jac, fluid_bias)
         return mass, bias
 
     def acceleration(
@@ -330,7 +429,9 @@ class Vehicle:
         q: np.ndarray,
         v: np.ndarray,
         tau: np.ndarray,
-        current: np.ndarray | None = None,
+        current=None,
+        *,
+        t: float = 0.0,
     ) -> np.ndarray:
         """Forward dynamics ``dv`` [m/s^2, rad/s^2] in Pinocchio's convention.
 
@@ -339,28 +440,30 @@ class Vehicle:
             v: Generalised velocity (nv,) [m/s, rad/s].
             tau: Generalised actuator forces (nv,) [N, N m]; thrusters enter through
                 :meth:`thrust_matrix`.
-            current: Constant irrotational water velocity in the world frame (3,) [m/s].
+            current: Water velocity: ``None`` (still water), a constant world velocity (3,) [m/s], or
+                a :class:`hydro.currents.Current` (sampled at each body at time ``t``).
+            t: Time [s] at which a time-varying current is sampled.
 
         Returns:
             ``dv`` (nv,), the time derivative of ``v``'s coordinates (Fossen's ``nu_dot`` for the base).
         """
         if self._fast is not None:
-            return self._fast.acceleration(q, v, tau, current)
-        mass, bias = self._hydro_terms(q, v, None if current is None else np.asarray(current))
+            return self._fast.acceleration(q, v, tau, current, t=t)
+        mass, bias = self._hydro_terms(q, v, current, t)
         return np.linalg.solve(mass, np.asarray(tau, dtype=float) - bias)
 
     def fluid_forces(
-        self, q: np.ndarray, v: np.ndarray, current: np.ndarray | None = None
+        self, q: np.ndarray, v: np.ndarray, current=None, *, t: float = 0.0
     ) -> FluidForces:
         """Mass matrix and bias of the equations of motion ``M dv + bias = tau``."""
-        mass, bias = self._hydro_terms(q, v, None if current is None else np.asarray(current))
+        mass, bias = self._hydro_terms(q, v, current, t)
         return FluidForces(mass, bias)
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """``M(q) = M_RB(q) + sum_i J_i^T M_A,i J_i`` (nv x nv), symmetric positive definite."""
         mass = pin.crba(self.model, self.data, q)
         mass = np.triu(mass) + np.triu(mass, 1).T  # CRBA fills the upper triangle
-        if self.added_mass and self._bodies:
+        if self.added_mass and self._fluid_reference.added_mass.any():
             pin.computeJointJacobians(self.model, self.data, q)
             mass += self._added_mass_matrix(self._body_jacobians())
         return mass
@@ -372,12 +475,14 @@ class Vehicle:
     def restoring_forces(self, q: np.ndarray) -> np.ndarray:
         """Hydrostatic generalised force ``g(q)`` (weight minus buoyancy) as on the left-hand side [N, N m].
 
-        Zero when the vehicle was loaded with ``restoring=False``.
+        Zero when the vehicle was loaded with ``restoring=False``. The compiled backend evaluates
+        :func:`hydro.laws.hydrostatic_wrench`; the Pinocchio reference, Pinocchio's generalised
+        gravity of the vehicle and of its displaced water.
         """
         if self._fast is not None:
             return self._fast.restoring_forces(q)
         weight = pin.computeGeneralizedGravity(self.model, self.data, q)
-        if not self.hydro.links:
+        if not self._has_buoyancy:
             return weight
         return weight - pin.computeGeneralizedGravity(self._buoyancy_model, self._buoyancy_data, q)
 
@@ -387,10 +492,11 @@ class Vehicle:
             return self._fast.thrust_matrix(q)
         pin.computeJointJacobians(self.model, self.data, q)
         matrix = np.zeros((self.nv, len(self.hydro.thrusters)))
-        for b, joint in enumerate(self._thruster_bodies):
-            jac = pin.getJointJacobian(self.model, self.data, joint, _LOCAL)
-            columns = np.flatnonzero(self._thruster_body_of == b)
-            matrix[:, columns] = jac.T @ self._thruster_wrench[columns].T
+        for k, (b, wrench) in enumerate(
+            zip(self._thrusters.body, self._thrusters.unit_wrench, strict=True)
+        ):
+            jac = pin.getJointJacobian(self.model, self.data, int(b) + 1, _LOCAL)
+            matrix[:, k] = jac.T @ wrench
         return matrix
 
     def momentum_in_world(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -403,12 +509,8 @@ class Vehicle:
             ``(linear [kg m/s], angular [kg m^2/s])``.
         """
         pin.forwardKinematics(self.model, self.data, q, v)
-        joints = range(1, self.model.njoints)
-        inertia = self._inertia_in_joint[1:]
-        twist = np.array([self.data.v[j].vector for j in joints])
-        rotation = np.array([self.data.oMi[j].rotation for j in joints])
-        translation = np.array([self.data.oMi[j].translation for j in joints])
-        return momentum_in_world(inertia, twist, rotation, translation)
+        rotation, position, twist = self._body_states()
+        return momentum_in_world(self._inertia_in_body, twist, rotation, position)
 
     # ------------------------------------------------------------------ kinematics
     def frame_id(self, name: str) -> int:

@@ -32,10 +32,11 @@ from functools import lru_cache
 
 import numpy as np
 
+from hydro import laws
 from hydro.spec import HydroError
 
 #: Default Gauss-Legendre nodes on each of the two sub-intervals.
-DEFAULT_NODES = 16
+DEFAULT_NODES = laws.CROSSFLOW_NODES
 
 
 @lru_cache(maxsize=16)
@@ -51,23 +52,11 @@ def gauss_legendre_unit(nodes: int) -> tuple[np.ndarray, np.ndarray]:
     if int(nodes) != nodes or nodes < 1:
         raise HydroError(f"crossflow quadrature needs a positive integer node count, got {nodes}")
     points, weights = np.polynomial.legendre.leggauss(int(nodes))
-    unit_points = 0.5 * (points + 1.0)
-    unit_weights = 0.5 * weights
+    unit_points = np.ascontiguousarray(0.5 * (points + 1.0))
+    unit_weights = np.ascontiguousarray(0.5 * weights)
     unit_points.setflags(write=False)
     unit_weights.setflags(write=False)
     return unit_points, unit_weights
-
-
-def _split_point(velocity: np.ndarray, length: np.ndarray) -> np.ndarray:
-    """Where ``|v_n(x)|`` is smallest on ``[0, L]``: the only possible kink of ``|v_n| v_n``."""
-    offset_y, offset_z = velocity[..., 1], velocity[..., 2]
-    slope_y, slope_z = velocity[..., 5], -velocity[..., 4]
-    slope_squared = slope_y * slope_y + slope_z * slope_z
-    # Minimiser of |A + B x|^2: x* = -(A . B) / |B|^2, clipped into the cylinder.
-    numerator = -(offset_y * slope_y + offset_z * slope_z)
-    safe = np.where(slope_squared > 0.0, slope_squared, 1.0)
-    split = np.where(slope_squared > 0.0, numerator / safe, 0.0)
-    return np.clip(split, 0.0, length)
 
 
 def crossflow_wrench(
@@ -100,27 +89,12 @@ def crossflow_wrench(
         raise HydroError("crossflow strip coefficient must be finite and >= 0")
 
     unit_points, unit_weights = gauss_legendre_unit(nodes)
-    split = _split_point(velocity, length)[..., None]
-    # Nodes on [0, x*] followed by nodes on [x*, L], shape (..., 2 n).
-    x = np.concatenate(
-        (split * unit_points, split + (length[..., None] - split) * unit_points), axis=-1
-    )
-    weights = np.concatenate(
-        (split * unit_weights, (length[..., None] - split) * unit_weights), axis=-1
-    )
-
-    # v_n(x) = (v + r x, w - q x)
-    normal_y = velocity[..., 1, None] + velocity[..., 5, None] * x
-    normal_z = velocity[..., 2, None] - velocity[..., 4, None] * x
-    speed = np.hypot(normal_y, normal_z)
-    # f(x) = -rho r C_dC |v_n| v_n (Fossen 2021, Sec. 6.4.3; PAPER_DATA)
-    load_y = -speed * normal_y
-    load_z = -speed * normal_z
-
-    wrench = np.zeros((*batch, 6))
-    wrench[..., 1] = np.sum(weights * load_y, axis=-1)
-    wrench[..., 2] = np.sum(weights * load_z, axis=-1)
-    # Moment of the force (x, 0, 0) x (0, f_y, f_z) = (0, -x f_z, x f_y) about the rear end.
-    wrench[..., 4] = -np.sum(weights * x * load_z, axis=-1)
-    wrench[..., 5] = np.sum(weights * x * load_y, axis=-1)
-    return coefficient[..., None] * wrench
+    flat_velocity = velocity.reshape(-1, 6)
+    flat_length = length.reshape(-1)
+    flat_coefficient = coefficient.reshape(-1)
+    wrench = np.empty((flat_velocity.shape[0], 6))
+    for k in range(flat_velocity.shape[0]):
+        wrench[k] = laws.crossflow_wrench(  # the one implementation of the strip integral
+            flat_velocity[k], flat_length[k], flat_coefficient[k], unit_points, unit_weights
+        )
+    return wrench.reshape((*batch, 6))

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from hydro import laws
+
 
 def linear_quadratic_wrench(
     linear: np.ndarray, quadratic: np.ndarray, relative_twist: np.ndarray
@@ -24,8 +26,14 @@ def linear_quadratic_wrench(
     Returns:
         Wrenches on the links in their frames, shape (n, 6) [N, N m].
     """
-    signed_square = np.abs(relative_twist) * relative_twist
-    return -(
-        np.einsum("nij,nj->ni", linear, relative_twist)
-        + np.einsum("nij,nj->ni", quadratic, signed_square)
-    )
+    wrench = np.empty(relative_twist.shape)
+    for k in range(relative_twist.shape[0]):
+        quadratic_k = np.ascontiguousarray(quadratic[k], dtype=float)
+        diagonal = not np.any(quadratic_k - np.diag(np.diag(quadratic_k)))
+        wrench[k] = laws.damping_wrench(  # the one implementation of the law
+            np.ascontiguousarray(linear[k], dtype=float),
+            quadratic_k,
+            diagonal,
+            np.ascontiguousarray(relative_twist[k], dtype=float),
+        )
+    return wrench

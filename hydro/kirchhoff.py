@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from hydro import laws
 from hydro.spatial import cross, spatial_cross_wrench
 
 __all__ = ["coriolis_wrench", "cross", "momentum_in_world", "spatial_cross_wrench"]
@@ -30,8 +31,17 @@ def coriolis_wrench(inertia: np.ndarray, twist: np.ndarray) -> np.ndarray:
     Returns:
         The wrench that appears on the left-hand side of the equations of motion, shape (..., 6).
     """
-    momentum = np.einsum("...ij,...j->...i", inertia, twist)
-    return spatial_cross_wrench(twist, momentum)
+    inertia = np.asarray(inertia, dtype=float)
+    twist = np.asarray(twist, dtype=float)
+    batch = np.broadcast_shapes(inertia.shape[:-2], twist.shape[:-1])
+    inertia = np.broadcast_to(inertia, (*batch, 6, 6)).reshape(-1, 6, 6)
+    twist = np.broadcast_to(twist, (*batch, 6)).reshape(-1, 6)
+    wrench = np.empty(twist.shape)
+    for k in range(twist.shape[0]):  # the one implementation of the law
+        wrench[k] = laws.coriolis_wrench(
+            np.ascontiguousarray(inertia[k]), np.ascontiguousarray(twist[k])
+        )
+    return wrench.reshape((*batch, 6))
 
 
 def momentum_in_world(

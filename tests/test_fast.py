@@ -27,7 +27,7 @@ from aiauv_pin.vehicle_spec import spec_from_dict
 pytest.importorskip("numba")
 
 from aiauv_pin.fast import kernels
-from aiauv_pin.fast.model import unsupported_reason
+from aiauv_pin.fast.records import unsupported_reason
 
 TOL = dict(rtol=1e-9, atol=1e-9)
 CURRENTS = [None, np.array([0.3, -0.2, 0.15])]

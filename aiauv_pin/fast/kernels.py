@@ -1,31 +1,28 @@
-"""Numba kernels: kinematics, articulated-body dynamics with general inertias, hydro, RK4 on SE(3).
+"""Compiled rigid-body kernels: kinematics, articulated-body dynamics with general inertias, RK4 on SE(3).
 
-Everything here works on the flat arrays of :class:`aiauv_pin.fast.model.FastModel` (a tuple ``M``):
+These kernels are the compiled counterpart of Pinocchio's algorithms for the models the toolkit
+simulates (a free-flyer root with 1-DOF revolute or prismatic joints), tested against Pinocchio
+(tests/test_fast.py). Every fluid term comes from :mod:`hydro.laws`, the same functions the
+Pinocchio path calls; nothing here re-implements a fluid law.
 
-* ``ints`` (nb, 4) int64: parent body (-1 for the base), joint type (0 free flyer, 1 revolute,
-  2 prismatic), index in ``q``, index in ``v``;
-* ``place`` (nb, 4, 3): joint placement in the parent body (rows 0-2 rotation, row 3 translation);
-* ``axis`` (nb, 6): motion subspace ``S`` of the 1-DOF joint in the child frame;
-* ``inertia`` (nb, 3, 6, 6): ``[0]`` rigid + added inertia, ``[1]`` added mass ``M_A``,
-  ``[2]`` rigid inertia, all about the body origin in body axes;
-* ``restore`` (nb, 4): ``(B - W, B c_B - W c_W)`` per body (weight ``W`` at ``c_W``, buoyancy
-  ``B`` at ``c_B``) so that the hydrostatic wrench on the body is
-  ``((B - W) e, (B c_B - W c_W) x e)`` with ``e`` the world's up axis in body axes
-  (Fossen 2021, eq. (4.6));
-* ``link_i`` (nl, 5) int64: body of the link, 1 if it has crossflow drag, 1 if the link frame is
-  the body frame, 1 if the cylinder frame is the link frame, 1 if ``D_Q`` is diagonal (these
-  three only skip multiplications by 0 and 1);
-* ``link_m`` (nl, 4, 6, 6): link-from-body motion transform, ``D_L``, ``D_Q``, cylinder-from-link
-  motion transform;
-* ``link_f`` (nl, 2): cylinder length [m], strip coefficient ``rho r C_dC`` [kg/m^2];
-* ``gauss`` (2, n): Gauss-Legendre nodes and weights on ``[0, 1]``;
-* ``thrust`` (m, 7): body index, unit-thrust wrench in the body frame (6).
+The model is a :class:`Model` record (:class:`RigidBodies`, :class:`hydro.laws.FluidModel`,
+:class:`Thrusters`), built by :meth:`aiauv_pin.Vehicle.packed_model`. Spatial vectors are
+``(linear, angular)`` as in Pinocchio. The articulated-body algorithm is Featherstone's (2008,
+Table 7.1) with the rigid inertia replaced by the full 6x6 ``I = I_RB + M_A`` of each body, so the
+added-mass inertia enters exactly (never lagged) and the added-mass Coriolis terms enter through
+the body bias (Kirchhoff: ``M nu_dot + nu x* (M nu)``, Fossen 2021, eq. (6.43)); with a current the
+added mass acts on the relative twist (Fossen 2021, eq. (10.5)).
 
-Spatial vectors are ``(linear, angular)`` as in Pinocchio. The articulated-body algorithm is
-Featherstone's (2008, Table 7.1) with the rigid inertia replaced by the full 6x6
-``I = I_RB + M_A`` of each body, so that the added-mass inertia and Coriolis terms enter exactly as
-in :meth:`aiauv_pin.Vehicle.acceleration` (Kirchhoff: ``M nu_dot + nu x* (M nu)``, Fossen 2021,
-eq. (6.43)); with a current the added mass acts on the relative twist (Fossen 2021, eq. (10.5)).
+The environment (:class:`Environment`) holds two compiled functions, called at every integrator
+stage with the stage's own time:
+
+* ``current(t, x, y, z, parameters) -> (V_x, V_y, V_z)``: the water velocity [m/s] at a world
+  point [m] (:mod:`hydro.currents` has the built-in ones), sampled at each body's probe point
+  (:attr:`hydro.laws.FluidModel.current_probe`). A time- or space-varying current is applied
+  quasi-steadily: the relative-velocity form of Fossen 2021, eq. (10.5), which is exact for a
+  uniform steady current, with the current's own local acceleration (Froude-Krylov and its
+  added-mass reaction) neglected;
+* ``disturbance(t, q, v, parameters, tau)``: adds a generalised force [N, N m] to ``tau`` (nv,).
 """
 
 from __future__ import annotations
@@ -33,22 +30,18 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-_OPTS = dict(
-    cache=True,
-    nogil=True,
-    # reassociation and FMA contraction only: NaN and infinity semantics are kept (divergence
-    # checks)
-    fastmath={"reassoc", "contract", "arcp", "nsz"},
-    error_model="numpy",
-)
+from hydro.jit import compiled
+from hydro.laws import add_body_fluid_bias, coriolis_wrench, hydrostatic_wrench
 
-FREE_FLYER, REVOLUTE, PRISMATIC = 0, 1, 2
+from .records import FREE_FLYER, REVOLUTE, Workspace
+
+#: Integration methods understood by :func:`step` and :func:`run_steps`.
+RK4, EULER = 0, 1
 
 
 # ---------------------------------------------------------------------- small linear algebra
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def _quat_to_rot(x, y, z, w, out):
     """Rotation matrix of a unit quaternion ``(x, y, z, w)``."""
     out[0, 0] = 1.0 - 2.0 * (y * y + z * z)
@@ -62,7 +55,7 @@ def _quat_to_rot(x, y, z, w, out):
     out[2, 2] = 1.0 - 2.0 * (x * x + y * y)
 
 
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def _axis_rot(ax, ay, az, angle, out):
     """Rodrigues: rotation by ``angle`` about the unit axis ``a``."""
     s = math.sin(angle)
@@ -78,7 +71,7 @@ def _axis_rot(ax, ay, az, angle, out):
     out[2, 1] = s * ax + c1 * ay * az
 
 
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def _motion_cross(a, b, out):
     """``a x b`` for motion vectors (Featherstone's ``crm``): ``(w x v' + v x w', w x w')``."""
     v0, v1, v2, w0, w1, w2 = a[0], a[1], a[2], a[3], a[4], a[5]
@@ -90,7 +83,7 @@ def _motion_cross(a, b, out):
     out[5] = w0 * b[4] - w1 * b[3]
 
 
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def _add_force_cross(twist, wrench, out):
     """``out += twist x* wrench`` (Featherstone's ``crf``): ``(w x f, v x f + w x n)``."""
     v0, v1, v2, w0, w1, w2 = twist[0], twist[1], twist[2], twist[3], twist[4], twist[5]
@@ -103,7 +96,7 @@ def _add_force_cross(twist, wrench, out):
     out[5] += v0 * f1 - v1 * f0 + w0 * n1 - w1 * n0
 
 
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def _matvec6(m, x, out):
     for i in range(6):
         s = 0.0
@@ -112,7 +105,7 @@ def _matvec6(m, x, out):
         out[i] = s
 
 
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def _matTvec6(m, x, out):
     for i in range(6):
         s = 0.0
@@ -121,7 +114,7 @@ def _matTvec6(m, x, out):
         out[i] = s
 
 
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def _motion_transform(rot, trans, out):
     """``X``: parent twists to the child frame at ``(R, p)`` (Featherstone 2008, eq. (2.24))."""
     px, py, pz = trans[0], trans[1], trans[2]
@@ -142,7 +135,7 @@ def _motion_transform(rot, trans, out):
         out[i, 5] = -(r0 * py - r1 * px)
 
 
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def _x_apply(xl, m, out):
     """``out = X m``: a parent-frame motion vector in the child frame.
 
@@ -161,7 +154,7 @@ def _x_apply(xl, m, out):
         out[3 + i] = r0 * w0 + r1 * w1 + r2 * w2
 
 
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def _xT_add(xl, f, dst):
     """``dst += X^T f``: a child-frame force vector in the parent frame, ``(R f, p x R f + R n)``."""
     p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
@@ -176,7 +169,7 @@ def _xT_add(xl, f, dst):
     dst[5] += xl[2, 0] * f[3] + xl[2, 1] * f[4] + xl[2, 2] * f[5] + p0 * f1 - p1 * f0
 
 
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def _add_transformed_inertia(xl, inertia, dst, half, rotated):
     """``dst += X^T I X`` for a symmetric 6x6 ``I`` given in the child frame, in 3x3 blocks.
 
@@ -234,7 +227,7 @@ def _add_transformed_inertia(xl, inertia, dst, half, rotated):
             )
 
 
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def _solve_spd6(a, b, out, low, y):
     """Solve ``a x = b`` for a symmetric positive-definite 6x6 ``a`` (Cholesky)."""
     for j in range(6):
@@ -261,16 +254,28 @@ def _solve_spd6(a, b, out, low, y):
 
 
 # ---------------------------------------------------------------------- kinematics
-@njit(**_OPTS)
-def kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc, m33, v6):
-    """Body poses in the world, placements in the parent (``xform``), twists and ``v x S qd``."""
-    nb = ints.shape[0]
-    rot_l = m33[0]
-    rot_j = m33[1]
-    pos_l = v6[0, :3]
-    tmp = v6[1]
-    for b in range(nb):
-        parent, kind, iq, iv = ints[b, 0], ints[b, 1], ints[b, 2], ints[b, 3]
+@compiled(fastmath=True)
+def kinematics(bodies, q, v, W):
+    """Body poses in the world, placements in the parent, twists and ``v x S qd`` into ``W``."""
+    rot_w, pos_w, xform, twist, bias_acc = (
+        W.rotation,
+        W.position,
+        W.placement,
+        W.twist,
+        W.bias_acceleration,
+    )
+    rot_l = W.m33[0]
+    rot_j = W.m33[1]
+    pos_l = W.v6[0, :3]
+    tmp = W.v6[1]
+    place, axis = bodies.placement, bodies.axis
+    for b in range(bodies.parent.shape[0]):
+        parent, kind, iq, iv = (
+            bodies.parent[b],
+            bodies.kind[b],
+            bodies.q_index[b],
+            bodies.v_index[b],
+        )
         if kind == FREE_FLYER:
             _quat_to_rot(q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6], rot_w[b])
             for i in range(3):
@@ -336,180 +341,78 @@ def kinematics(ints, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc, m3
         _motion_cross(twist[b], tmp, bias_acc[b])
 
 
-# ---------------------------------------------------------------------- hydrodynamics
-@njit(**_OPTS)
-def _crossflow(vel, length, coefficient, gauss, out):
-    """Crossflow wrench about the cylinder origin (as :func:`hydro.crossflow.crossflow_wrench`).
-
-    ``f(x) = -k |v_n| v_n`` with ``v_n(x) = (v + r x, w - q x)`` integrated over ``[0, L]`` with
-    Gauss-Legendre on each side of the point where ``|v_n|`` is smallest (Fossen 2021, Sec. 6.4.3).
-    """
-    a_y, a_z = vel[1], vel[2]
-    b_y, b_z = vel[5], -vel[4]
-    slope2 = b_y * b_y + b_z * b_z
-    split = 0.0
-    if slope2 > 0.0:
-        split = -(a_y * b_y + a_z * b_z) / slope2
-    if split < 0.0:
-        split = 0.0
-    elif split > length:
-        split = length
-    fy = 0.0
-    fz = 0.0
-    my = 0.0
-    mz = 0.0
-    n = gauss.shape[1]
-    for part in range(2):
-        start = 0.0 if part == 0 else split
-        width = split if part == 0 else length - split
-        for k in range(n):
-            x = start + width * gauss[0, k]
-            w = width * gauss[1, k]
-            ny = a_y + b_y * x
-            nz = a_z + b_z * x
-            speed = math.sqrt(ny * ny + nz * nz)
-            ly = -speed * ny
-            lz = -speed * nz
-            fy += w * ly
-            fz += w * lz
-            my -= w * x * lz
-            mz += w * x * ly
-    out[0] = 0.0
-    out[1] = coefficient * fy
-    out[2] = coefficient * fz
-    out[3] = 0.0
-    out[4] = coefficient * my
-    out[5] = coefficient * mz
+@compiled(fastmath=True)
+def sample_current(model, env, t, W):
+    """Water velocity at every body's probe point at time ``t`` into ``W.current`` (after kinematics)."""
+    probe = model.fluid.current_probe
+    for b in range(W.current.shape[0]):
+        rot = W.rotation[b]
+        x = (
+            W.position[b, 0]
+            + rot[0, 0] * probe[b, 0]
+            + rot[0, 1] * probe[b, 1]
+            + rot[0, 2] * probe[b, 2]
+        )
+        y = (
+            W.position[b, 1]
+            + rot[1, 0] * probe[b, 0]
+            + rot[1, 1] * probe[b, 1]
+            + rot[1, 2] * probe[b, 2]
+        )
+        z = (
+            W.position[b, 2]
+            + rot[2, 0] * probe[b, 0]
+            + rot[2, 1] * probe[b, 1]
+            + rot[2, 2] * probe[b, 2]
+        )
+        c = env.current(t, x, y, z, env.current_parameters)
+        W.current[b, 0] = c[0]
+        W.current[b, 1] = c[1]
+        W.current[b, 2] = c[2]
 
 
-@njit(**_OPTS)
-def body_bias(M, rot_w, twist, current, bias, relative, v6):
+@compiled(fastmath=True)
+def body_bias(model, W):
     """Velocity- and state-dependent part of each body's equation ``f = I a + p`` (left-hand side).
 
-    ``p = nu x* (I_RB nu) + nu_r x* (M_A nu_r) + M_A (w x v_c, 0) - tau_D(nu_r) - g_wrench``.
+    ``p = nu x* (I_RB nu)`` (rigid Coriolis, Featherstone 2008, eq. (2.67)) plus every fluid term of
+    :func:`hydro.laws.add_body_fluid_bias`; after :func:`kinematics` and :func:`sample_current`.
     """
-    ints, inertia, restore, link_i, link_m, link_f, gauss = M[0], M[3], M[4], M[5], M[6], M[7], M[8]
-    nb = ints.shape[0]
-    mom = v6[0]
-    tmp = v6[1]
-    tmp2 = v6[2]
-    wrench = v6[3]
-    cyl = v6[4]
-    cyl_w = v6[5]
-    cur_x, cur_y, cur_z = current[0], current[1], current[2]
-    has_current = cur_x != 0.0 or cur_y != 0.0 or cur_z != 0.0
-    for b in range(nb):
-        rot = rot_w[b]
-        nu = twist[b]
+    rigid = model.bodies.rigid_inertia
+    for b in range(W.bias.shape[0]):
+        w = coriolis_wrench(rigid[b], W.twist[b])
         for i in range(6):
-            bias[b, i] = 0.0
-            relative[b, i] = nu[i]
-        if not has_current:
-            # nu x* (I_RB nu) + nu x* (M_A nu) = nu x* ((I_RB + M_A) nu): one product
-            # (Featherstone 2008, eq. (2.67); Fossen 2021, eq. (6.46))
-            _matvec6(inertia[b, 0], nu, mom)
-            _add_force_cross(nu, mom, bias[b])
-        else:
-            # rigid Coriolis-centripetal: nu x* (I_RB nu)   (Featherstone 2008, eq. (2.67))
-            _matvec6(inertia[b, 2], nu, mom)
-            _add_force_cross(nu, mom, bias[b])
-            # current in body axes, v_c = R^T V_c; nu_r = nu - (v_c, 0)   (Fossen 2021, eq. (10.4))
-            vc0 = rot[0, 0] * cur_x + rot[1, 0] * cur_y + rot[2, 0] * cur_z
-            vc1 = rot[0, 1] * cur_x + rot[1, 1] * cur_y + rot[2, 1] * cur_z
-            vc2 = rot[0, 2] * cur_x + rot[1, 2] * cur_y + rot[2, 2] * cur_z
-            relative[b, 0] -= vc0
-            relative[b, 1] -= vc1
-            relative[b, 2] -= vc2
-            # M_A (w x v_c, 0): d/dt of the current seen from the rotating body
-            # (Fossen 2021, eq. (10.5))
-            tmp[0] = nu[4] * vc2 - nu[5] * vc1
-            tmp[1] = nu[5] * vc0 - nu[3] * vc2
-            tmp[2] = nu[3] * vc1 - nu[4] * vc0
-            tmp[3] = 0.0
-            tmp[4] = 0.0
-            tmp[5] = 0.0
-            _matvec6(inertia[b, 1], tmp, tmp2)
-            for i in range(6):
-                bias[b, i] += tmp2[i]
-            # added-mass Coriolis: nu_r x* (M_A nu_r)   (Fossen 2021, eq. (6.46))
-            _matvec6(inertia[b, 1], relative[b], mom)
-            _add_force_cross(relative[b], mom, bias[b])
-        # hydrostatics: ((B - W) e, (B c_B - W c_W) x e), e = R^T z   (Fossen 2021, eq. (4.6))
-        e0, e1, e2 = rot[2, 0], rot[2, 1], rot[2, 2]
-        sf, sx, sy, sz = restore[b, 0], restore[b, 1], restore[b, 2], restore[b, 3]
-        bias[b, 0] -= sf * e0
-        bias[b, 1] -= sf * e1
-        bias[b, 2] -= sf * e2
-        bias[b, 3] -= sy * e2 - sz * e1
-        bias[b, 4] -= sz * e0 - sx * e2
-        bias[b, 5] -= sx * e1 - sy * e0
-    # damping per link: -D_L nu_r - D_Q |nu_r| nu_r (+ crossflow)   (Fossen 2021, eq. (6.60)-(6.62))
-    for k in range(link_i.shape[0]):
-        b = link_i[k, 0]
-        x_link = link_m[k, 0]
-        same_frame = link_i[k, 2] != 0
-        if same_frame:
-            for i in range(6):
-                tmp[i] = relative[b, i]
-        else:
-            _matvec6(x_link, relative[b], tmp)
-        d_lin = link_m[k, 1]
-        d_quad = link_m[k, 2]
-        if link_i[k, 4] != 0:
-            for i in range(6):
-                s = 0.0
-                for j in range(6):
-                    s += d_lin[i, j] * tmp[j]
-                wrench[i] = -s - d_quad[i, i] * abs(tmp[i]) * tmp[i]
-        else:
-            for i in range(6):
-                tmp2[i] = abs(tmp[i]) * tmp[i]
-            for i in range(6):
-                s = 0.0
-                for j in range(6):
-                    s += d_lin[i, j] * tmp[j] + d_quad[i, j] * tmp2[j]
-                wrench[i] = -s
-        if link_i[k, 1]:
-            x_cyl = link_m[k, 3]
-            if link_i[k, 3] != 0:
-                _crossflow(tmp, link_f[k, 0], link_f[k, 1], gauss, cyl_w)
-                for i in range(6):
-                    wrench[i] += cyl_w[i]
-            else:
-                _matvec6(x_cyl, tmp, cyl)
-                _crossflow(cyl, link_f[k, 0], link_f[k, 1], gauss, cyl_w)
-                _matTvec6(x_cyl, cyl_w, tmp2)
-                for i in range(6):
-                    wrench[i] += tmp2[i]
-        if same_frame:
-            for i in range(6):
-                bias[b, i] -= wrench[i]
-        else:
-            _matTvec6(x_link, wrench, tmp2)
-            for i in range(6):
-                bias[b, i] -= tmp2[i]
+            W.bias[b, i] = w[i]
+    add_body_fluid_bias(
+        model.fluid, W.rotation, W.twist, W.current, W.bias, W.relative, W.fluid_scratch
+    )
 
 
 # ---------------------------------------------------------------------- articulated-body algorithm
-@njit(**_OPTS)
-def _articulated(M, tau, xform, bias_acc, bias, out, art, pa, u_vec, scal, acc, m66, v6):
+@compiled(fastmath=True)
+def _articulated(bodies, tau, W, out):
     """ABA passes 2 and 3 (Featherstone 2008, Table 7.1) with general 6x6 body inertias."""
-    ints, axis, inertia = M[0], M[2], M[3]
-    nb = ints.shape[0]
-    d_inv = scal[0]
-    u_sc = scal[1]
-    ia = m66[0]
-    t66 = m66[1]
-    p_loc = v6[0]
-    tmp = v6[1]
+    nb = bodies.parent.shape[0]
+    xform, bias_acc, bias = W.placement, W.bias_acceleration, W.bias
+    art, pa, u_vec, d_inv, u_sc, acc = (
+        W.articulated_inertia,
+        W.articulated_bias,
+        W.u_vector,
+        W.d_inverse,
+        W.u_scalar,
+        W.acceleration,
+    )
+    ia = W.m66[0]
+    p_loc = W.v6[0]
+    tmp = W.v6[1]
     for b in range(nb):
         for i in range(6):
             pa[b, i] = bias[b, i]
             for j in range(6):
-                art[b, i, j] = inertia[b, 0, i, j]
+                art[b, i, j] = bodies.inertia[b, i, j]
     for b in range(nb - 1, 0, -1):
-        parent = ints[b, 0]
-        s = axis[b]
+        parent = bodies.parent[b]
+        s = bodies.axis[b]
         _matvec6(art[b], s, u_vec[b])
         d = 0.0
         sp = 0.0
@@ -517,7 +420,7 @@ def _articulated(M, tau, xform, bias_acc, bias, out, art, pa, u_vec, scal, acc, 
             d += s[i] * u_vec[b, i]
             sp += s[i] * pa[b, i]
         d_inv[b] = 1.0 / d
-        u_sc[b] = tau[ints[b, 3]] - sp
+        u_sc[b] = tau[bodies.v_index[b]] - sp
         if parent < 0:
             continue
         for i in range(6):
@@ -528,18 +431,18 @@ def _articulated(M, tau, xform, bias_acc, bias, out, art, pa, u_vec, scal, acc, 
         for i in range(6):
             p_loc[i] += pa[b, i] + u_vec[b, i] * u_sc[b] * d_inv[b]
         # parent += X^T I^a X, X^T p^a
-        _add_transformed_inertia(xform[b], ia, art[parent], t66, m66[2])
+        _add_transformed_inertia(xform[b], ia, art[parent], W.m66[1], W.m66[2])
         _xT_add(xform[b], p_loc, pa[parent])
     # root: free flyer (6 DOF, S = identity)
-    iv0 = ints[0, 3]
+    iv0 = bodies.v_index[0]
     for i in range(6):
         tmp[i] = tau[iv0 + i] - pa[0, i]
-    _solve_spd6(art[0], tmp, acc[0], m66[2], v6[2])
+    _solve_spd6(art[0], tmp, acc[0], W.m66[2], W.v6[2])
     for i in range(6):
         out[iv0 + i] = acc[0, i]
     for b in range(1, nb):
-        parent = ints[b, 0]
-        s = axis[b]
+        parent = bodies.parent[b]
+        s = bodies.axis[b]
         if parent < 0:
             for i in range(6):
                 tmp[i] = bias_acc[b, i]
@@ -551,158 +454,134 @@ def _articulated(M, tau, xform, bias_acc, bias, out, art, pa, u_vec, scal, acc, 
         for i in range(6):
             ua += u_vec[b, i] * tmp[i]
         qdd = (u_sc[b] - ua) * d_inv[b]
-        out[ints[b, 3]] = qdd
+        out[bodies.v_index[b]] = qdd
         for i in range(6):
             acc[b, i] = tmp[i] + s[i] * qdd
 
 
-@njit(**_OPTS)
-def _backward_generalized(ints, axis, xform, body_wrench, out, tmp):
+@compiled(fastmath=True)
+def generalized_force(bodies, xform, body_wrench, out, tmp):
     """Generalised force ``sum_b J_b^T w_b`` of body wrenches (body frames); consumes them."""
-    nb = ints.shape[0]
-    for b in range(nb - 1, -1, -1):
-        iv = ints[b, 3]
-        if ints[b, 1] == FREE_FLYER:
+    for b in range(bodies.parent.shape[0] - 1, -1, -1):
+        iv = bodies.v_index[b]
+        if bodies.kind[b] == FREE_FLYER:
             for i in range(6):
                 out[iv + i] = body_wrench[b, i]
         else:
             s = 0.0
             for i in range(6):
-                s += axis[b, i] * body_wrench[b, i]
+                s += bodies.axis[b, i] * body_wrench[b, i]
             out[iv] = s
-        parent = ints[b, 0]
+        parent = bodies.parent[b]
         if parent >= 0:
             _xT_add(xform[b], body_wrench[b], body_wrench[parent])
 
 
-@njit(**_OPTS)
-def _restoring_wrenches(restore, rot_w, out):
-    """Hydrostatic wrench acting on each body, in body axes (Fossen 2021, eq. (4.6))."""
-    for b in range(restore.shape[0]):
-        e0, e1, e2 = rot_w[b, 2, 0], rot_w[b, 2, 1], rot_w[b, 2, 2]
-        sf, sx, sy, sz = restore[b, 0], restore[b, 1], restore[b, 2], restore[b, 3]
-        out[b, 0] = sf * e0
-        out[b, 1] = sf * e1
-        out[b, 2] = sf * e2
-        out[b, 3] = sy * e2 - sz * e1
-        out[b, 4] = sz * e0 - sx * e2
-        out[b, 5] = sx * e1 - sy * e0
+@compiled(fastmath=True)
+def restoring_into(model, W, out):
+    """``g(q)`` (left-hand side: weight minus buoyancy, generalised) after :func:`kinematics`.
+
+    Built from :func:`hydro.laws.hydrostatic_wrench` through the same per-body data the dynamics use.
+    """
+    wrench = W.relative
+    h = model.fluid.hydrostatics
+    for b in range(wrench.shape[0]):
+        rot = W.rotation[b]
+        w = hydrostatic_wrench(h[b, 0], h[b, 1], h[b, 2], h[b, 3], rot[2, 0], rot[2, 1], rot[2, 2])
+        for i in range(6):
+            wrench[b, i] = -w[i]
+    generalized_force(model.bodies, W.placement, wrench, out, W.v6[0])
+
+
+@compiled(fastmath=True)
+def thrust_into(model, W, thrusts, out):
+    """``out = B(q) thrusts`` (the paper's eq. (20)) after :func:`kinematics` [N, N m]."""
+    wrench = W.relative
+    wrench[:, :] = 0.0
+    th = model.thrusters
+    for k in range(th.body.shape[0]):
+        b = th.body[k]
+        for i in range(6):
+            wrench[b, i] += th.unit_wrench[k, i] * thrusts[k]
+    generalized_force(model.bodies, W.placement, wrench, out, W.v6[0])
 
 
 # ---------------------------------------------------------------------- workspace
-@njit(**_OPTS)
+@compiled
 def workspace(nb, nq, nv):
-    """Scratch arrays reused by every evaluation (no allocation inside the step loop)."""
-    return (
-        np.empty((nb, 3, 3)),  # 0 rot_w
-        np.empty((nb, 3)),  # 1 pos_w
-        np.empty((nb, 4, 3)),  # 2 placements in the parent (rows 0-2 R, row 3 p)
-        np.empty((nb, 6)),  # 3 twist
-        np.empty((nb, 6)),  # 4 bias_acc
-        np.empty((nb, 6)),  # 5 bias
-        np.empty((nb, 6)),  # 6 relative twist / wrenches
-        np.empty((nb, 6, 6)),  # 7 articulated inertia
-        np.empty((nb, 6)),  # 8 articulated bias
-        np.empty((nb, 6)),  # 9 U
-        np.empty((2, nb)),  # 10 1/D, u
-        np.empty((nb, 6)),  # 11 accelerations
-        np.empty((3, 6, 6)),  # 12 6x6 scratch
-        np.empty((8, 6)),  # 13 6-vector scratch
-        np.empty((2, 3, 3)),  # 14 3x3 scratch
-        np.empty((3, nv)),  # 15 generalised scratch: tau + servo, g(q), zero velocity
-        np.empty((10, nv)),  # 16 integrator stages
-        np.empty((3, nq)),  # 17 stage / next configurations
+    """Scratch arrays of one evaluation (allocate once, reuse in every step)."""
+    return Workspace(
+        np.empty((nb, 3, 3)),
+        np.empty((nb, 3)),
+        np.empty((nb, 4, 3)),
+        np.empty((nb, 6)),
+        np.empty((nb, 6)),
+        np.empty((nb, 6)),
+        np.empty((nb, 6)),
+        np.zeros((nb, 3)),
+        np.empty((nb, 6, 6)),
+        np.empty((nb, 6)),
+        np.empty((nb, 6)),
+        np.empty(nb),
+        np.empty(nb),
+        np.empty((nb, 6)),
+        np.empty((3, 6)),
+        np.empty((3, 6, 6)),
+        np.empty((8, 6)),
+        np.empty((2, 3, 3)),
+        np.empty(nv),
+        np.empty(nv),
+        np.zeros(nv),
+        np.empty(nv),
+        np.empty(nv),
+        np.empty(nv),
+        np.empty(nv),
+        np.empty(nv),
+        np.empty(nv),
+        np.empty(nv),
+        np.empty(nv),
+        np.empty(nv),
+        np.empty(nv),
+        np.empty(nq),
+        np.empty(nq),
     )
 
 
-@njit(**_OPTS)
-def _kinematics_ws(M, q, v, W):
-    kinematics(M[0], M[1], M[2], q, v, W[0], W[1], W[2], W[3], W[4], W[14], W[13])
-
-
-@njit(**_OPTS)
-def _restoring_ws(M, W, out):
-    """``g(q)`` after :func:`_kinematics_ws` (left-hand side: minus the force on the system)."""
-    wrench = W[6]
-    _restoring_wrenches(M[4], W[0], wrench)
-    _backward_generalized(M[0], M[2], W[2], wrench, out, W[13][0])
-    for i in range(out.shape[0]):
-        out[i] = -out[i]
-
-
-@njit(**_OPTS)
-def restoring_forces(M, q):
-    """``g(q)``: hydrostatic generalised force on the left-hand side (weight minus buoyancy)."""
-    nv = M[10][1]
-    W = workspace(M[0].shape[0], q.shape[0], nv)
-    zero = W[15][2]
-    zero[:] = 0.0
-    _kinematics_ws(M, q, zero, W)
-    out = np.empty(nv)
-    _restoring_ws(M, W, out)
-    return out
-
-
-@njit(**_OPTS)
-def thrust_matrix(M, q):
-    """``B(q)`` (nv x m): generalised forces of unit thrusts (the paper's eq. (20))."""
-    ints, axis, thrust = M[0], M[2], M[9]
-    nv = M[10][1]
-    W = workspace(ints.shape[0], q.shape[0], nv)
-    zero = W[15][2]
-    zero[:] = 0.0
-    _kinematics_ws(M, q, zero, W)
-    m = thrust.shape[0]
-    out = np.empty((nv, m))
-    wrench = W[6]
-    column = W[15][0]
-    for k in range(m):
-        wrench[:, :] = 0.0
-        b = int(thrust[k, 0])
-        for i in range(6):
-            wrench[b, i] = thrust[k, 1 + i]
-        _backward_generalized(ints, axis, W[2], wrench, column, W[13][0])
-        out[:, k] = column
-    return out
+def new_workspace(model, nq: int, nv: int) -> Workspace:
+    """A :class:`Workspace` for ``model`` (from Python)."""
+    return workspace(model.bodies.parent.shape[0], nq, nv)
 
 
 # ---------------------------------------------------------------------- forward dynamics
-@njit(**_OPTS)
-def _acceleration_ws(M, q, v, tau, current, servo, W, out):
-    """Forward dynamics into ``out`` using the workspace ``W``."""
-    _kinematics_ws(M, q, v, W)
-    body_bias(M, W[0], W[3], current, W[5], W[6], W[13])
-    tau_all = W[15][0]
+@compiled(fastmath=True)
+def acceleration_into(model, env, servo, t, q, v, tau, W, out):
+    """Forward dynamics ``dv`` of ``M(q) dv + bias(q, v) = tau + servo + disturbance`` into ``out``."""
+    kinematics(model.bodies, q, v, W)
+    sample_current(model, env, t, W)
+    body_bias(model, W)
+    tau_all = W.tau_total
     for i in range(tau.shape[0]):
         tau_all[i] = tau[i]
-    n_joint = servo.shape[1]
-    if n_joint > 0 and servo[3, 0] != 0.0:
+    env.disturbance(t, q, v, env.disturbance_parameters, tau_all)
+    n_joint = servo.references.shape[0]
+    if servo.enabled and n_joint > 0:
         # joint servo, paper eq. (24): -k_p (q - q*) - k_d qd + g_q(q)
-        g = W[15][1]
-        if servo[4, 0] != 0.0:
-            _restoring_ws(M, W, g)
+        g = W.restoring
+        if servo.compensate_restoring:
+            restoring_into(model, W, g)
         else:
             g[:] = 0.0
         for k in range(n_joint):
             tau_all[6 + k] += (
-                -servo[0, k] * (q[7 + k] - servo[2, k]) - servo[1, k] * v[6 + k] + g[6 + k]
+                -servo.stiffness[k] * (q[7 + k] - servo.references[k])
+                - servo.damping[k] * v[6 + k]
+                + g[6 + k]
             )
-    _articulated(M, tau_all, W[2], W[4], W[5], out, W[7], W[8], W[9], W[10], W[11], W[12], W[13])
-
-
-@njit(**_OPTS)
-def acceleration(M, q, v, tau, current, servo, out):
-    """Forward dynamics ``dv`` for ``M(q) dv + bias(q, v) = tau (+ servo)``; writes ``out`` (nv,).
-
-    ``servo`` (5, n): rows ``k_p``, ``k_d``, ``q*``, then ``[enabled, compensate g_q]`` in column 0
-    (shape (5, 0): no servo).
-    """
-    W = workspace(M[0].shape[0], q.shape[0], v.shape[0])
-    _acceleration_ws(M, q, v, tau, current, servo, W, out)
+    _articulated(model.bodies, tau_all, W, out)
 
 
 # ------------------------------------------------------------------ SE(3) x R^n group operations
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def integrate(q, xi, out):
     """``out = q * exp(xi)``: free flyer by the exact SE(3) exponential, joints by addition.
 
@@ -762,12 +641,12 @@ def integrate(q, xi, out):
         out[i] = q[i] + xi[i - 1]
 
 
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def _cross(a0, a1, a2, b0, b1, b2):
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@njit(**_OPTS)
+@compiled(fastmath=True)
 def tangent_rate(xi, vel, out):
     """``out = J_r(xi)^-1 vel``: the rate of ``xi`` for ``integrate(q0, xi)`` moving with ``vel``.
 
@@ -844,42 +723,34 @@ def tangent_rate(xi, vel, out):
 
 
 # ---------------------------------------------------------------------- integrators
-@njit(**_OPTS)
-def _rk4_ws(M, q, v, tau, current, servo, dt, W, q_out, v_out):
-    """One Runge-Kutta-Munthe-Kaas step of order 4 (as :func:`aiauv_pin.integrators.rk4_step`)."""
+@compiled(fastmath=True)
+def rk4_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
+    """One Runge-Kutta-Munthe-Kaas step of order 4 (as :func:`aiauv_pin.integrators.rk4_step`).
+
+    Stages at ``t``, ``t + dt/2`` (twice) and ``t + dt`` see the current and disturbance at their time.
+    """
     nv = v.shape[0]
     half = 0.5 * dt
-    st = W[16]
-    a1, a2, a3, a4, k2, k3, k4, xi, vs = (
-        st[0],
-        st[1],
-        st[2],
-        st[3],
-        st[4],
-        st[5],
-        st[6],
-        st[7],
-        st[8],
-    )
-    qs = W[17][0]
-    _acceleration_ws(M, q, v, tau, current, servo, W, a1)
+    a1, a2, a3, a4 = W.acc1, W.acc2, W.acc3, W.acc4
+    k2, k3, k4, xi, vs, qs = W.rate2, W.rate3, W.rate4, W.xi, W.v_stage, W.q_stage
+    acceleration_into(model, env, servo, t, q, v, tau, W, a1)
     for i in range(nv):
         xi[i] = half * v[i]  # k1 = v: the Jacobian at xi = 0 is the identity
         vs[i] = v[i] + half * a1[i]
     integrate(q, xi, qs)
-    _acceleration_ws(M, qs, vs, tau, current, servo, W, a2)
+    acceleration_into(model, env, servo, t + half, qs, vs, tau, W, a2)
     tangent_rate(xi, vs, k2)
     for i in range(nv):
         xi[i] = half * k2[i]
         vs[i] = v[i] + half * a2[i]
     integrate(q, xi, qs)
-    _acceleration_ws(M, qs, vs, tau, current, servo, W, a3)
+    acceleration_into(model, env, servo, t + half, qs, vs, tau, W, a3)
     tangent_rate(xi, vs, k3)
     for i in range(nv):
         xi[i] = dt * k3[i]
         vs[i] = v[i] + dt * a3[i]
     integrate(q, xi, qs)
-    _acceleration_ws(M, qs, vs, tau, current, servo, W, a4)
+    acceleration_into(model, env, servo, t + dt, qs, vs, tau, W, a4)
     tangent_rate(xi, vs, k4)
     sixth = dt / 6.0
     for i in range(nv):
@@ -888,79 +759,115 @@ def _rk4_ws(M, q, v, tau, current, servo, dt, W, q_out, v_out):
     integrate(q, xi, q_out)
 
 
-@njit(**_OPTS)
-def _euler_ws(M, q, v, tau, current, servo, dt, W, q_out, v_out):
+@compiled(fastmath=True)
+def euler_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
     """Semi-implicit Euler: ``v += dt f(q, v)``, then ``q = q * exp(dt v)``."""
-    a = W[16][0]
-    xi = W[16][1]
-    _acceleration_ws(M, q, v, tau, current, servo, W, a)
+    a = W.acc1
+    xi = W.xi
+    acceleration_into(model, env, servo, t, q, v, tau, W, a)
     for i in range(v.shape[0]):
         v_out[i] = v[i] + dt * a[i]
         xi[i] = dt * v_out[i]
     integrate(q, xi, q_out)
 
 
-@njit(**_OPTS)
-def step(M, q, v, tau, current, servo, dt, method, q_out, v_out):
-    """One step (method 0 = RK4, 1 = semi-implicit Euler) into ``q_out, v_out``."""
-    W = workspace(M[0].shape[0], q.shape[0], v.shape[0])
-    if method == 0:
-        _rk4_ws(M, q, v, tau, current, servo, dt, W, q_out, v_out)
+@compiled(fastmath=True)
+def step_into(model, env, servo, t, q, v, tau, dt, method, W, q_out, v_out):
+    """One step of ``method`` (:data:`RK4` or :data:`EULER`) into ``q_out, v_out``."""
+    if method == RK4:
+        rk4_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out)
     else:
-        _euler_ws(M, q, v, tau, current, servo, dt, W, q_out, v_out)
+        euler_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out)
 
 
-@njit(**_OPTS)
-def run_steps(M, q, v, tau, current, servo, dt, n_steps, method):
-    """Advance ``(q, v)`` in place by ``n_steps`` steps (method 0 = RK4, 1 = Euler).
+@compiled(fastmath=True)
+def is_finite_state(q, v):
+    """Whether every entry of ``q`` and ``v`` is finite."""
+    for i in range(q.shape[0]):
+        if not math.isfinite(q[i]):
+            return False
+    for i in range(v.shape[0]):
+        if not math.isfinite(v[i]):
+            return False
+    return True
+
+
+@compiled(fastmath=True)
+def run_steps(model, env, servo, t0, q, v, tau, dt, n_steps, method, W):
+    """Advance ``(q, v)`` in place by ``n_steps`` steps from time ``t0`` with ``tau`` held.
 
     Returns:
         The number of steps completed; fewer than ``n_steps`` if the state became non-finite (then
         ``q, v`` hold the last finite state).
     """
-    W = workspace(M[0].shape[0], q.shape[0], v.shape[0])
-    q_new = W[17][1]
-    v_new = W[16][9]
     for k in range(n_steps):
-        if method == 0:
-            _rk4_ws(M, q, v, tau, current, servo, dt, W, q_new, v_new)
-        else:
-            _euler_ws(M, q, v, tau, current, servo, dt, W, q_new, v_new)
-        for i in range(q.shape[0]):
-            if not math.isfinite(q_new[i]):
-                return k
-        for i in range(v.shape[0]):
-            if not math.isfinite(v_new[i]):
-                return k
-        q[:] = q_new
-        v[:] = v_new
+        step_into(model, env, servo, t0 + k * dt, q, v, tau, dt, method, W, W.q_next, W.v_next)
+        if not is_finite_state(W.q_next, W.v_next):
+            return k
+        q[:] = W.q_next
+        v[:] = W.v_next
     return n_steps
 
 
-@njit(**_OPTS)
-def time_accelerations(M, q, v, tau, current, servo, repeats):
-    """Evaluate the dynamics ``repeats`` times in compiled code (benchmarking); returns the last."""
-    W = workspace(M[0].shape[0], q.shape[0], v.shape[0])
-    out = np.empty(v.shape[0])
+@compiled(fastmath=True)
+def time_accelerations(model, env, servo, q, v, tau, repeats, W, out):
+    """Evaluate the dynamics ``repeats`` times in compiled code (benchmarking)."""
     for _ in range(repeats):
-        _acceleration_ws(M, q, v, tau, current, servo, W, out)
-    return out
+        acceleration_into(model, env, servo, 0.0, q, v, tau, W, out)
 
 
-@njit(**_OPTS)
-def frame_kinematics(M, q, v, body, rotation, translation):
-    """World pose and body-frame twist of a frame fixed to ``body`` at ``(rotation, translation)``.
+@compiled(fastmath=True)
+def frame_kinematics(model, q, v, body, rotation, translation, W):
+    """World pose and twist (in its own axes) of a frame fixed to ``body`` at ``(rotation, translation)``.
 
     Returns:
         ``(R (3x3), p (3,), twist (6,))`` with the twist ``(v, w)`` in the frame's axes.
     """
-    W = workspace(M[0].shape[0], q.shape[0], v.shape[0])
-    _kinematics_ws(M, q, v, W)
-    rot_w, pos_w = W[0], W[1]
-    rot = rot_w[body] @ rotation
-    pos = pos_w[body] + rot_w[body] @ translation
-    x = W[12][0]
+    kinematics(model.bodies, q, v, W)
+    return frame_of_body(W, body, rotation, translation)
+
+
+@compiled(fastmath=True)
+def frame_of_body(W, body, rotation, translation):
+    """Pose and own-axes twist of a frame on ``body``, from the kinematics already in ``W``."""
+    rot_w, pos_w = W.rotation[body], W.position[body]
+    rot = np.empty((3, 3))
+    pos = np.empty(3)
+    for i in range(3):
+        acc = pos_w[i]
+        for k in range(3):
+            acc += rot_w[i, k] * translation[k]
+        pos[i] = acc
+        for j in range(3):
+            rot[i, j] = (
+                rot_w[i, 0] * rotation[0, j]
+                + rot_w[i, 1] * rotation[1, j]
+                + rot_w[i, 2] * rotation[2, j]
+            )
+    x = W.m66[0]
     _motion_transform(rotation, translation, x)
     frame_twist = np.empty(6)
-    _matvec6(x, W[3][body], frame_twist)
+    _matvec6(x, W.twist[body], frame_twist)
     return rot, pos, frame_twist
+
+
+@compiled(fastmath=True)
+def restoring_forces(model, q, W, out):
+    """``g(q)``: hydrostatic generalised force on the left-hand side (weight minus buoyancy)."""
+    kinematics(model.bodies, q, W.zero_velocity, W)
+    restoring_into(model, W, out)
+
+
+@compiled(fastmath=True)
+def thrust_matrix(model, q, W, out):
+    """``B(q)`` (nv x m): generalised forces of unit thrusts (the paper's eq. (20))."""
+    kinematics(model.bodies, q, W.zero_velocity, W)
+    m = model.thrusters.body.shape[0]
+    unit = np.zeros(m)
+    column = W.tau_total
+    for k in range(m):
+        unit[k] = 1.0
+        thrust_into(model, W, unit, column)
+        unit[k] = 0.0
+        for i in range(column.shape[0]):
+            out[i, k] = column[i]

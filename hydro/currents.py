@@ -1,0 +1,206 @@
+"""Water currents: the velocity of the water at a point and time, as compiled functions.
+
+A current is a function ``current(t, x, y, z, parameters) -> (V_x, V_y, V_z)`` giving the water
+velocity [m/s] in world axes at time ``t`` [s] and world point ``(x, y, z)`` [m], compiled with
+:func:`hydro.jit.compiled` (a user's own current is any numba function with this signature), plus its
+parameter array. The simulator samples it at every integrator stage at each body's probe point
+(:attr:`hydro.laws.FluidModel.current_probe`), and the fluid laws act on each link's velocity
+relative to that water (Fossen 2021, eq. (10.4)).
+
+Built in (:class:`Current` builds them and checks their parameters):
+
+* :func:`constant_current` - uniform and steady (Fossen 2021, Sec. 10.3);
+* :func:`tidal_current` - uniform, ``V(t) = V_0 + A sin(2 pi t / T + phi)`` (a tide or a slow
+  oscillation; a real tide has ``T`` near 12.42 h);
+* :func:`shear_current` - steady, varying linearly with depth, ``V(z) = V_0 + G (z - z_0)`` (a
+  boundary-layer or wind-driven profile near a reference depth).
+
+A varying current is applied quasi-steadily (see :mod:`aiauv_pin.fast.kernels`): the forces use the
+relative velocity, and the fluid's own acceleration is neglected.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hydro.jit import compiled
+from hydro.spec import HydroError
+
+
+@compiled
+def constant_current(t, x, y, z, parameters):
+    """``V = (p_0, p_1, p_2)`` [m/s] everywhere, at all times."""
+    return parameters[0], parameters[1], parameters[2]
+
+
+@compiled
+def tidal_current(t, x, y, z, parameters):
+    """``V(t) = V_0 + A sin(2 pi t / T + phi)``; parameters ``(V_0 (3), A (3), T [s], phi [rad])``."""
+    s = math.sin(2.0 * math.pi * t / parameters[6] + parameters[7])
+    return (
+        parameters[0] + parameters[3] * s,
+        parameters[1] + parameters[4] * s,
+        parameters[2] + parameters[5] * s,
+    )
+
+
+@compiled
+def shear_current(t, x, y, z, parameters):
+    """``V(z) = V_0 + G (z - z_0)``; parameters ``(V_0 (3) [m/s], G (3) [1/s], z_0 [m])``."""
+    dz = z - parameters[6]
+    return (
+        parameters[0] + parameters[3] * dz,
+        parameters[1] + parameters[4] * dz,
+        parameters[2] + parameters[5] * dz,
+    )
+
+
+def _vector3(value, name: str) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise HydroError(f"{name}: expected three numbers, got {value!r}") from None
+    if array.shape != (3,) or not np.all(np.isfinite(array)):
+        raise HydroError(f"{name}: expected three finite numbers, got {value!r}")
+    return array
+
+
+def _number(value, name: str, *, positive: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise HydroError(f"{name}: expected a number, got {value!r}")
+    number = float(value)
+    if not math.isfinite(number) or (positive and number <= 0.0):
+        raise HydroError(
+            f"{name}: expected a {'positive ' if positive else ''}finite number, got {value!r}"
+        )
+    return number
+
+
+@dataclass(frozen=True)
+class Current:
+    """A water current: a compiled function and its parameters.
+
+    Attributes:
+        function: ``current(t, x, y, z, parameters) -> (V_x, V_y, V_z)`` [m/s].
+        parameters: Its parameter array.
+        kind: A name for reports (``"constant"``, ``"tidal"``, ``"shear"`` or ``"user"``).
+    """
+
+    function: Callable
+    parameters: np.ndarray
+    kind: str = "user"
+    description: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        parameters = np.ascontiguousarray(self.parameters, dtype=float).reshape(-1)
+        object.__setattr__(self, "parameters", parameters)
+
+    @classmethod
+    def constant(cls, velocity) -> Current:
+        """Uniform, steady current ``velocity`` (3,) [m/s], world axes."""
+        v = _vector3(velocity, "current.velocity")
+        return cls(constant_current, v, "constant", {"type": "constant", "velocity": v.tolist()})
+
+    @classmethod
+    def tidal(cls, mean, amplitude, period: float, phase: float = 0.0) -> Current:
+        """``V(t) = mean + amplitude sin(2 pi t / period + phase)`` [m/s]."""
+        mean = _vector3(mean, "current.velocity")
+        amplitude = _vector3(amplitude, "current.amplitude")
+        period = _number(period, "current.period", positive=True)
+        phase = _number(phase, "current.phase")
+        parameters = np.concatenate((mean, amplitude, [period, phase]))
+        description = {
+            "type": "tidal",
+            "velocity": mean.tolist(),
+            "amplitude": amplitude.tolist(),
+            "period": period,
+            "phase": phase,
+        }
+        return cls(tidal_current, parameters, "tidal", description)
+
+    @classmethod
+    def shear(cls, velocity, gradient, reference_z: float = 0.0) -> Current:
+        """``V(z) = velocity + gradient (z - reference_z)`` [m/s], ``gradient`` in [1/s]."""
+        velocity = _vector3(velocity, "current.velocity")
+        gradient = _vector3(gradient, "current.gradient")
+        reference_z = _number(reference_z, "current.reference_z")
+        parameters = np.concatenate((velocity, gradient, [reference_z]))
+        description = {
+            "type": "shear",
+            "velocity": velocity.tolist(),
+            "gradient": gradient.tolist(),
+            "reference_z": reference_z,
+        }
+        return cls(shear_current, parameters, "shear", description)
+
+    @property
+    def is_zero(self) -> bool:
+        """True for a constant current of zero velocity."""
+        return self.kind == "constant" and not np.any(self.parameters[:3])
+
+    def velocity(self, t: float, position) -> np.ndarray:
+        """Water velocity (3,) [m/s] at time ``t`` [s] and world ``position`` (3,) [m]."""
+        p = np.asarray(position, dtype=float)
+        return np.array(self.function(float(t), p[0], p[1], p[2], self.parameters))
+
+    def describe(self) -> dict:
+        """JSON-friendly description for reports."""
+        return dict(self.description) or {"type": self.kind, "parameters": self.parameters.tolist()}
+
+
+#: Keys accepted per current type in a scenario file's ``[current]`` table.
+CURRENT_KEYS = {
+    "constant": ("type", "velocity"),
+    "tidal": ("type", "velocity", "amplitude", "period", "phase"),
+    "shear": ("type", "velocity", "gradient", "reference_z"),
+}
+
+
+def as_current(value) -> Current:
+    """A :class:`Current` from ``None`` (still water), a velocity (3,) or a :class:`Current`."""
+    if isinstance(value, Current):
+        return value
+    if value is None:
+        return Current.constant(np.zeros(3))
+    return Current.constant(value)
+
+
+def current_from_mapping(table: Mapping, where: str = "current") -> Current:
+    """A :class:`Current` from a scenario file's table, e.g. ``{"velocity": [0, 0.2, 0]}``.
+
+    ``type`` is ``"constant"`` (default), ``"tidal"`` or ``"shear"``; unknown keys, wrong types and
+    non-physical values get a one-line :class:`hydro.spec.HydroError` naming the key.
+    """
+    if not isinstance(table, Mapping):
+        raise HydroError(f"{where}: expected a table, got {type(table).__name__}")
+    kind = table.get("type", "constant")
+    if kind not in CURRENT_KEYS:
+        raise HydroError(
+            f"{where}.type: unknown current type {kind!r} (expected one of {', '.join(CURRENT_KEYS)})"
+        )
+    unknown = sorted(set(table) - set(CURRENT_KEYS[kind]))
+    if unknown:
+        raise HydroError(f"{where}: unknown key {unknown[0]!r} for a {kind} current")
+    velocity = table.get("velocity", [0.0, 0.0, 0.0])
+    try:
+        if kind == "constant":
+            return Current.constant(velocity)
+        if kind == "tidal":
+            for key in ("amplitude", "period"):
+                if key not in table:
+                    raise HydroError(f"{where}.{key}: required for a tidal current")
+            return Current.tidal(
+                velocity, table["amplitude"], table["period"], table.get("phase", 0.0)
+            )
+        if "gradient" not in table:
+            raise HydroError(f"{where}.gradient: required for a shear current")
+        return Current.shear(velocity, table["gradient"], table.get("reference_z", 0.0))
+    except HydroError as exc:
+        message = str(exc)
+        if message.startswith("current.") and where != "current":
+            message = where + message[len("current") :]
+        raise HydroError(message) from None
