@@ -34,6 +34,7 @@ References:
 
 from __future__ import annotations
 
+import abc
 import dataclasses
 import math
 from collections.abc import Callable, Mapping
@@ -419,7 +420,7 @@ def _path_point(result) -> PathPoint:
     )
 
 
-class Path:
+class Path(abc.ABC):
     """Common interface: a compiled function, its parameters, and conveniences around them.
 
     Subclasses are frozen dataclasses that fill :attr:`params` in ``__post_init__``, set
@@ -448,9 +449,9 @@ class Path:
             ]
         )
 
+    @abc.abstractmethod
     def points_at(self, s) -> np.ndarray:
         """World points (n, 3) [m] at arc lengths ``s`` (n,) [m]."""
-        raise NotImplementedError  # every registered path overrides it; UserPath marches
 
     def sample(self, s_range: float | tuple[float, float], n: int = 200) -> np.ndarray:
         """``n`` world points (n, 3) [m] evenly spaced in arc length, for drawing.

@@ -8,6 +8,7 @@ closed-form curvature and torsion, and exact floating-point values on the paper'
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -172,7 +173,7 @@ def test_helix_start_point_and_start_frame():
     # right-handed about the axis: moving counter-clockwise seen from +z and upwards
     assert T[2] > 0 and np.cross(start - arr(path.centre), T)[2] > 0
     one_turn = 2 * math.pi * math.hypot(4.0, 6.0 / (2 * math.pi))  # [m]
-    assert path.closest(start + [0, 0, 6.0]).s == pytest.approx(one_turn, abs=1e-12)
+    assert path.closest(start + np.array([0.0, 0.0, 6.0])).s == pytest.approx(one_turn, abs=1e-12)
 
 
 # --- lines ----------------------------------------------------------------------------------
@@ -274,7 +275,7 @@ def test_user_path_takes_a_compiled_function_and_samples_by_marching():
     assert user.closest(p) == helix.closest(p)
     assert np.allclose(user.cross_track_error(p), helix.cross_track_error(p), atol=0)
     assert np.allclose(user.sample((-5.0, 50.0), 23), helix.sample((-5.0, 50.0), 23), atol=1e-8)
-    assert user.describe()["type"] == "user"
+    assert json.loads(json.dumps(user.describe()))["type"] == "user"
 
 
 # --- tables and errors ----------------------------------------------------------------------
@@ -283,7 +284,7 @@ def test_user_path_takes_a_compiled_function_and_samples_by_marching():
 @pytest.mark.parametrize("name", PATHS)
 def test_describe_round_trips_through_from_mapping(name):
     path = PATHS[name]
-    table = path.describe()
+    table = json.loads(json.dumps(path.describe()))  # JSON-friendly, for summary.json
     rebuilt = from_mapping(table)
     assert type(rebuilt) is PATH_TYPES[table["type"]]
     assert np.allclose(rebuilt.params, path.params, rtol=0, atol=1e-15)
