@@ -128,10 +128,6 @@ def line_point(position, params) -> PathPoint:
     )
 
 
-#: Layout of :func:`helix_point`'s parameters (see :meth:`HelixPath.params`).
-HELIX_PARAMS = 14
-
-
 @compiled
 def helix_point(position, params) -> PathPoint:
     """Closest point and rotation-minimising frame of a circular helix.
@@ -267,7 +263,7 @@ def waypoints_point(position, params) -> PathPoint:
 
     Args:
         position: Position ``p`` (3,) [m], world frame.
-        params: Flat piece records, see :meth:`WaypointPath.params`.
+        params: Header and flat piece records (:data:`PIECE_STRIDE`), built by :class:`WaypointPath`.
     """
     count = int(params[0])
     stride = int(params[1])
@@ -404,6 +400,13 @@ def _as_tuple(array: np.ndarray) -> Vector3:
     return tuple(float(x) for x in array)  # type: ignore[return-value]
 
 
+def _position(position) -> np.ndarray:
+    try:
+        return np.ascontiguousarray(_vector(position, "position"))
+    except PathError as error:
+        raise ValueError(f"position: {error.problem}") from None
+
+
 def _path_point(result) -> PathPoint:
     """A :class:`PathPoint` with plain floats, whatever the function returned (tuple or record)."""
     s, point, tangent, normal1, normal2, k1, k2, k1_rate, k2_rate = result
@@ -433,12 +436,12 @@ class Path(abc.ABC):
 
     def closest(self, position) -> PathPoint:
         """The path point closest to ``position`` (3,) [m] (world frame) and the frame there."""
-        p = np.ascontiguousarray(_vector(position, "position"))
+        p = _position(position)
         return _path_point(self.function(p, self.params))
 
     def cross_track_error(self, position) -> np.ndarray:
         """Components of ``position - closest point`` along ``(N1, N2)`` (2,) [m]."""
-        p = np.ascontiguousarray(_vector(position, "position"))
+        p = _position(position)
         q = _path_point(self.function(p, self.params))
         e = (p[0] - q.point[0], p[1] - q.point[1], p[2] - q.point[2])
         n1, n2 = q.normal1, q.normal2
@@ -719,7 +722,7 @@ def _piece(kind, s, lo, hi, origin, a, b, n1, n2, radius=0.0, w=(0.0, 0.0, 0.0))
     return record
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class UserPath(Path):
     """A user's own path: a compiled ``function(position, params) -> PathPoint`` (or any callable
     returning the same nine fields) and its parameter array.
@@ -814,7 +817,6 @@ def from_mapping(table: Mapping[str, Any], where: str = "path") -> Path:
 
 
 __all__ = [
-    "HELIX_PARAMS",
     "PATH_TYPES",
     "PIECE_STRIDE",
     "VERTICAL_TOLERANCE",

@@ -314,6 +314,9 @@ BAD_CLASSES = [
         "path.corner_radius: corner at waypoint 1 does not fit (needs 3.2 m, segment 1-2 has 1.1 m)",
     ),
     (lambda: UserPath(3.0, np.zeros(3)), "path.function: expected a callable"),
+    (lambda: PATHS["line"].sample((1.0, 1.0)), "s_range: need finite s_min < s_max"),
+    (lambda: PATHS["line"].sample(5.0, 1), "n: need at least 2 points"),
+    (lambda: PATHS["line"].closest([0.0, 1.0]), "position: expected 3 numbers"),
     (lambda: UserPath(helix_point, np.zeros((2, 2))), "path.params: expected a 1-D array"),
 ]
 
