@@ -10,13 +10,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from control.laws import new_command_buffers, new_surge_state
 from control.path_following import (
     PathFollowingController,
     PathFollowingGains,
     PathFollowingMeasurement,
 )
+from control.paths import Path
 from control.surge import SurgePIController
 
+from .controllers import CompiledController
+from .fast.controllers import PaperParameters, PaperState, paper_info_shapes, paper_path_following
 from .simulation import JointServo
 from .vehicle import Vehicle
 
@@ -58,9 +62,11 @@ def surge_thruster_indices(vehicle: Vehicle) -> list[int]:
 def compiled_path_following_reason(adapter) -> str | None:
     """Why ``adapter`` cannot run in compiled code (``None`` if it can).
 
-    The compiled path (:mod:`aiauv_pin.fast.path_following`) re-implements exactly the paper's
-    controller; it runs only for a plain :class:`VehiclePathFollowing` around a plain
-    :class:`control.path_following.PathFollowingController` on a vehicle with the numba backend.
+    The compiled loop runs the same law (:func:`control.laws.path_following_command`) through
+    :func:`aiauv_pin.fast.controllers.paper_path_following`; it needs a plain
+    :class:`VehiclePathFollowing` around a plain
+    :class:`control.path_following.PathFollowingController` (a subclass may change the law in
+    Python) on a vehicle with the numba backend.
     """
     if type(adapter) is not VehiclePathFollowing:
         return f"the controller is a {type(adapter).__name__}, not VehiclePathFollowing"
@@ -96,6 +102,7 @@ class VehiclePathFollowing:
         gains: Controller gains (paper defaults).
         end_effector: Name of the end-effector frame.
         continuous_joints: Run eq. (24) as a continuous servo (see above).
+        path: The path to follow (default: the world x-axis, the paper's).
     """
 
     def __init__(
@@ -105,6 +112,7 @@ class VehiclePathFollowing:
         *,
         end_effector: str = END_EFFECTOR,
         continuous_joints: bool = True,
+        path: Path | None = None,
     ) -> None:
         self.vehicle = vehicle
         self.continuous_joints = bool(continuous_joints)
@@ -119,7 +127,9 @@ class VehiclePathFollowing:
             n_thrusters=len(vehicle.hydro.thrusters),
             max_thrust=vehicle.max_thrust,
             gains=self.gains,
+            path=path,
         )
+        self.path = self.controller.path
         self.joint_servo = JointServo.uniform(vehicle.nv - 6, self.gains.k_qp, self.gains.k_qd)
         self.reset()
 
@@ -175,5 +185,55 @@ class VehiclePathFollowing:
             # mechanical power of each thruster: thrust times the speed of its point along its axis
             "thruster_power": (v @ thrust_matrix) * command.thrusts,
             "joint_torque": command.joint_torques,
+            "cross_track": command.cross_track_error,
+            "path_s": command.path_parameter,
         }
         return tau, info
+
+    def info_shapes(self) -> dict[str, tuple[int, ...]]:
+        """Keys and shapes of the logged diagnostics (both the Python and the compiled loop)."""
+        return paper_info_shapes(self.controller.n_joints, self.controller.n_thrusters)
+
+    def compiled(self) -> CompiledController:
+        """This controller for the compiled loop (a fresh state; the same law and parameters).
+
+        Raises:
+            ValueError: It cannot run compiled (see :func:`compiled_path_following_reason`).
+        """
+        reason = compiled_path_following_reason(self)
+        if reason is not None:
+            raise ValueError(f"compiled path following unavailable: {reason}")
+        controller = self.controller
+        body, rotation, translation = self.vehicle.fast.frame(self.frame)
+        parameters = PaperParameters(
+            gains=controller.gain_record,
+            path_function=controller.path.function,
+            path_parameters=controller.path.params,
+            axis_index=np.ascontiguousarray(controller.axis_index, dtype=np.int64),
+            reference_scale=np.ascontiguousarray(controller.reference_scale, dtype=float),
+            surge_mask=controller.surge_mask,
+            frame_body=body,
+            frame_rotation=rotation,
+            frame_translation=translation,
+            continuous_joints=self.continuous_joints,
+            servo_references=self.joint_servo.references,
+        )
+        state = PaperState(
+            surge=new_surge_state(),
+            velocity_history=np.zeros(5),
+            command=new_command_buffers(controller.n_joints, controller.n_thrusters),
+        )
+
+        def reset() -> None:
+            for array in (*state.surge, state.velocity_history):
+                array[:] = 0.0
+            self.joint_servo.references[:] = 0.0
+
+        return CompiledController(
+            paper_path_following,
+            parameters,
+            state,
+            self.info_shapes(),
+            self.joint_servo if self.continuous_joints else None,
+            reset,
+        )

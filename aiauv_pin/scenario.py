@@ -200,29 +200,17 @@ def run_paper_scenario(
         on_log=on_log,
     )
     start = time.perf_counter()
-    if use_compiled:
-        from .fast.path_following import run_path_following
-
-        trajectory = run_path_following(
-            controller,
-            q0,
-            v0,
-            scenario.duration,
-            scenario.dt,
-            after_first_chunk=after_first_chunk,
-            **options,
-        )
-    else:
-        trajectory = simulate(
-            vehicle,
-            q0,
-            v0,
-            scenario.duration,
-            scenario.dt,
-            controller,
-            servo=controller.joint_servo if controller.continuous_joints else None,
-            **options,
-        )
+    trajectory = simulate(
+        vehicle,
+        q0,
+        v0,
+        scenario.duration,
+        scenario.dt,
+        controller.compiled() if use_compiled else controller,
+        servo=controller.joint_servo if controller.continuous_joints else None,
+        after_first_chunk=after_first_chunk if use_compiled else None,
+        **options,
+    )
     return ScenarioResult(
         scenario=scenario,
         trajectory=trajectory,

@@ -9,13 +9,16 @@ then every step goes through Python. On Pinocchio every step calls :mod:`aiauv_p
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from control.laws import joint_pd_torque
 from hydro.currents import as_current
 
+from .controllers import CompiledController
 from .disturbances import Disturbance
 from .errors import SimulationDiverged
 from .integrators import INTEGRATORS
@@ -78,10 +81,12 @@ class JointServo:
     def torque(self, vehicle: Vehicle, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Generalised force (nv,) of the servo at ``(q, v)`` (zero on the base)."""
         tau = np.zeros(vehicle.nv)
-        # eq. (24)
-        tau[6:] = -self.stiffness * (q[7:] - self.references) - self.damping * v[6:]
-        if self.compensate_restoring:
-            tau[6:] += vehicle.restoring_forces(q)[6:]
+        n = self.references.size
+        g = vehicle.restoring_forces(q)[6:] if self.compensate_restoring else np.zeros(n)
+        for k in range(n):  # eq. (24): control.laws.joint_pd_torque
+            tau[6 + k] = joint_pd_torque(
+                q[7 + k], v[6 + k], self.references[k], g[k], self.stiffness[k], self.damping[k]
+            )
         return tau
 
     def packed(self):
@@ -174,6 +179,8 @@ def simulate(
     progress: bool = False,
     on_log: Callable[[float, np.ndarray, Mapping[str, object]], None] | None = None,
     control_period: float | None = None,
+    chunk_seconds: float | None = None,
+    after_first_chunk: Callable[[], None] | None = None,
 ) -> Trajectory:
     """Integrate the vehicle's dynamics with a fixed step.
 
@@ -187,7 +194,10 @@ def simulate(
         v0: Initial velocity (nv,) [m/s, rad/s].
         duration: Simulated time [s] (> 0).
         dt: Step [s] (> 0).
-        controller: ``controller(t, q, v) -> tau | (tau, info)``; ``None`` applies no input.
+        controller: ``controller(t, q, v) -> tau | (tau, info)`` (Python), a
+            :class:`aiauv_pin.controllers.CompiledController` (the whole run then executes in
+            compiled code, in chunks of ``chunk_seconds`` of simulated time between which the
+            progress bar and ``on_log`` run), or ``None`` (no input).
         method: ``"rk4"`` (Runge-Kutta-Munthe-Kaas, order 4) or ``"euler"`` (semi-implicit, order 1).
         current: Water velocity: ``None`` (still water), a constant world velocity (3,) [m/s], or a
             :class:`hydro.currents.Current` (time- and space-varying, compiled), sampled at every
@@ -202,6 +212,11 @@ def simulate(
         control_period: Controller sampling period [s], a whole multiple of ``dt``; ``None`` means
             ``dt``.
         on_log: ``on_log(t, q, info)`` called at every logged sample (e.g. a live viewer).
+        chunk_seconds: Compiled controller only: simulated time per compiled call (default 1 s
+            with ``on_log``, else 10 s).
+        after_first_chunk: Compiled controller only: called once after the first chunk (the code
+            is then compiled; later chunks release the GIL, so a background thread started here
+            overlaps them).
 
     Returns:
         The trajectory.
@@ -214,6 +229,25 @@ def simulate(
     n_steps, steps_per_control = check_run_arguments(
         duration, dt, method, log_every, control_period
     )
+    if isinstance(controller, CompiledController):
+        return _simulate_compiled(
+            vehicle,
+            controller,
+            q0,
+            v0,
+            n_steps,
+            steps_per_control,
+            dt,
+            method=method,
+            current=current,
+            disturbance=disturbance,
+            servo=servo,
+            log_every=log_every,
+            progress=progress,
+            on_log=on_log,
+            chunk_seconds=chunk_seconds,
+            after_first_chunk=after_first_chunk,
+        )
     step = INTEGRATORS[method]
     model = vehicle.model
     q = np.array(q0, dtype=float)
@@ -332,6 +366,129 @@ def simulate(
         if bar is not None:
             bar.close()
     return _trajectory(t_log, q_log, v_log, tau_log, info_log, logged)
+
+
+def _simulate_compiled(
+    vehicle: Vehicle,
+    controller: CompiledController,
+    q0,
+    v0,
+    n_steps: int,
+    steps_per_control: int,
+    dt: float,
+    *,
+    method: str,
+    current,
+    disturbance,
+    servo,
+    log_every: int,
+    progress: bool,
+    on_log,
+    chunk_seconds: float | None,
+    after_first_chunk,
+) -> Trajectory:
+    """:func:`simulate` with a compiled controller: the whole loop in compiled code."""
+    from .fast.loop import run_chunk
+    from .fast.model import METHOD_CODES
+
+    fast = vehicle.fast
+    if fast is None:
+        raise ValueError(
+            f"a compiled controller needs the numba backend (the vehicle runs on "
+            f"{vehicle.active_backend}: {vehicle.fallback_reason})"
+        )
+    if disturbance is not None and not isinstance(disturbance, Disturbance):
+        raise ValueError(
+            "a compiled controller runs with compiled disturbances only (a Disturbance)"
+        )
+    servo = controller.servo if servo is None else servo
+    if servo is not None and not isinstance(servo, JointServo):
+        raise ValueError("a compiled controller runs with a JointServo only, not a Python servo")
+    nq, nv = fast.nq, fast.nv
+    q = np.array(q0, dtype=float)
+    v = np.array(v0, dtype=float)
+    if q.shape != (nq,) or v.shape != (nv,):
+        raise ValueError(f"q0 must have {nq} and v0 {nv} entries")
+    if controller.reset is not None:
+        controller.reset()
+    environment = fast.environment(as_current(current), disturbance)
+    servo_record = servo.packed() if servo is not None else fast.no_servo
+    log_every = int(log_every)
+    n_logs = n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
+    width = controller.info_width
+    log = np.empty((n_logs, 1 + nq + 2 * nv + width))
+    tau = np.zeros(nv)
+    info = np.full(width, np.nan)
+    workspace = fast.workspace
+    if chunk_seconds is None:
+        chunk_seconds = 1.0 if on_log is not None else 10.0
+    chunk = max(1, round(chunk_seconds / dt))
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=n_steps, unit="step", desc=f"simulate {n_steps * dt:g} s", leave=False)
+    logged = 0
+    k = 0
+    diverged_at = None
+    try:
+        while True:
+            stop = min(k + chunk, n_steps)
+            start_log = logged
+            logged, done = run_chunk(
+                fast.model,
+                environment,
+                servo_record,
+                controller.function,
+                controller.parameters,
+                controller.state,
+                q,
+                v,
+                tau,
+                info,
+                float(dt),
+                METHOD_CODES[method],
+                k,
+                stop,
+                n_steps,
+                steps_per_control,
+                log_every,
+                log,
+                logged,
+                workspace,
+            )
+            if on_log is not None:
+                for row in log[start_log:logged]:
+                    on_log(
+                        float(row[0]),
+                        row[1 : 1 + nq].copy(),
+                        controller.unpack(row[1 + nq + 2 * nv :]),
+                    )
+            if bar is not None:
+                bar.update(done)
+            if k == 0 and after_first_chunk is not None:
+                after_first_chunk()
+            if k + done < stop:
+                diverged_at = k + done
+                break
+            k = stop
+            if k == n_steps:
+                break
+            time.sleep(0)  # let other threads (a viewer) run between chunks
+    finally:
+        if bar is not None:
+            bar.close()
+    rows = log[:logged]
+    trajectory = Trajectory(
+        t=rows[:, 0].copy(),
+        q=rows[:, 1 : 1 + nq].copy(),
+        v=rows[:, 1 + nq : 1 + nq + nv].copy(),
+        tau=rows[:, 1 + nq + nv : 1 + nq + 2 * nv].copy(),
+        info=controller.unpack(rows[:, 1 + nq + 2 * nv :]),
+    )
+    if diverged_at is not None:
+        raise diverged(trajectory, diverged_at + 1, dt)
+    return trajectory
 
 
 def _generalized(value, nv: int) -> np.ndarray:

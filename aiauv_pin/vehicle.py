@@ -37,7 +37,7 @@ import pinocchio as pin
 from hydro.crossflow import gauss_legendre_unit
 from hydro.currents import Current, as_current
 from hydro.kirchhoff import momentum_in_world
-from hydro.laws import CROSSFLOW_NODES, FluidModel, add_body_fluid_bias, hydrostatic_wrench
+from hydro.laws import CROSSFLOW_NODES, FluidModel, add_body_fluid_bias
 from hydro.spatial import motion_transform
 from hydro.spec import HydroSpec
 

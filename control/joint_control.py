@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from control import laws
+
 
 def _array(value, n: int | None, name: str) -> np.ndarray:
     array = np.atleast_1d(np.asarray(value, dtype=float))
@@ -56,4 +58,6 @@ def joint_torques(
     for name, gain in (("k_qp", k_qp), ("k_qd", k_qd)):
         if not (np.isfinite(gain) and gain >= 0.0):
             raise ValueError(f"{name} must be finite and >= 0, got {gain}")
-    return -k_qp * (q - q_ref) - k_qd * q_dot + g_q  # eq. (24)
+    return np.array(  # eq. (24): control.laws.joint_pd_torque
+        [laws.joint_pd_torque(q[j], q_dot[j], q_ref[j], g_q[j], k_qp, k_qd) for j in range(n)]
+    )

@@ -21,6 +21,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from control import laws
 from control.reduced_attitude import Feedforward, ReducedAttitudeLaw
 
 AXIS_LABELS = ("y", "z")
@@ -100,7 +101,9 @@ def joint_references(
     if not (np.isfinite(q_max) and q_max > 0.0):
         raise ValueError(f"q_max must be positive and finite, got {q_max}")
     axis_index, scale = joint_reference_pattern(joint_axes, alpha)
-    return scale * np.clip(q0, -q_max, q_max)[axis_index]  # eq. (22)
+    return np.array(  # eq. (22): control.laws.joint_reference
+        [laws.joint_reference(q0[a], k, q_max) for a, k in zip(axis_index, scale, strict=True)]
+    )
 
 
 def pointing_law(k_p: float, k_d: float, feedforward: Feedforward = "exact") -> ReducedAttitudeLaw:

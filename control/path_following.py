@@ -29,10 +29,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from control.guidance import cross_track_gains, los_reference
-from control.joint_control import joint_torques
-from control.joint_references import check_joint_axes, joint_reference_pattern, pointing_law
-from control.reduced_attitude import check_feedforward
+from control import laws
+from control.guidance import X_AXIS, cross_track_gains
+from control.joint_references import check_joint_axes, joint_reference_pattern
+from control.paths import Path
+from control.reduced_attitude import check_feedforward, check_rotation
 from control.surge import SurgePIController
 
 CASES = ("uniform", "stabilised")
@@ -204,6 +205,9 @@ class PathFollowingCommand:
         x_ref_dot: Its time derivative (3,) [1/s].
         pointing_direction: End-effector x-axis in the world frame (3,).
         surge_integral: ``integral (u - u_d) dt`` of the surge PI [m].
+        x_ref_ddot: Second time derivative of ``x_ref`` (3,) [1/s^2].
+        cross_track_error: End-effector offset from the path along ``N1``, ``N2`` (2,) [m].
+        path_parameter: Arc length of the closest path point [m].
     """
 
     joint_torques: np.ndarray
@@ -216,10 +220,13 @@ class PathFollowingCommand:
     x_ref_dot: np.ndarray
     pointing_direction: np.ndarray
     surge_integral: float
+    x_ref_ddot: np.ndarray
+    cross_track_error: np.ndarray
+    path_parameter: float
 
 
 class PathFollowingController:
-    """Path following along the world x-axis by curving the body (paper, Section 3).
+    """Path following by curving the body (paper, Section 3), on any path of :mod:`control.paths`.
 
     Args:
         joint_axes: Axis label (``"y"``/``"z"``) of each actuated joint, model order, tail to head;
@@ -230,6 +237,7 @@ class PathFollowingController:
             same thrust, limited by the smallest of their limits, so that a symmetric pair produces
             no turning moment.
         gains: Controller parameters.
+        path: The path to follow (default: the world x-axis, as in the paper).
     """
 
     def __init__(
@@ -239,6 +247,7 @@ class PathFollowingController:
         n_thrusters: int,
         max_thrust: float | Sequence[float],
         gains: PathFollowingGains | None = None,
+        path: Path | None = None,
     ) -> None:
         self.gains = PathFollowingGains() if gains is None else gains
         if not isinstance(self.gains, PathFollowingGains):
@@ -263,13 +272,52 @@ class PathFollowingController:
                 f"max_thrust: limits must be positive and finite, got {limits.tolist()}"
             )
         self.max_thrust = limits.copy()
-        self._pointing_law = pointing_law(self.gains.k_p, self.gains.k_d, self.gains.feedforward)
+        self.path = X_AXIS if path is None else path
+        if not isinstance(self.path, Path):
+            raise ValueError(f"path: expected a control.paths.Path, got {type(self.path).__name__}")
         self._surge = SurgePIController(
             self.gains.k_1p,
             self.gains.k_1i,
             self.gains.u_d,
             float(np.min(self.max_thrust[list(self.surge_thrusters)])),
         )
+        self.surge_mask = np.zeros(self.n_thrusters, dtype=np.int64)
+        self.surge_mask[list(self.surge_thrusters)] = 1
+
+    @property
+    def gain_record(self) -> laws.PaperGains:
+        """The gains as the :class:`control.laws.PaperGains` record the compiled law takes."""
+        g = self.gains
+        k_y, k_z = cross_track_gains(g.k_e)[1:]
+        return laws.PaperGains(
+            u_d=g.u_d,
+            k_y=float(k_y),
+            k_z=float(k_z),
+            k_p=g.k_p,
+            k_d=g.k_d,
+            k_qp=g.k_qp,
+            k_qd=g.k_qd,
+            k_1p=g.k_1p,
+            k_1i=g.k_1i,
+            max_thrust=self._surge.max_thrust,
+            q_max=g.q_max,
+            exact=g.feedforward == "exact",
+        )
+
+    @property
+    def axis_index(self) -> np.ndarray:
+        """Base angle (0: ``q_y0``, 1: ``q_z0``) driving each joint (eq. 22)."""
+        return self._axis_index
+
+    @property
+    def reference_scale(self) -> np.ndarray:
+        """``exp(-alpha (j - 1))`` per joint (eq. 22)."""
+        return self._reference_scale
+
+    @property
+    def surge_state(self) -> laws.SurgeState:
+        """The surge PI's state record (shared with the compiled loop when it runs this controller)."""
+        return self._surge.state
 
     def _check_surge_thrusters(self, surge_thrusters: Sequence[int]) -> tuple[int, ...]:
         indices = tuple(surge_thrusters)
@@ -312,41 +360,48 @@ class PathFollowingController:
                 f"measurement: {measurement.joint_positions.size} joints, "
                 f"controller has {self.n_joints}"
             )
-        g = self.gains
-        x_ref, x_ref_dot, x_ref_ddot = los_reference(  # eq. (21)
+        t = float(t)
+        if not np.isfinite(t):
+            raise ValueError(f"t must be finite, got {t}")
+        if self._surge.state.has_previous[0] and t < self._surge.state.time[0]:
+            if True:
+                raise ValueError(
+                    f"time went backwards: t = {t} < previous {self._surge.state.time[0]}"
+                )
+        out = laws.new_command_buffers(self.n_joints, self.n_thrusters)
+        R_e = check_rotation(measurement.rotation_to_world, "rotation_to_world")
+        laws.path_following_command(  # eqs. (21)-(25): control.laws.path_following_command
+            self.gain_record,
+            self.path.function,
+            self.path.params,
+            self._axis_index,
+            self._reference_scale,
+            self.surge_mask,
+            self._surge.state,
+            float(t),
+            R_e,
             measurement.position_in_world,
             measurement.velocity_in_world,
             measurement.acceleration_in_world,
-            g.u_d,
-            g.k_e,
-        )
-        R_e = measurement.rotation_to_world
-        omega_e = measurement.angular_velocity_in_ee
-        q0, phi_tilde, omega_tilde = self._pointing_law(  # eqs. (23), (4), (8)
-            R_e, omega_e, x_ref, x_ref_dot, x_ref_ddot
-        )
-        q_ref = self._reference_scale * np.clip(q0, -g.q_max, g.q_max)[self._axis_index]  # eq. (22)
-        tau_q = joint_torques(  # eq. (24)
+            measurement.angular_velocity_in_ee,
+            measurement.surge_velocity,
             measurement.joint_positions,
             measurement.joint_velocities,
-            q_ref,
             measurement.joint_hydrostatic_forces,
-            g.k_qp,
-            g.k_qd,
+            out,
         )
-        thrusts = np.zeros(self.n_thrusters)
-        thrusts[list(self.surge_thrusters)] = self._surge.update(
-            t, measurement.surge_velocity
-        )  # eq. (25)
         return PathFollowingCommand(
-            joint_torques=tau_q,
-            thrusts=thrusts,
-            phi_tilde=phi_tilde,
-            omega_tilde=omega_tilde,
-            base_angles=q0,
-            joint_references=q_ref,
-            x_ref=x_ref,
-            x_ref_dot=x_ref_dot,
+            joint_torques=out.joint_torques,
+            thrusts=out.thrusts,
+            phi_tilde=float(out.scalars[0]),
+            omega_tilde=out.omega_tilde,
+            base_angles=out.base_angles,
+            joint_references=out.joint_references,
+            x_ref=out.x_ref,
+            x_ref_dot=out.x_ref_dot,
             pointing_direction=R_e[:, 0].copy(),
             surge_integral=self._surge.integral,
+            x_ref_ddot=out.x_ref_ddot,
+            cross_track_error=out.cross_track,
+            path_parameter=float(out.scalars[1]),
         )

@@ -49,11 +49,13 @@ from typing import Literal, NamedTuple
 
 import numpy as np
 
+from control import laws
+
 Feedforward = Literal["exact", "paper"]
 FEEDFORWARD_OPTIONS: tuple[str, ...] = ("exact", "paper")
 """Accepted values of the ``feedforward`` switch."""
 
-ANTIPODAL_TOLERANCE = 1e-12
+ANTIPODAL_TOLERANCE = laws.ANTIPODAL_TOLERANCE
 """``|x_ref^b x e1|`` (with ``e1 . x_ref^b < 0``) at or below which ``phi_tilde = pi`` [-]."""
 
 E1 = np.array([1.0, 0.0, 0.0])
@@ -85,6 +87,11 @@ def _unit_vector(value, name: str) -> np.ndarray:
     if abs(norm - 1.0) > _UNIT_TOLERANCE:
         raise ValueError(f"{name}: must be a unit vector, got norm {norm:.6g}")
     return array / norm
+
+
+def check_rotation(value, name: str = "R") -> np.ndarray:
+    """``value`` as a 3x3 rotation matrix, or a one-line ``ValueError`` naming ``name``."""
+    return _rotation(value, name)
 
 
 def _rotation(value, name: str = "R") -> np.ndarray:
@@ -159,46 +166,30 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     )
 
 
-def _y_cross_e1(y: np.ndarray) -> np.ndarray:
-    """``k = y x e1 = (0, y_3, -y_2)``; ``|k| = sin(phi_tilde)``."""
-    return np.array([0.0, y[2], -y[1]])
-
-
 def _one_plus_cos(y: np.ndarray) -> float:
-    """``1 + e1 . y`` for unit ``y``; as ``|y x e1|^2 / (1 - e1 . y)`` when ``e1 . y < 0``."""
-    if y[0] >= 0.0:
-        return 1.0 + y[0]
-    return (y[1] * y[1] + y[2] * y[2]) / (1.0 - y[0])
+    """``1 + e1 . y`` for unit ``y`` (:func:`control.laws.one_plus_cos`)."""
+    return float(laws.one_plus_cos(y[0], y[1], y[2]))
 
 
 def is_antipodal(x_ref_b) -> bool:
     """True if ``x_ref^b`` is within :data:`ANTIPODAL_TOLERANCE` of ``-e1`` (``phi_tilde = pi``)."""
-    return bool(x_ref_b[0] < 0.0 and np.hypot(x_ref_b[1], x_ref_b[2]) <= ANTIPODAL_TOLERANCE)
+    return bool(laws.is_antipodal(float(x_ref_b[0]), float(x_ref_b[1]), float(x_ref_b[2])))
 
 
 def _error_angle(y: np.ndarray) -> float:
-    return float(np.arctan2(np.hypot(y[1], y[2]), y[0]))  # eq. (4); |y x e1| = hypot(y_2, y_3)
+    return float(laws.error_angle(y[0], y[1], y[2]))  # eq. (4)
 
 
 def _error_axis_angle(y: np.ndarray) -> np.ndarray:
-    sin_phi = float(np.hypot(y[1], y[2]))
-    if sin_phi == 0.0 or is_antipodal(y):
-        return np.zeros(3)  # 0 at phi_tilde = 0; phi_tilde n := 0 at phi_tilde = pi (after eq. 9)
-    return (_error_angle(y) / sin_phi) * _y_cross_e1(y)  # phi n = (phi / sin phi) (y x e1)
+    return np.array(laws.error_axis_angle(y[0], y[1], y[2]))
 
 
 def _minimal_rotation(y: np.ndarray) -> np.ndarray:
-    if is_antipodal(y):
-        return np.eye(3)  # R_tilde := I at phi_tilde = pi (paper, after eq. 9)
-    S_k = skew(_y_cross_e1(y))
-    return np.eye(3) + S_k + S_k @ S_k / _one_plus_cos(y)  # eq. (5), (1 - cos)/sin^2 = 1/(1 + cos)
+    return np.array(laws.minimal_rotation(y[0], y[1], y[2]))  # eq. (5)
 
 
 def _rate_correction(delta: np.ndarray, y: np.ndarray) -> float:
-    if is_antipodal(y):
-        return 0.0  # undefined at y = -e1; set to zero together with R_tilde := I
-    # finding 2: mu = -(e1 . delta + y . delta) / (1 + e1 . y), numerator regrouped for accuracy
-    return float(-delta[0] - (y[1] * delta[1] + y[2] * delta[2]) / _one_plus_cos(y))
+    return float(laws.rate_correction(delta[0], delta[1], delta[2], y[0], y[1], y[2]))  # finding 2
 
 
 def error_angle(x_ref_b) -> float:
@@ -309,17 +300,10 @@ def reduced_attitude_errors(R, omega, x_ref, x_ref_dot) -> tuple[float, np.ndarr
     omega = _vector(omega, 3, "omega")
     x_ref = _unit_vector(x_ref, "x_ref")
     x_ref_dot = _vector(x_ref_dot, 3, "x_ref_dot")
-    y, _, _, omega_tilde = _tracking_terms(R, omega, x_ref, x_ref_dot)
-    return _error_angle(y), omega_tilde
-
-
-def _tracking_terms(R, omega, x_ref, x_ref_dot):
-    """``(y, R_tilde, omega_ref^b, omega_tilde)`` of eqs. (3), (5) and (8), from checked inputs."""
-    y = R.T @ x_ref
-    R_tilde = _minimal_rotation(y)
-    omega_ref_b = R.T @ _cross(x_ref, x_ref_dot)  # eq. (3)
-    omega_tilde = (omega - R_tilde @ omega_ref_b)[1:]  # eq. (8), H^T v = v[1:]
-    return y, R_tilde, omega_ref_b, omega_tilde
+    command = laws.reduced_attitude_law(
+        R, omega, x_ref, x_ref_dot, np.zeros(3), _IDENTITY, 0.0, 0.0, 1.0, 1.0, False
+    )
+    return float(command.phi_tilde), np.array([command.omega_tilde_y, command.omega_tilde_z])
 
 
 class ReducedAttitudeOutput(NamedTuple):
@@ -381,19 +365,23 @@ class ReducedAttitudeLaw:
         x_ref_dot = _vector(x_ref_dot, 3, "x_ref_dot")
         x_ref_ddot = _vector(x_ref_ddot, 3, "x_ref_ddot")
 
-        y, R_tilde, omega_ref_b, omega_tilde = _tracking_terms(R, omega, x_ref, x_ref_dot)
-        # Reference angular acceleration rotated into the tangent plane at e1 (eq. 9, finding 1).
-        acceleration = R_tilde @ (R.T @ _cross(x_ref, x_ref_ddot))
-        if self.feedforward == "exact":
-            mu = _rate_correction(omega - omega_ref_b, y)
-            acceleration = acceleration + mu * (R_tilde @ _cross(y, omega_ref_b))  # finding 2
-        feedforward = (self.J @ acceleration)[1:]
-        if m is not None:
-            feedforward = feedforward - _vector(m, 3, "m")[1:]
-        torque = (
-            -self.k_p * _error_axis_angle(y)[1:] - self.k_d * omega_tilde + feedforward
-        )  # eq. (9)
-        return ReducedAttitudeOutput(torque, _error_angle(y), omega_tilde)
+        m = np.zeros(3) if m is None else _vector(m, 3, "m")
+        command = laws.reduced_attitude_law(  # eq. (9), findings 1 and 2: control.laws
+            R,
+            omega,
+            x_ref,
+            x_ref_dot,
+            x_ref_ddot,
+            self.J,
+            m[1],
+            m[2],
+            self.k_p,
+            self.k_d,
+            self.feedforward == "exact",
+        )
+        torque = np.array([command.u_y, command.u_z])
+        omega_tilde = np.array([command.omega_tilde_y, command.omega_tilde_z])
+        return ReducedAttitudeOutput(torque, float(command.phi_tilde), omega_tilde)
 
 
 def reduced_attitude_torque(

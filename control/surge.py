@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from control import laws
+
 
 def _finite(value, name: str) -> float:
     number = float(value)
@@ -50,20 +52,17 @@ class SurgePIController:
 
     def reset(self) -> None:
         """Clear the integral and the sampling history."""
-        self._integral = 0.0
-        self._previous_time: float | None = None
-        self._previous_error = 0.0
-        self._previous_saturation = 0  # +1 at +max_thrust, -1 at -max_thrust, 0 inside the limits
+        self.state = laws.new_surge_state()
 
     @property
     def integral(self) -> float:
         """Current value of ``integral (u - u_d) dt`` [m]."""
-        return self._integral
+        return float(self.state.integral[0])
 
     @property
     def saturated(self) -> bool:
         """True if the last output was clipped at the thrust limit."""
-        return self._previous_saturation != 0
+        return self.state.saturation[0] != 0.0
 
     def update(self, t: float, surge_velocity: float) -> float:
         """Advance the integral to time ``t`` and return the thrust per longitudinal thruster [N].
@@ -76,17 +75,9 @@ class SurgePIController:
             ValueError: non-finite input or time going backwards.
         """
         t = _finite(t, "t")
-        error = _finite(surge_velocity, "surge_velocity") - self.u_d
-        if self._previous_time is not None:
-            dt = t - self._previous_time
-            if dt < 0.0:
-                raise ValueError(f"time went backwards: t = {t} < previous {self._previous_time}")
-            winding_up = self._previous_saturation * self._previous_error < 0.0
-            if not winding_up:
-                self._integral += self._previous_error * dt  # zero-order hold of the error
-        demand = -self.k_p * error - self.k_i * self._integral  # eq. (25)
-        thrust = min(max(demand, -self.max_thrust), self.max_thrust)
-        self._previous_saturation = int(np.sign(demand)) if thrust != demand else 0
-        self._previous_time = t
-        self._previous_error = error
-        return thrust
+        u = _finite(surge_velocity, "surge_velocity")
+        if self.state.has_previous[0] and t < self.state.time[0]:
+            raise ValueError(f"time went backwards: t = {t} < previous {self.state.time[0]}")
+        return float(  # eq. (25): control.laws.surge_pi
+            laws.surge_pi(self.state, t, u, self.k_p, self.k_i, self.u_d, self.max_thrust)
+        )

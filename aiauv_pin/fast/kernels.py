@@ -31,6 +31,7 @@ import math
 
 import numpy as np
 
+from control.laws import joint_pd_torque
 from hydro.jit import compiled
 from hydro.laws import add_body_fluid_bias, coriolis_wrench, hydrostatic_wrench
 
@@ -572,10 +573,13 @@ def acceleration_into(model, env, servo, t, q, v, tau, W, out):
         else:
             g[:] = 0.0
         for k in range(n_joint):
-            tau_all[6 + k] += (
-                -servo.stiffness[k] * (q[7 + k] - servo.references[k])
-                - servo.damping[k] * v[6 + k]
-                + g[6 + k]
+            tau_all[6 + k] += joint_pd_torque(
+                q[7 + k],
+                v[6 + k],
+                servo.references[k],
+                g[6 + k],
+                servo.stiffness[k],
+                servo.damping[k],
             )
     _articulated(model.bodies, tau_all, W, out)
 

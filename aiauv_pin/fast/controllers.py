@@ -1,0 +1,177 @@
+"""Built-in controllers for the compiled loop, and the vehicle side of the paper's controller.
+
+A compiled controller is a function
+
+    controller(t, q, v, model, workspace, parameters, state, tau, info) -> None
+
+called by :func:`aiauv_pin.fast.loop.run_chunk` at every control sample. It writes the generalised
+force ``tau`` (nv,) [N, N m] to hold until the next sample and its diagnostics into ``info`` (one
+row of the log, laid out as its :class:`aiauv_pin.controllers.CompiledController` declares). It may
+use the kernels on ``workspace`` (e.g. :func:`aiauv_pin.fast.kernels.kinematics`,
+:func:`~aiauv_pin.fast.kernels.thrust_into` for ``tau = B(q) thrusts``). ``parameters`` and
+``state`` are whatever the controller needs (arrays, named tuples of arrays); ``state`` is updated
+in place.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from control.laws import CommandBuffers, PaperGains, SurgeState, path_following_command
+from hydro.jit import compiled
+
+from .kernels import frame_of_body, kinematics, restoring_into, thrust_into
+
+
+@compiled
+def passive(t, q, v, model, workspace, parameters, state, tau, info):
+    """No input: thrusters and joints idle (``tau = 0``)."""
+    for i in range(tau.shape[0]):
+        tau[i] = 0.0
+
+
+class PaperParameters(NamedTuple):
+    """What :func:`paper_path_following` needs besides the state (built in Python once)."""
+
+    gains: PaperGains
+    path_function: object
+    path_parameters: np.ndarray
+    axis_index: np.ndarray  # (n,) base angle of each joint (0: y, 1: z)
+    reference_scale: np.ndarray  # (n,) exp(-alpha (j - 1))
+    surge_mask: np.ndarray  # (m,) 1 for the surge thrusters
+    frame_body: int  # body carrying the end-effector frame
+    frame_rotation: np.ndarray  # (3, 3) end-effector frame in that body
+    frame_translation: np.ndarray  # (3,) [m]
+    continuous_joints: bool  # eq. (24) as a servo at every stage (True) or sampled
+    servo_references: np.ndarray  # (n,) the servo's references, updated in place
+
+
+class PaperState(NamedTuple):
+    """State of :func:`paper_path_following` (arrays updated in place)."""
+
+    surge: SurgeState
+    velocity_history: np.ndarray  # (5,): has previous, time [s], previous world velocity (3) [m/s]
+    command: CommandBuffers
+
+
+#: Diagnostics of the paper's controller, in the order of its info row: name -> shape.
+def paper_info_shapes(n_joints: int, n_thrusters: int) -> dict[str, tuple[int, ...]]:
+    """Keys and shapes of the info row of :func:`paper_path_following` (and of the Python controller)."""
+    return {
+        "p": (3,),
+        "u": (),
+        "phi_tilde": (),
+        "omega_tilde": (2,),
+        "base_angles": (2,),
+        "joint_references": (n_joints,),
+        "x_ref": (3,),
+        "pointing": (3,),
+        "thrust": (n_thrusters,),
+        "thruster_power": (n_thrusters,),
+        "joint_torque": (n_joints,),
+        "cross_track": (2,),
+        "path_s": (),
+    }
+
+
+@compiled
+def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info):
+    """The paper's controller on the vehicle: measure, :func:`control.laws.path_following_command`, act.
+
+    Measurement: the end-effector pose and twist from the kinematics, its world velocity, the
+    difference of that velocity with the previous sample over the elapsed time as its acceleration
+    (zero at the first sample), the joints' hydrostatic forces ``g_q`` (left-hand side) and the
+    surge speed ``u`` (x-component of the end-effector velocity in its own axes). Action: ``tau =
+    B(q) tau_thr`` (eq. 20), plus the joint torques of eq. (24) when they are sampled; with the
+    continuous servo the joint references go to ``parameters.servo_references``.
+    """
+    W = workspace
+    P = parameters
+    kinematics(model.bodies, q, v, W)
+    R, p, twist = frame_of_body(W, P.frame_body, P.frame_rotation, P.frame_translation)
+    velocity = np.empty(3)
+    acceleration = np.zeros(3)
+    omega = np.empty(3)
+    for i in range(3):
+        velocity[i] = R[i, 0] * twist[0] + R[i, 1] * twist[1] + R[i, 2] * twist[2]
+        omega[i] = twist[3 + i]
+    history = state.velocity_history
+    if history[0] != 0.0 and t > history[1]:
+        h = t - history[1]
+        for i in range(3):
+            acceleration[i] = (velocity[i] - history[2 + i]) / h
+    history[0] = 1.0
+    history[1] = t
+    for i in range(3):
+        history[2 + i] = velocity[i]
+    g = W.restoring
+    restoring_into(model, W, g)
+    n = q.shape[0] - 7
+    out = state.command
+    path_following_command(
+        P.gains,
+        P.path_function,
+        P.path_parameters,
+        P.axis_index,
+        P.reference_scale,
+        P.surge_mask,
+        state.surge,
+        t,
+        R,
+        p,
+        velocity,
+        acceleration,
+        omega,
+        twist[0],
+        q[7:],
+        v[6:],
+        g[6:],
+        out,
+    )
+    thrust_into(model, W, out.thrusts, tau)  # eq. (20)
+    if P.continuous_joints:
+        for j in range(n):
+            P.servo_references[j] = out.joint_references[j]
+    else:
+        for j in range(n):
+            tau[6 + j] += out.joint_torques[j]
+    # info row, in the order of paper_info_shapes
+    o = 0
+    for i in range(3):
+        info[o + i] = p[i]
+    o += 3
+    info[o] = twist[0]
+    info[o + 1] = out.scalars[0]
+    info[o + 2] = out.omega_tilde[0]
+    info[o + 3] = out.omega_tilde[1]
+    info[o + 4] = out.base_angles[0]
+    info[o + 5] = out.base_angles[1]
+    o += 6
+    for j in range(n):
+        info[o + j] = out.joint_references[j]
+    o += n
+    for i in range(3):
+        info[o + i] = out.x_ref[i]
+        info[o + 3 + i] = R[i, 0]
+    o += 6
+    m = out.thrusts.shape[0]
+    for k in range(m):
+        info[o + k] = out.thrusts[k]
+    o += m
+    # mechanical power of each thruster: thrust times the speed of its point along its axis
+    th = model.thrusters
+    for k in range(m):
+        b = th.body[k]
+        speed = 0.0
+        for i in range(6):
+            speed += W.twist[b, i] * th.unit_wrench[k, i]
+        info[o + k] = speed * out.thrusts[k]
+    o += m
+    for j in range(n):
+        info[o + j] = out.joint_torques[j]
+    o += n
+    info[o] = out.cross_track[0]
+    info[o + 1] = out.cross_track[1]
+    info[o + 2] = out.scalars[1]

@@ -1,0 +1,78 @@
+"""The compiled simulation loop: controller samples, logging and integration in one compiled call.
+
+:func:`run_chunk` advances a run by a block of steps without returning to Python: at every control
+sample it calls the controller (any compiled controller, :mod:`aiauv_pin.fast.controllers`), logs
+every ``log_every`` steps, and integrates with :func:`aiauv_pin.fast.kernels.step_into` (current,
+disturbance and joint servo at every stage). :func:`aiauv_pin.simulate` drives it in chunks so that
+a progress bar and ``on_log`` callbacks still run between them.
+"""
+
+from __future__ import annotations
+
+from hydro.jit import compiled
+
+from .kernels import is_finite_state, step_into
+
+
+@compiled
+def run_chunk(
+    model,
+    env,
+    servo,
+    controller,
+    parameters,
+    state,
+    q,
+    v,
+    tau,
+    info,
+    dt,
+    method,
+    k_start,
+    k_stop,
+    n_total,
+    steps_per_control,
+    log_every,
+    log,
+    log_index,
+    W,
+):
+    """Steps ``k_start .. k_stop - 1`` (controller, logging, integration), plus the final sample.
+
+    ``log`` rows are ``(t, q, v, tau, info)``; ``tau`` and ``info`` hold the last controller output
+    between calls (zero-order hold).
+
+    Returns:
+        ``(next log index, steps completed)``; fewer steps than asked means the state became
+        non-finite (``q, v`` then hold the last finite state).
+    """
+    nq = q.shape[0]
+    nv = v.shape[0]
+    width = info.shape[0]
+    k = k_start
+    while True:
+        if k == k_stop and k != n_total:
+            return log_index, k - k_start
+        t = k * dt
+        if k % steps_per_control == 0:
+            controller(t, q, v, model, W, parameters, state, tau, info)
+        if k % log_every == 0 or k == n_total:
+            row = log[log_index]
+            row[0] = t
+            for i in range(nq):
+                row[1 + i] = q[i]
+            for i in range(nv):
+                row[1 + nq + i] = v[i]
+                row[1 + nq + nv + i] = tau[i]
+            base = 1 + nq + 2 * nv
+            for i in range(width):
+                row[base + i] = info[i]
+            log_index += 1
+        if k == n_total:
+            return log_index, k - k_start
+        step_into(model, env, servo, t, q, v, tau, dt, method, W, W.q_next, W.v_next)
+        if not is_finite_state(W.q_next, W.v_next):
+            return log_index, k - k_start
+        q[:] = W.q_next
+        v[:] = W.v_next
+        k += 1

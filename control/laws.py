@@ -1,0 +1,495 @@
+"""The control laws of the paper, written once for every backend (Wrzos-Kaminska et al. 2019).
+
+Each function here is the only implementation of its law in the project. They are compiled by
+:func:`hydro.jit.compiled` and called from the compiled simulation loop
+(:mod:`aiauv_pin.fast.controllers`), from the Python API (:mod:`control.guidance`,
+:mod:`control.reduced_attitude`, :mod:`control.joint_references`, :mod:`control.joint_control`,
+:mod:`control.surge`, :mod:`control.path_following`, which validate their inputs and call these), and
+interpreted when numba is missing.
+
+* :func:`los_guidance` - path-parametrised line-of-sight guidance (eq. 21 on any path) with exact
+  first and second time derivatives of the reference direction;
+* :func:`reduced_attitude_law` - the reduced-attitude law of eq. (9) (and eq. 23 for ``J = I``,
+  ``m = 0``) with the ``"paper"`` or ``"exact"`` feedforward (findings 1 and 2 of PAPER_DATA.md);
+* :func:`joint_reference` - eq. (22); :func:`joint_pd_torque` - eq. (24);
+* :func:`surge_pi` - eq. (25) with conditional-integration anti-windup;
+* :func:`path_following_command` - the composition of all of them (paper, Section 3).
+
+No fast-math here: saturations, the anti-windup and the antipodal branch must take the same
+decisions compiled and interpreted.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from hydro.jit import compiled
+
+#: ``|x_ref^b x e1|`` (with ``e1 . x_ref^b < 0``) at or below which ``phi_tilde = pi`` [-].
+ANTIPODAL_TOLERANCE = 1e-12
+
+
+# ---------------------------------------------------------------------- LOS guidance (eq. 21)
+@compiled
+def los_guidance(path_point, p, p_dot, p_ddot, u_d, k_y, k_z):
+    """Reference pointing direction ``x_ref = mu / |mu|`` and its exact time derivatives.
+
+    Path-parametrised vector LOS (the paper's eq. 21 on any path): with the closest path point, its
+    rotation-minimising frame ``(T, N1, N2)`` and curvatures ``k1, k2`` (:mod:`control.paths`), the
+    cross-track errors ``e_i = (p - c) . N_i`` give
+
+        mu = u_d T - k_y e_1 N1 - k_z e_2 N2.
+
+    On the world x-axis this is eq. (21), ``mu = u_d e1 - K (0, p_y, p_z)``. Time derivatives
+    (``D = 1 - k1 e1 - k2 e2``, dots are d/dt, primes d/ds):
+
+        s_dot = T . p_dot / D,   e_i_dot = N_i . p_dot,   e_i_ddot = N_i . p_ddot - k_i s_dot (T . p_dot),
+        T_dot = (k1 N1 + k2 N2) s_dot,   N_i_dot = -k_i T s_dot,
+
+    and ``x_ref_dot = P mu_dot / r``, ``x_ref_ddot = (P mu_ddot - x (x_dot . mu_dot)
+    - 2 x_dot (x . mu_dot)) / r`` with ``r = |mu|``, ``P = I - x x^T``.
+
+    Args:
+        path_point: The :class:`control.paths.PathPoint` closest to ``p``.
+        p, p_dot, p_ddot: End-effector position [m], velocity [m/s] and acceleration [m/s^2] (3,).
+        u_d: Desired speed along the path [m/s] (> 0).
+        k_y, k_z: Cross-track gains along ``N1`` and ``N2`` [1/s].
+
+    Returns:
+        ``(x_ref, x_ref_dot, x_ref_ddot)``, each a 3-tuple (world frame; [-], [1/s], [1/s^2]).
+    """
+    c = path_point.point
+    t0, t1, t2 = path_point.tangent
+    a0, a1, a2 = path_point.normal1
+    b0, b1, b2 = path_point.normal2
+    k1, k2 = path_point.curvature1, path_point.curvature2
+    dk1, dk2 = path_point.curvature1_rate, path_point.curvature2_rate
+    d0, d1, d2 = p[0] - c[0], p[1] - c[1], p[2] - c[2]
+    e1 = a0 * d0 + a1 * d1 + a2 * d2
+    e2 = b0 * d0 + b1 * d1 + b2 * d2
+    tv = t0 * p_dot[0] + t1 * p_dot[1] + t2 * p_dot[2]
+    e1_dot = a0 * p_dot[0] + a1 * p_dot[1] + a2 * p_dot[2]
+    e2_dot = b0 * p_dot[0] + b1 * p_dot[1] + b2 * p_dot[2]
+    ta = t0 * p_ddot[0] + t1 * p_ddot[1] + t2 * p_ddot[2]
+    # mu and its derivatives; on a straight path (k = 0) only the cross-track terms remain
+    m0 = u_d * t0 - k_y * e1 * a0 - k_z * e2 * b0
+    m1 = u_d * t1 - k_y * e1 * a1 - k_z * e2 * b1
+    m2 = u_d * t2 - k_y * e1 * a2 - k_z * e2 * b2
+    e1_ddot = a0 * p_ddot[0] + a1 * p_ddot[1] + a2 * p_ddot[2]
+    e2_ddot = b0 * p_ddot[0] + b1 * p_ddot[1] + b2 * p_ddot[2]
+    v0 = -k_y * e1_dot * a0 - k_z * e2_dot * b0
+    v1 = -k_y * e1_dot * a1 - k_z * e2_dot * b1
+    v2 = -k_y * e1_dot * a2 - k_z * e2_dot * b2
+    w0 = -k_y * e1_ddot * a0 - k_z * e2_ddot * b0
+    w1 = -k_y * e1_ddot * a1 - k_z * e2_ddot * b1
+    w2 = -k_y * e1_ddot * a2 - k_z * e2_ddot * b2
+    if k1 != 0.0 or k2 != 0.0 or dk1 != 0.0 or dk2 != 0.0:
+        big_d = 1.0 - k1 * e1 - k2 * e2
+        s_dot = tv / big_d
+        # curvature vector kappa = k1 N1 + k2 N2 and its parts
+        kv0, kv1, kv2 = k1 * a0 + k2 * b0, k1 * a1 + k2 * b1, k1 * a2 + k2 * b2
+        kp = kv0 * p_dot[0] + kv1 * p_dot[1] + kv2 * p_dot[2]
+        d_dot = -(dk1 * s_dot * e1 + k1 * e1_dot + dk2 * s_dot * e2 + k2 * e2_dot)
+        s_ddot = (kp * s_dot + ta) / big_d - tv * d_dot / (big_d * big_d)
+        e1_ddot -= k1 * s_dot * tv
+        e2_ddot -= k2 * s_dot * tv
+        # T_dot = kappa s_dot;  N_i_dot = -k_i T s_dot
+        # T_ddot = (k1' N1 + k2' N2) s_dot^2 - (k1^2 + k2^2) T s_dot^2 + kappa s_ddot
+        # N_i_ddot = -k_i' s_dot^2 T - k_i kappa s_dot^2 - k_i T s_ddot
+        s2 = s_dot * s_dot
+        kk = k1 * k1 + k2 * k2
+        td0, td1, td2 = kv0 * s_dot, kv1 * s_dot, kv2 * s_dot
+        tdd0 = (dk1 * a0 + dk2 * b0) * s2 - kk * t0 * s2 + kv0 * s_ddot
+        tdd1 = (dk1 * a1 + dk2 * b1) * s2 - kk * t1 * s2 + kv1 * s_ddot
+        tdd2 = (dk1 * a2 + dk2 * b2) * s2 - kk * t2 * s2 + kv2 * s_ddot
+        n1d = -k1 * s_dot
+        n2d = -k2 * s_dot
+        n1dd0 = -dk1 * s2 * t0 - k1 * kv0 * s2 - k1 * t0 * s_ddot
+        n1dd1 = -dk1 * s2 * t1 - k1 * kv1 * s2 - k1 * t1 * s_ddot
+        n1dd2 = -dk1 * s2 * t2 - k1 * kv2 * s2 - k1 * t2 * s_ddot
+        n2dd0 = -dk2 * s2 * t0 - k2 * kv0 * s2 - k2 * t0 * s_ddot
+        n2dd1 = -dk2 * s2 * t1 - k2 * kv1 * s2 - k2 * t1 * s_ddot
+        n2dd2 = -dk2 * s2 * t2 - k2 * kv2 * s2 - k2 * t2 * s_ddot
+        # mu_dot = u_d T_dot - k_y (e1_dot N1 + e1 N1_dot) - k_z (e2_dot N2 + e2 N2_dot)
+        v0 += u_d * td0 - k_y * e1 * n1d * t0 - k_z * e2 * n2d * t0
+        v1 += u_d * td1 - k_y * e1 * n1d * t1 - k_z * e2 * n2d * t1
+        v2 += u_d * td2 - k_y * e1 * n1d * t2 - k_z * e2 * n2d * t2
+        # mu_ddot = u_d T_ddot - k_y (e1_ddot N1 + 2 e1_dot N1_dot + e1 N1_ddot) - k_z (...)
+        w0 = (
+            u_d * tdd0
+            - k_y * (e1_ddot * a0 + 2.0 * e1_dot * n1d * t0 + e1 * n1dd0)
+            - k_z * (e2_ddot * b0 + 2.0 * e2_dot * n2d * t0 + e2 * n2dd0)
+        )
+        w1 = (
+            u_d * tdd1
+            - k_y * (e1_ddot * a1 + 2.0 * e1_dot * n1d * t1 + e1 * n1dd1)
+            - k_z * (e2_ddot * b1 + 2.0 * e2_dot * n2d * t1 + e2 * n2dd1)
+        )
+        w2 = (
+            u_d * tdd2
+            - k_y * (e1_ddot * a2 + 2.0 * e1_dot * n1d * t2 + e1 * n1dd2)
+            - k_z * (e2_ddot * b2 + 2.0 * e2_dot * n2d * t2 + e2 * n2dd2)
+        )
+    r = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+    x0, x1, x2 = m0 / r, m1 / r, m2 / r
+    x_mud = x0 * v0 + x1 * v1 + x2 * v2
+    xd0 = (v0 - x0 * x_mud) / r  # P mu_dot / r
+    xd1 = (v1 - x1 * x_mud) / r
+    xd2 = (v2 - x2 * x_mud) / r
+    x_mudd = x0 * w0 + x1 * w1 + x2 * w2
+    xd_mud = xd0 * v0 + xd1 * v1 + xd2 * v2
+    # d/dt of P mu_dot / r
+    xdd0 = (w0 - x0 * x_mudd - x0 * xd_mud - 2.0 * xd0 * x_mud) / r
+    xdd1 = (w1 - x1 * x_mudd - x1 * xd_mud - 2.0 * xd1 * x_mud) / r
+    xdd2 = (w2 - x2 * x_mudd - x2 * xd_mud - 2.0 * xd2 * x_mud) / r
+    return (x0, x1, x2), (xd0, xd1, xd2), (xdd0, xdd1, xdd2)
+
+
+# ---------------------------------------------------------------------- reduced attitude (eq. 9)
+@compiled
+def one_plus_cos(y0, y1, y2):
+    """``1 + e1 . y`` for a unit ``y``; as ``|y x e1|^2 / (1 - e1 . y)`` when ``e1 . y < 0``."""
+    if y0 >= 0.0:
+        return 1.0 + y0
+    return (y1 * y1 + y2 * y2) / (1.0 - y0)
+
+
+@compiled
+def is_antipodal(y0, y1, y2):
+    """True if ``y`` is within :data:`ANTIPODAL_TOLERANCE` of ``-e1`` (``phi_tilde = pi``)."""
+    return y0 < 0.0 and math.hypot(y1, y2) <= ANTIPODAL_TOLERANCE
+
+
+@compiled
+def error_angle(y0, y1, y2):
+    """Pointing error ``phi_tilde = atan2(|y x e1|, e1 . y)`` in ``[0, pi]`` [rad] (eq. 4)."""
+    return math.atan2(math.hypot(y1, y2), y0)
+
+
+@compiled
+def error_axis_angle(y0, y1, y2):
+    """``phi_tilde n = (phi_tilde / sin phi_tilde) (y x e1)`` (eq. 9); 0 at 0 and (by convention) at pi."""
+    sin_phi = math.hypot(y1, y2)
+    if sin_phi == 0.0 or is_antipodal(y0, y1, y2):
+        return 0.0, 0.0, 0.0
+    scale = error_angle(y0, y1, y2) / sin_phi
+    return 0.0, scale * y2, scale * -y1
+
+
+@compiled
+def minimal_rotation(y0, y1, y2):
+    """``R_tilde = I + S(k) + S(k)^2 / (1 + e1 . y)``, ``k = y x e1`` (eq. 5), as three row tuples.
+
+    ``R_tilde y = e1``; the identity at the antipodal point (paper, after eq. 9).
+    """
+    if is_antipodal(y0, y1, y2):
+        return (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
+    k1, k2 = y2, -y1
+    # S(k) = [[0, -k2, k1], [k2, 0, 0], [-k1, 0, 0]];
+    # S(k)^2 = [[-(k1^2 + k2^2), 0, 0], [0, -k2^2, k1 k2], [0, k1 k2, -k1^2]]
+    opc = one_plus_cos(y0, y1, y2)
+    return (
+        (1.0 + (-(k1 * k1 + k2 * k2)) / opc, -k2, k1),
+        (k2, 1.0 + (-(k2 * k2)) / opc, (k1 * k2) / opc),
+        (-k1, (k2 * k1) / opc, 1.0 + (-(k1 * k1)) / opc),
+    )
+
+
+@compiled
+def rate_correction(delta0, delta1, delta2, y0, y1, y2):
+    """Finding 2: ``mu = -(e1 . delta + y . delta) / (1 + e1 . y)`` [rad/s]; 0 at the antipode."""
+    if is_antipodal(y0, y1, y2):
+        return 0.0
+    return -delta0 - (y1 * delta1 + y2 * delta2) / one_plus_cos(y0, y1, y2)
+
+
+class AttitudeCommand(NamedTuple):
+    """Output of :func:`reduced_attitude_law`."""
+
+    u_y: float
+    """Control about the body y-axis (eq. 9) [N m], or base angle ``q_y0`` (eq. 23) [rad]."""
+    u_z: float
+    """Control about the body z-axis [N m], or ``q_z0`` [rad]."""
+    phi_tilde: float
+    """Pointing error [rad] (eq. 4)."""
+    omega_tilde_y: float
+    """Angular velocity error about y [rad/s] (eq. 8)."""
+    omega_tilde_z: float
+    """Angular velocity error about z [rad/s] (eq. 8)."""
+
+
+@compiled
+def reduced_attitude_law(R, omega, x_ref, x_dot, x_ddot, J, m_y, m_z, k_p, k_d, exact):
+    """The reduced-attitude tracking law of eq. (9), findings 1 and 2 applied.
+
+    ``u = -k_P phi_tilde H^T n - k_D omega_tilde + H^T (J R_tilde R^T (x_ref x x_ref_ddot) - m)``,
+    plus ``mu H^T J R_tilde (y x omega_ref^b)`` when ``exact`` (finding 2), with
+    ``y = R^T x_ref``, ``omega_ref^b = R^T (x_ref x x_ref_dot)`` (eq. 3) and
+    ``omega_tilde = H^T (omega - R_tilde omega_ref^b)`` (eq. 8). Eq. (23), the base angles, is this law
+    on the end-effector frame with ``J = I`` and ``m = 0``.
+
+    Args:
+        R: Body-to-world rotation (3, 3).
+        omega: Body angular velocity, body axes (3,) [rad/s].
+        x_ref: Reference direction, world (3-sequence; renormalised here).
+        x_dot, x_ddot: Its first and second time derivatives [1/s], [1/s^2].
+        J: Inertia (3, 3) [kg m^2], block-diagonal (Assumption 1): only ``J[1:, 1:]`` enters.
+        m_y, m_z: Known moments about the body y- and z-axes [N m] (eq. 1).
+        k_p: Proportional gain [N m/rad]; k_d: derivative gain [N m s/rad].
+        exact: Add the finding-2 term.
+    """
+    norm = math.sqrt(x_ref[0] * x_ref[0] + x_ref[1] * x_ref[1] + x_ref[2] * x_ref[2])
+    r0, r1, r2 = x_ref[0] / norm, x_ref[1] / norm, x_ref[2] / norm
+    y0 = R[0, 0] * r0 + R[1, 0] * r1 + R[2, 0] * r2  # y = R^T x_ref
+    y1 = R[0, 1] * r0 + R[1, 1] * r1 + R[2, 1] * r2
+    y2 = R[0, 2] * r0 + R[1, 2] * r1 + R[2, 2] * r2
+    _, row1, row2 = minimal_rotation(y0, y1, y2)
+    # omega_ref^b = R^T (x_ref x x_ref_dot)   (eq. 3)
+    c0 = r1 * x_dot[2] - r2 * x_dot[1]
+    c1 = r2 * x_dot[0] - r0 * x_dot[2]
+    c2 = r0 * x_dot[1] - r1 * x_dot[0]
+    w0 = R[0, 0] * c0 + R[1, 0] * c1 + R[2, 0] * c2
+    w1 = R[0, 1] * c0 + R[1, 1] * c1 + R[2, 1] * c2
+    w2 = R[0, 2] * c0 + R[1, 2] * c1 + R[2, 2] * c2
+    # omega_tilde = H^T (omega - R_tilde omega_ref^b)   (eq. 8)
+    ot_y = omega[1] - (row1[0] * w0 + row1[1] * w1 + row1[2] * w2)
+    ot_z = omega[2] - (row2[0] * w0 + row2[1] * w1 + row2[2] * w2)
+    # R_tilde R^T (x_ref x x_ref_ddot)   (eq. 9 with finding 1)
+    c0 = r1 * x_ddot[2] - r2 * x_ddot[1]
+    c1 = r2 * x_ddot[0] - r0 * x_ddot[2]
+    c2 = r0 * x_ddot[1] - r1 * x_ddot[0]
+    b0 = R[0, 0] * c0 + R[1, 0] * c1 + R[2, 0] * c2
+    b1 = R[0, 1] * c0 + R[1, 1] * c1 + R[2, 1] * c2
+    b2 = R[0, 2] * c0 + R[1, 2] * c1 + R[2, 2] * c2
+    acc1 = row1[0] * b0 + row1[1] * b1 + row1[2] * b2
+    acc2 = row2[0] * b0 + row2[1] * b1 + row2[2] * b2
+    if exact:
+        # + mu R_tilde (y x omega_ref^b)   (finding 2)
+        mu = rate_correction(omega[0] - w0, omega[1] - w1, omega[2] - w2, y0, y1, y2)
+        s0 = y1 * w2 - y2 * w1
+        s1 = y2 * w0 - y0 * w2
+        s2 = y0 * w1 - y1 * w0
+        acc1 = acc1 + mu * (row1[0] * s0 + row1[1] * s1 + row1[2] * s2)
+        acc2 = acc2 + mu * (row2[0] * s0 + row2[1] * s1 + row2[2] * s2)
+    _, n1, n2 = error_axis_angle(y0, y1, y2)
+    feedforward_y = J[1, 1] * acc1 + J[1, 2] * acc2 - m_y
+    feedforward_z = J[2, 1] * acc1 + J[2, 2] * acc2 - m_z
+    return AttitudeCommand(
+        -k_p * n1 - k_d * ot_y + feedforward_y,  # eq. (9)
+        -k_p * n2 - k_d * ot_z + feedforward_z,
+        error_angle(y0, y1, y2),
+        ot_y,
+        ot_z,
+    )
+
+
+# ---------------------------------------------------------------------- joints (eqs. 22, 24)
+@compiled
+def joint_reference(base_angle, scale, q_max):
+    """``q*_{a,j} = exp(-alpha (j - 1)) sat(q_{a,0})`` (eq. 22), ``scale = exp(-alpha (j - 1))`` [rad]."""
+    return scale * min(max(base_angle, -q_max), q_max)
+
+
+@compiled
+def joint_pd_torque(q, q_dot, q_ref, g_q, k_qp, k_qd):
+    """Joint PD with hydrostatic compensation, ``-k_qP (q - q*) - k_qD q_dot + g_q`` (eq. 24) [N m]."""
+    return -k_qp * (q - q_ref) - k_qd * q_dot + g_q
+
+
+# ---------------------------------------------------------------------- surge PI (eq. 25)
+class SurgeState(NamedTuple):
+    """State of :func:`surge_pi`, each field a 1-element array (updated in place).
+
+    Attributes:
+        integral: ``integral (u - u_d) dt`` [m].
+        has_previous: 1 once a sample has been taken.
+        time: Time of the previous sample [s].
+        error: Error ``u - u_d`` of the previous sample [m/s].
+        saturation: +1 / -1 if the previous output was clipped at +/- the limit, else 0.
+    """
+
+    integral: np.ndarray
+    has_previous: np.ndarray
+    time: np.ndarray
+    error: np.ndarray
+    saturation: np.ndarray
+
+
+def new_surge_state() -> SurgeState:
+    """A cleared :class:`SurgeState`."""
+    return SurgeState(*(np.zeros(1) for _ in SurgeState._fields))
+
+
+@compiled
+def surge_pi(state, t, u, k_p, k_i, u_d, max_thrust):
+    """Thrust of eq. (25) at time ``t`` [N]; advances ``state``.
+
+    ``T = sat(-k_1P (u - u_d) - k_1I integral (u - u_d) dt)``. The integral advances by the previous
+    error held over the elapsed time (zero-order hold); it is frozen while the previous output was
+    saturated with an error pushing further into the limit (conditional-integration anti-windup).
+    """
+    error = u - u_d
+    if state.has_previous[0] != 0.0:
+        winding_up = state.saturation[0] * state.error[0] < 0.0
+        if not winding_up:
+            state.integral[0] += state.error[0] * (t - state.time[0])
+    demand = -k_p * error - k_i * state.integral[0]  # eq. (25)
+    thrust = min(max(demand, -max_thrust), max_thrust)
+    saturation = 0.0
+    if thrust != demand:
+        saturation = 1.0 if demand > 0.0 else (-1.0 if demand < 0.0 else 0.0)
+    state.saturation[0] = saturation
+    state.has_previous[0] = 1.0
+    state.time[0] = t
+    state.error[0] = error
+    return thrust
+
+
+# ---------------------------------------------------------------------- composition (Section 3)
+class PaperGains(NamedTuple):
+    """The gains of :func:`path_following_command` as plain floats (see
+    :class:`control.path_following.PathFollowingGains`, which builds it)."""
+
+    u_d: float
+    k_y: float
+    k_z: float
+    k_p: float
+    k_d: float
+    k_qp: float
+    k_qd: float
+    k_1p: float
+    k_1i: float
+    max_thrust: float
+    q_max: float
+    exact: bool
+
+
+class CommandBuffers(NamedTuple):
+    """Outputs of :func:`path_following_command`, written in place."""
+
+    joint_references: np.ndarray  # (n,) [rad] (eq. 22)
+    joint_torques: np.ndarray  # (n,) [N m] (eq. 24)
+    thrusts: np.ndarray  # (m,) [N] (eq. 25)
+    base_angles: np.ndarray  # (2,) [rad] (eq. 23)
+    omega_tilde: np.ndarray  # (2,) [rad/s] (eq. 8)
+    x_ref: np.ndarray  # (3,) (eq. 21)
+    x_ref_dot: np.ndarray  # (3,) [1/s]
+    x_ref_ddot: np.ndarray  # (3,) [1/s^2]
+    cross_track: np.ndarray  # (2,) [m] along N1, N2
+    scalars: np.ndarray  # (2,): phi_tilde [rad], path parameter s [m]
+
+
+def new_command_buffers(n_joints: int, n_thrusters: int) -> CommandBuffers:
+    """Zeroed :class:`CommandBuffers`."""
+    return CommandBuffers(
+        np.zeros(n_joints),
+        np.zeros(n_joints),
+        np.zeros(n_thrusters),
+        np.zeros(2),
+        np.zeros(2),
+        np.zeros(3),
+        np.zeros(3),
+        np.zeros(3),
+        np.zeros(2),
+        np.zeros(2),
+    )
+
+
+_IDENTITY = np.eye(3)
+
+
+@compiled
+def path_following_command(
+    gains,
+    path_function,
+    path_parameters,
+    axis_index,
+    reference_scale,
+    surge_mask,
+    surge_state,
+    t,
+    rotation,
+    position,
+    velocity,
+    acceleration,
+    omega,
+    surge_velocity,
+    joint_positions,
+    joint_velocities,
+    joint_hydrostatic_forces,
+    out,
+):
+    """One evaluation of the paper's path-following controller (Section 3) into ``out``.
+
+    LOS guidance on the path (eq. 21, :func:`los_guidance`); base angles by the reduced-attitude
+    law on the end-effector frame (eq. 23 = eq. 9 with ``J = I``, ``m = 0``); joint references
+    (eq. 22) and joint PD with hydrostatic compensation (eq. 24); the surge PI (eq. 25) on the
+    thrusters flagged in ``surge_mask``, all others at zero.
+
+    Args:
+        gains: :class:`PaperGains`.
+        path_function, path_parameters: The path (:mod:`control.paths`).
+        axis_index: Base angle (0: y, 1: z) driving each joint (n,).
+        reference_scale: ``exp(-alpha (j - 1))`` per joint (n,).
+        surge_mask: 1 for the surge thrusters (m,).
+        surge_state: :class:`SurgeState` (advanced).
+        t: Time [s].
+        rotation: End-effector-to-world rotation (3, 3).
+        position, velocity, acceleration: End-effector position [m], velocity [m/s] and
+            acceleration [m/s^2], world (3,).
+        omega: End-effector angular velocity in its own axes (3,) [rad/s].
+        surge_velocity: ``u`` [m/s], end-effector velocity along its own x-axis.
+        joint_positions, joint_velocities, joint_hydrostatic_forces: (n,) [rad], [rad/s], [N m].
+        out: :class:`CommandBuffers`.
+    """
+    point = path_function(position, path_parameters)
+    x_ref, x_dot, x_ddot = los_guidance(  # eq. (21)
+        point, position, velocity, acceleration, gains.u_d, gains.k_y, gains.k_z
+    )
+    command = reduced_attitude_law(  # eqs. (23), (4), (8)
+        rotation,
+        omega,
+        x_ref,
+        x_dot,
+        x_ddot,
+        _IDENTITY,
+        0.0,
+        0.0,
+        gains.k_p,
+        gains.k_d,
+        gains.exact,
+    )
+    out.base_angles[0] = command.u_y
+    out.base_angles[1] = command.u_z
+    out.omega_tilde[0] = command.omega_tilde_y
+    out.omega_tilde[1] = command.omega_tilde_z
+    for j in range(joint_positions.shape[0]):
+        ref = joint_reference(out.base_angles[axis_index[j]], reference_scale[j], gains.q_max)
+        out.joint_references[j] = ref  # eq. (22)
+        out.joint_torques[j] = joint_pd_torque(  # eq. (24)
+            joint_positions[j],
+            joint_velocities[j],
+            ref,
+            joint_hydrostatic_forces[j],
+            gains.k_qp,
+            gains.k_qd,
+        )
+    thrust = surge_pi(  # eq. (25)
+        surge_state, t, surge_velocity, gains.k_1p, gains.k_1i, gains.u_d, gains.max_thrust
+    )
+    for k in range(surge_mask.shape[0]):
+        out.thrusts[k] = thrust if surge_mask[k] != 0 else 0.0
+    for i in range(3):
+        out.x_ref[i] = x_ref[i]
+        out.x_ref_dot[i] = x_dot[i]
+        out.x_ref_ddot[i] = x_ddot[i]
+    c = point.point
+    d0, d1, d2 = position[0] - c[0], position[1] - c[1], position[2] - c[2]
+    n1, n2 = point.normal1, point.normal2
+    out.cross_track[0] = n1[0] * d0 + n1[1] * d1 + n1[2] * d2
+    out.cross_track[1] = n2[0] * d0 + n2[1] * d1 + n2[2] * d2
+    out.scalars[0] = command.phi_tilde
+    out.scalars[1] = point.s
