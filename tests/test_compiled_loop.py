@@ -1,0 +1,221 @@
+"""The compiled simulation loop and the paper's controller in it, against the Python loop.
+
+The laws themselves are written once (:mod:`control.laws`, tested in tests/test_laws.py); here the
+vehicle side is checked: the compiled controller's measurement and action against the Python
+adapter (:class:`aiauv_pin.path_following.VehiclePathFollowing`) on the same state, whole compiled
+runs against Python-controller runs and against the Pinocchio reference, logging, divergence, and
+the reproduction of the runs recorded before the laws were moved (to 1e-9).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("numba")
+
+import aiauv_pin
+from aiauv_pin.errors import SimulationDiverged
+from aiauv_pin.path_following import VehiclePathFollowing, compiled_path_following_reason
+from aiauv_pin.scenario import PaperScenario, run_paper_scenario
+from control.path_following import PathFollowingGains
+
+TIGHT = dict(rtol=1e-12, atol=1e-12)
+REFERENCE = Path(__file__).parent / "data" / "paper_reference_60s.npz"
+
+
+# ---------------------------------------------------------------- whole runs
+@pytest.fixture(scope="module")
+def numba_vehicle():
+    vehicle = aiauv_pin.load_vehicle()
+    vehicle.backend = "numba"
+    return vehicle
+
+
+def test_measurement_and_output_match_the_python_adapter(numba_vehicle, rng):
+    from conftest import random_state
+
+    for continuous in (True, False):
+        adapter = VehiclePathFollowing(
+            numba_vehicle, PathFollowingGains.stabilised(), continuous_joints=continuous
+        )
+        compiled = adapter.compiled()
+        fast = numba_vehicle.fast
+        for k in range(4):  # successive calls: the finite-difference acceleration enters
+            q, v = random_state(numba_vehicle.model, rng, speed=0.4)
+            tau_expected, info_expected = adapter(0.01 * k, q, v)
+            tau = np.zeros(numba_vehicle.nv)
+            row = np.zeros(compiled.info_width)
+            compiled.function(
+                0.01 * k,
+                q,
+                v,
+                fast.model,
+                fast.workspace,
+                compiled.parameters,
+                compiled.state,
+                tau,
+                row,
+            )
+            info = compiled.unpack(row)
+            np.testing.assert_allclose(tau, tau_expected, **TIGHT)
+            assert info.keys() == info_expected.keys()
+            for key, value in info_expected.items():
+                np.testing.assert_allclose(info[key], value, err_msg=key, **TIGHT)
+
+
+@pytest.mark.parametrize("case", ["uniform", "stabilised"])
+@pytest.mark.parametrize("feedforward", ["exact", "paper"])
+def test_paper_runs_unchanged_by_the_move_of_the_laws(case, feedforward):
+    """60 s of the paper scenario, sampled every 0.5 s, as recorded before the laws moved."""
+    reference = np.load(REFERENCE)
+    vehicle = aiauv_pin.load_vehicle(aiauv_pin.bundled_urdf(case))
+    gains = PathFollowingGains.for_case(case, feedforward=feedforward)
+    result = run_paper_scenario(vehicle, PaperScenario(case=case, duration=60.0, gains=gains))
+    trajectory = result.trajectory
+    rows = np.arange(0, len(trajectory.t), 50)
+    key = f"{case}_{feedforward}"
+    np.testing.assert_array_equal(trajectory.t[rows], reference[f"{key}_t"])
+    for name, got in (
+        ("q", trajectory.q[rows]),
+        ("v", trajectory.v[rows]),
+        ("p", trajectory.info["p"][rows]),
+        ("phi", trajectory.info["phi_tilde"][rows]),
+        ("thrust", trajectory.info["thrust"][rows]),
+    ):
+        np.testing.assert_allclose(got, reference[f"{key}_{name}"], rtol=0, atol=1e-9, err_msg=name)
+
+
+def _same_trajectory(got, expected, tol) -> None:
+    np.testing.assert_array_equal(got.t, expected.t)
+    for name in ("q", "v", "tau"):
+        np.testing.assert_allclose(getattr(got, name), getattr(expected, name), err_msg=name, **tol)
+    assert got.info.keys() == expected.info.keys()
+    for key, value in expected.info.items():
+        assert got.info[key].shape == value.shape, key
+        np.testing.assert_allclose(got.info[key], value, err_msg=key, **tol)
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        dict(case="uniform"),
+        dict(case="stabilised", control_period=0.03, current=(0.1, -0.05, 0.02)),
+        dict(case="uniform", continuous_joints=False, method="euler", dt=0.005),
+    ],
+    ids=["paper", "held_with_current", "sampled_joints_euler"],
+)
+def test_compiled_scenario_matches_python_controller(numba_vehicle, options):
+    scenario = PaperScenario(duration=2.0, **options)
+    compiled = run_paper_scenario(numba_vehicle, scenario)
+    python = run_paper_scenario(numba_vehicle, scenario, compiled=False)
+    assert compiled.extra["compiled_controller"] and not python.extra["compiled_controller"]
+    # same kernels for the dynamics: only the controller's rounding differs
+    _same_trajectory(compiled.trajectory, python.trajectory, dict(rtol=1e-9, atol=1e-11))
+
+
+def test_compiled_scenario_matches_pinocchio_reference():
+    reference = aiauv_pin.load_vehicle()
+    reference.backend = "pinocchio"
+    fast = aiauv_pin.load_vehicle()
+    fast.backend = "numba"
+    scenario = PaperScenario(duration=1.5)
+    expected = run_paper_scenario(reference, scenario)
+    assert not expected.extra["compiled_controller"]
+    got = run_paper_scenario(fast, scenario)
+    _same_trajectory(got.trajectory, expected.trajectory, dict(rtol=1e-9, atol=1e-9))
+
+
+def test_on_log_sees_every_logged_sample(numba_vehicle):
+    scenario = PaperScenario(duration=2.5, control_period=0.02)
+    seen = {True: [], False: []}
+    for compiled in (True, False):
+        run_paper_scenario(
+            numba_vehicle,
+            scenario,
+            compiled=compiled,
+            on_log=lambda t, q, info, c=compiled: seen[c].append((t, q[0], info["p"][1])),
+        )
+    assert len(seen[True]) == 126
+    np.testing.assert_allclose(np.array(seen[True]), np.array(seen[False]), rtol=1e-9, atol=1e-12)
+
+
+def test_divergence_reports_the_same_time_and_partial_trajectory(numba_vehicle):
+    scenario = PaperScenario(duration=20.0, dt=0.5)
+    errors = []
+    for compiled in (True, False):
+        with pytest.raises(SimulationDiverged) as error:
+            run_paper_scenario(numba_vehicle, scenario, compiled=compiled)
+        errors.append(error.value)
+    got, expected = errors
+    assert str(got) == str(expected) and "t = 1 s" in str(got)
+    assert got.trajectory.status == "diverged"
+    _same_trajectory(got.trajectory, expected.trajectory, dict(rtol=1e-9, atol=1e-11))
+
+
+def test_custom_controllers_fall_back_to_python(numba_vehicle, paper_vehicle):
+    class Quieter(VehiclePathFollowing):
+        def __call__(self, t, q, v):
+            tau, info = super().__call__(t, q, v)
+            return 0.5 * tau, info
+
+    custom = Quieter(numba_vehicle)
+    assert "Quieter" in compiled_path_following_reason(custom)
+    scenario = PaperScenario(duration=0.2)
+    result = run_paper_scenario(numba_vehicle, scenario, controller=custom)
+    assert not result.extra["compiled_controller"]
+    plain = run_paper_scenario(numba_vehicle, scenario)
+    # the subclass's halved thrust was applied: the run differs from the paper controller's
+    assert not np.allclose(result.trajectory.tau[1:, :6], 0.5 * plain.trajectory.tau[1:, :6])
+    with pytest.raises(ValueError, match="compiled path following unavailable") as error:
+        run_paper_scenario(numba_vehicle, scenario, controller=custom, compiled=True)
+    assert "\n" not in str(error.value)
+    pinocchio_vehicle = aiauv_pin.load_vehicle()
+    pinocchio_vehicle.backend = "pinocchio"
+    assert "pinocchio" in compiled_path_following_reason(VehiclePathFollowing(pinocchio_vehicle))
+
+
+# ---------------------------------------------------------------- result files (speed-ups)
+def test_csv_text_is_that_of_numpy_savetxt(rng):
+    import io
+
+    from aiauv_pin.outputs import format_table
+
+    table = rng.normal(size=(7, 5)) * np.logspace(-12, 12, 5)
+    table[0, 0] = 0.0
+    buffer = io.StringIO()
+    np.savetxt(buffer, table, delimiter=",", header="a,b,c,d,e", comments="", fmt="%.9g")
+    assert format_table(list("abcde"), table) == buffer.getvalue()
+
+
+def test_csv_keeps_every_csv_period_and_the_summary_every_step(numba_vehicle, tmp_path):
+    import json
+
+    from aiauv_pin.outputs import write_results
+
+    result = run_paper_scenario(numba_vehicle, PaperScenario(duration=1.03))
+    write_results(result, tmp_path)
+    rows = (tmp_path / "timeseries.csv").read_text().splitlines()[1:]
+    times = [float(row.split(",")[0]) for row in rows]
+    np.testing.assert_allclose(times, [*np.arange(0.0, 1.0001, 0.05), 1.03], atol=1e-12)
+    content = json.loads((tmp_path / "summary.json").read_text())
+    assert content["steps"] == 103  # integrals and settling times see every step
+
+
+def test_plot_envelope_keeps_each_buckets_extremes_in_time_order(rng):
+    from aiauv_pin.outputs import envelope
+
+    t = np.arange(10_001) * 0.01
+    y = np.cumsum(rng.normal(size=t.size)) + 5.0 * (rng.random(t.size) < 0.001)
+    t_kept, y_kept = envelope(t, y, buckets=100)
+    assert len(t_kept) <= 2 * 100 + 2 and np.all(np.diff(t_kept) > 0)
+    assert (t_kept[0], t_kept[-1]) == (t[0], t[-1])
+    size = -(-t.size // 100)
+    for start in range(0, t.size, size):
+        inside = (t_kept >= t[start]) & (t_kept <= t[min(start + size, t.size) - 1])
+        assert y_kept[inside].max() == y[start : start + size].max()
+        assert y_kept[inside].min() == y[start : start + size].min()
+    _, short_y = envelope(t[:150], y[:150], buckets=100)
+    assert np.array_equal(short_y, y[:150])
