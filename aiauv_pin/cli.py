@@ -188,6 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     from .bench import add_bench_parser
+    from .interop.cli import add_interop_subcommands
     from .sweep import add_sweep_subcommand
 
     _add_simulate(subparsers)
@@ -195,6 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_check(subparsers)
     add_bench_parser(subparsers)
     add_sweep_subcommand(subparsers)
+    add_interop_subcommands(subparsers)
     return parser
 
 
