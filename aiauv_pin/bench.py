@@ -441,7 +441,12 @@ def add_bench_parser(subparsers) -> None:
         "write JSON.",
     )
     parser.add_argument("--quick", action="store_true", help="short CI-friendly run")
-    parser.add_argument("--case", choices=("uniform", "stabilised"), default="uniform")
+    parser.add_argument(
+        "--case",
+        choices=("uniform", "stabilised"),
+        default="uniform",
+        help="the paper vehicle's case to time (uniform)",
+    )
     parser.add_argument(
         "--duration",
         type=positive_seconds,
