@@ -223,6 +223,14 @@ def test_import_checks_link_frames(coupled_urdf, tmp_path):
     assert not (tmp_path / "out.urdf").exists()
 
 
+def test_import_refuses_links_the_urdf_lacks(tmp_path):
+    path = tmp_path / "auv.sdf"
+    path.write_text(_sdf("<xU>-1</xU>"))
+    with pytest.raises(InteropError, match="SDF link 'hull' is not a link of"):
+        import_gz(path, VEHICLES["paper_uniform"], tmp_path / "out.urdf")
+    assert not (tmp_path / "out.urdf").exists()
+
+
 def test_cli_import_and_export_errors_are_one_line(tmp_path, capsys):
     urdf = VEHICLES["paper_uniform"]
     assert main(["export", str(urdf), "-o", str(tmp_path / "x.txt")]) == 1
@@ -328,6 +336,14 @@ def test_mjcf_rigid_body_dynamics_match_pinocchio(name, coupled_urdf, tmp_path):
         body = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_BODY, frame.name)
         subtree = [b for b in range(mj.nbody) if b == body or _welded_to(mj, b, body)]
         assert mj.body_mass[subtree].sum() == pytest.approx(inertia.mass, rel=1e-14), frame.name
+        if len(subtree) == 1:  # principal moments of inertia about the centre of mass
+            np.testing.assert_allclose(
+                np.sort(mj.body_inertia[body]),
+                np.linalg.eigvalsh(inertia.inertia),
+                rtol=1e-10,
+                atol=1e-12,
+                err_msg=frame.name,
+            )
     assert checked == model.njoints - 1
     pin_data = model.createData()
     # fluid off: the exported model is the rigid-body model, so MuJoCo's qacc is Pinocchio's aba
