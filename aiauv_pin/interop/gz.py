@@ -646,7 +646,8 @@ def _header(source: ExportSource, added_mass: str, crossflow: list[str]) -> str:
         "Buoyancy: each link's displaced volume is a non-colliding sphere collision named",
         "<link>_buoyancy centred at the centre of buoyancy; add gz's Buoyancy world system with",
         "<uniform_fluid_density> to the world (the density used here is given below).",
-        "Not exported: thrusters, meshes, and the crossflow strip drag"
+        "Not exported: thrusters, meshes, contact collisions (gz would count their volume),"
+        " and the crossflow strip drag"
         + (f" of {', '.join(crossflow)}" if crossflow else "")
         + " (gz has no such term).",
     ]
