@@ -296,10 +296,20 @@ def command_line_timing(case: str, duration: float, out_dir: Path, repeats: int 
         str(out_dir),
     ]
     walls = []
+    out_dir = Path(out_dir).resolve()
+    out_dir.mkdir(parents=True, exist_ok=True)
     for _ in range(repeats):
         start = time.perf_counter()
-        subprocess.run(command, check=True, capture_output=True)
+        # run outside the current folder: ``python -m`` puts it first on sys.path, and in a source
+        # checkout (the repository root) that would import the source tree instead of the
+        # installed package (whose aiauv_pin.urdf lives in urdf/ of the tree)
+        run = subprocess.run(command, capture_output=True, text=True, cwd=out_dir)
         walls.append(time.perf_counter() - start)
+        if run.returncode != 0:
+            said = (run.stderr.strip().splitlines() or ["no message"])[-1]
+            from .errors import AiauvError
+
+            raise AiauvError(f"'aiauv simulate' failed in a fresh process: {said}")
     return {
         "command": "aiauv " + " ".join(command[3:-2]),
         "wall_s": min(walls),
@@ -441,7 +451,12 @@ def add_bench_parser(subparsers) -> None:
         "write JSON.",
     )
     parser.add_argument("--quick", action="store_true", help="short CI-friendly run")
-    parser.add_argument("--case", choices=("uniform", "stabilised"), default="uniform")
+    parser.add_argument(
+        "--case",
+        choices=("uniform", "stabilised"),
+        default="uniform",
+        help="the paper vehicle's case to time (uniform)",
+    )
     parser.add_argument(
         "--duration",
         type=positive_seconds,

@@ -152,6 +152,11 @@ def write_summary(result: ScenarioResult, path: Path, extra: dict | None = None)
     return content
 
 
+#: Resolution of PNG figures [dots per inch].
+FIGURE_DPI = 200
+#: Figure formats: PNG (raster, :data:`FIGURE_DPI`), SVG and PDF (vector).
+FIGURE_FORMATS = ("png", "svg", "pdf")
+
 FIGURES = (
     "fig2_cross_track.png",
     "fig3_surge.png",
@@ -164,17 +169,70 @@ FIGURES = (
 """File names of the figures, in drawing order."""
 
 
-def _draw(name: str, result: ScenarioResult, plt):
-    """The figure ``name`` of :data:`FIGURES`."""
+def _error_axes(plt, title: str):
+    """A figure with an error panel above its log-scale companion (``|error|``, shared time axis)."""
+    fig, (ax, ax_log) = plt.subplots(
+        2, 1, figsize=(6, 4.6), sharex=True, gridspec_kw={"height_ratios": (3, 2)}
+    )
+    ax.set_title(title)
+    ax.axhline(0.0, color="k", lw=0.5)
+    ax_log.set_yscale("log")
+    ax_log.set_xlabel("t [s]")
+    ax_log.grid(True, which="major", lw=0.3)
+    return fig, ax, ax_log
+
+
+def _plot_error(ax, ax_log, t, y, **kwargs) -> None:
+    """``y`` on the linear panel and ``|y|`` on the log-scale one (zeros are not drawn there)."""
+    _plot(ax, t, y, **kwargs)
+    magnitude = np.abs(np.asarray(y, dtype=float))
+    _plot(ax_log, t, np.where(magnitude > 0.0, magnitude, np.nan), **kwargs)
+
+
+def default_path_points(result: ScenarioResult) -> np.ndarray:
+    """The drawn path when none is given: the world x-axis over the end-effector's x-range (N, 3)."""
+    p = result.trajectory.info["p"]
+    return np.array([[p[0, 0], 0.0, 0.0], [p[-1, 0], 0.0, 0.0]])
+
+
+def _set_equal_axes(ax, points: np.ndarray) -> None:
+    """Equal scales on the three axes of a 3-D plot, framing ``points`` (N, 3) [m]."""
+    low, high = np.nanmin(points, axis=0), np.nanmax(points, axis=0)
+    centre = (low + high) / 2.0
+    half = max(float(np.max(high - low)) / 2.0, 1e-3) * 1.05
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.set_box_aspect((1.0, 1.0, 1.0))
+
+
+def _draw(
+    name: str,
+    result: ScenarioResult,
+    plt,
+    *,
+    vehicle_name: str | None = None,
+    path_points: np.ndarray | None = None,
+):
+    """The figure ``name`` of :data:`FIGURES`, titled with the vehicle's name.
+
+    Args:
+        name: One of :data:`FIGURES`.
+        result: The run.
+        plt: ``matplotlib.pyplot``.
+        vehicle_name: Name in the titles (default: the scenario's case).
+        path_points: World points of the path the 3-D figure draws, (N, 3) [m] (default:
+            :func:`default_path_points`).
+    """
     tr = result.trajectory
     info, t = tr.info, tr.t
-    case = result.scenario.case
+    case = vehicle_name if vehicle_name else result.scenario.case
     if name == "fig2_cross_track.png":
-        fig, ax = plt.subplots(figsize=(6, 3.2))
-        _plot(ax, t, info["p"][:, 1], label="$p_y$")
-        _plot(ax, t, info["p"][:, 2], label="$p_z$")
-        ax.set(xlabel="t [s]", ylabel="cross-track error [m]", title=f"Cross-track errors ({case})")
-        ax.axhline(0.0, color="k", lw=0.5)
+        fig, ax, ax_log = _error_axes(plt, f"Cross-track errors ({case})")
+        _plot_error(ax, ax_log, t, info["p"][:, 1], label="$p_y$")
+        _plot_error(ax, ax_log, t, info["p"][:, 2], label="$p_z$")
+        ax.set_ylabel("cross-track error [m]")
+        ax_log.set_ylabel("|error| [m]")
         ax.legend()
     elif name == "fig3_surge.png":
         fig, ax = plt.subplots(figsize=(6, 3.2))
@@ -184,14 +242,16 @@ def _draw(name: str, result: ScenarioResult, plt):
         ax.set(xlabel="t [s]", ylabel="surge velocity [m/s]", title=f"Surge velocity ({case})")
         ax.legend()
     elif name == "fig4_phi_tilde.png":
-        fig, ax = plt.subplots(figsize=(6, 3.2))
-        _plot(ax, t, info["phi_tilde"])
-        ax.set(xlabel="t [s]", ylabel=r"$\tilde\phi$ [rad]", title=f"Pointing error ({case})")
+        fig, ax, ax_log = _error_axes(plt, f"Pointing error ({case})")
+        _plot_error(ax, ax_log, t, info["phi_tilde"])
+        ax.set_ylabel(r"$\tilde\phi$ [rad]")
+        ax_log.set_ylabel(r"$|\tilde\phi|$ [rad]")
     elif name == "fig5_omega_tilde.png":
-        fig, ax = plt.subplots(figsize=(6, 3.2))
-        _plot(ax, t, info["omega_tilde"][:, 0], label=r"$\tilde\omega_y$")
-        _plot(ax, t, info["omega_tilde"][:, 1], label=r"$\tilde\omega_z$")
-        ax.set(xlabel="t [s]", ylabel="[rad/s]", title=f"Angular velocity error ({case})")
+        fig, ax, ax_log = _error_axes(plt, f"Angular velocity error ({case})")
+        _plot_error(ax, ax_log, t, info["omega_tilde"][:, 0], label=r"$\tilde\omega_y$")
+        _plot_error(ax, ax_log, t, info["omega_tilde"][:, 1], label=r"$\tilde\omega_z$")
+        ax.set_ylabel("[rad/s]")
+        ax_log.set_ylabel("|error| [rad/s]")
         ax.legend()
     elif name == "fig6_base_angles.png":
         fig, ax = plt.subplots(figsize=(6, 3.2))
@@ -214,15 +274,27 @@ def _draw(name: str, result: ScenarioResult, plt):
         stride = max(1, len(p) // (2 * PLOT_BUCKETS))  # a smooth space curve: every stride-th point
         path = np.concatenate((p[::stride], p[-1:]))
         ax.plot(path[:, 0], path[:, 1], path[:, 2], label="end-effector")
-        ax.plot([p[0, 0], p[-1, 0]], [0, 0], [0, 0], "k--", lw=0.8, label="path")
+        drawn = default_path_points(result) if path_points is None else path_points
+        drawn = np.asarray(drawn, dtype=float)
+        if drawn.ndim != 2 or drawn.shape[1] != 3:
+            raise ValueError(f"path_points must be an (N, 3) array, got shape {drawn.shape}")
+        ax.plot(drawn[:, 0], drawn[:, 1], drawn[:, 2], "k--", lw=0.8, label="path")
         ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"Path ({case})")
+        _set_equal_axes(ax, np.concatenate((path, drawn)))
         ax.legend()
     else:
         raise ValueError(f"unknown figure {name!r}")
     return fig
 
 
-def _render(result: ScenarioResult, folder: Path, names) -> list[Path]:
+def figure_path(folder: Path, name: str, figure_format: str = "png") -> Path:
+    """File of figure ``name`` (of :data:`FIGURES`) in ``figure_format``."""
+    return Path(folder) / Path(name).with_suffix(f".{figure_format}")
+
+
+def _render(
+    result: ScenarioResult, folder: Path, names, figure_format: str = "png", **drawing
+) -> list[Path]:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -230,12 +302,13 @@ def _render(result: ScenarioResult, folder: Path, names) -> list[Path]:
 
     written = []
     for name in names:
-        fig = _draw(name, result, plt)
+        fig = _draw(name, result, plt, **drawing)
         fig.tight_layout()
-        with atomic_path(folder / name) as temporary:
-            fig.savefig(temporary, dpi=110, format="png")
+        path = figure_path(folder, name, figure_format)
+        with atomic_path(path) as temporary:
+            fig.savefig(temporary, dpi=FIGURE_DPI, format=figure_format)
         plt.close(fig)
-        written.append(folder / name)
+        written.append(path)
     return written
 
 
@@ -249,12 +322,39 @@ def _fork_context():
     return multiprocessing.get_context("fork")
 
 
-def write_figures(result: ScenarioResult, folder: Path, *, parallel: bool = True) -> list[Path]:
-    """PNG figures mirroring the paper's Figs. 2-7, plus the 3-D path (:data:`FIGURES`).
+def write_figures(
+    result: ScenarioResult,
+    folder: Path,
+    *,
+    parallel: bool = True,
+    figure_format: str = "png",
+    vehicle_name: str | None = None,
+    path_points: np.ndarray | None = None,
+) -> list[Path]:
+    """Figures mirroring the paper's Figs. 2-7, plus the 3-D path (:data:`FIGURES`).
 
-    With ``parallel`` (on Linux, with more than one CPU) a forked process draws half of them
-    while this one draws the rest.
+    Error figures (cross-track, ``phi_tilde``, ``omega_tilde``) have a log-scale panel of the
+    error's magnitude under the linear one, so that final errors of 1e-5 are visible; the 3-D path
+    has equal axes. With ``parallel`` (on Linux, with more than one CPU) a forked process draws
+    half of them while this one draws the rest.
+
+    Args:
+        result: The run.
+        folder: Where to write.
+        parallel: Draw in two processes where possible.
+        figure_format: ``"png"`` (:data:`FIGURE_DPI` dpi), ``"svg"`` or ``"pdf"``.
+        vehicle_name: Name in the titles (default: the scenario's case).
+        path_points: The path drawn in the 3-D figure, world points (N, 3) [m] (default: the
+            x-axis over the run's x-range).
+
+    Returns:
+        The files written, in the order of :data:`FIGURES`.
     """
+    if figure_format not in FIGURE_FORMATS:
+        raise ValueError(
+            f"unknown figure format '{figure_format}' (expected {', '.join(FIGURE_FORMATS)})"
+        )
+    drawing = {"vehicle_name": vehicle_name, "path_points": path_points}
     import os
 
     _wait_for_preload()  # no import may be in progress in another thread when forking
@@ -267,24 +367,50 @@ def write_figures(result: ScenarioResult, folder: Path, *, parallel: bool = True
     folder = Path(folder)
     context = _fork_context() if parallel and (os.cpu_count() or 1) > 1 else None
     if context is None:
-        return _render(result, folder, FIGURES)
+        return _render(result, folder, FIGURES, figure_format, **drawing)
     from concurrent.futures import ProcessPoolExecutor
 
     # the 3-D path and the 3-panel figure are the slowest: split the work about evenly
     mine = ("fig7_pointing.png", "fig2_cross_track.png", "fig4_phi_tilde.png")
     theirs = tuple(name for name in FIGURES if name not in mine)
     with ProcessPoolExecutor(max_workers=1, mp_context=context) as pool:
-        future = pool.submit(_render, result, folder, theirs)
-        _render(result, folder, mine)
+        future = pool.submit(_render, result, folder, theirs, figure_format, **drawing)
+        _render(result, folder, mine, figure_format, **drawing)
         future.result()
-    return [folder / name for name in FIGURES]
+    return [figure_path(folder, name, figure_format) for name in FIGURES]
 
 
-def write_results(result: ScenarioResult, out_dir: Path, extra: dict | None = None) -> dict:
-    """Write every result file of a run into ``out_dir``; return the summary."""
+def write_results(
+    result: ScenarioResult,
+    out_dir: Path,
+    extra: dict | None = None,
+    *,
+    figure_format: str = "png",
+    vehicle_name: str | None = None,
+    path_points: np.ndarray | None = None,
+) -> dict:
+    """Write every result file of a run into ``out_dir``; return the summary.
+
+    Args:
+        result: The run.
+        out_dir: The output folder.
+        extra: Entries added to ``summary.json``.
+        figure_format: See :func:`write_figures`.
+        vehicle_name: Name in the figure titles (default: the stem of ``extra["vehicle"]``, else
+            the scenario's case).
+        path_points: See :func:`write_figures`.
+    """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     write_timeseries(result, out_dir / "timeseries.csv")
     content = write_summary(result, out_dir / "summary.json", extra)
-    write_figures(result, out_dir / "figures")
+    if vehicle_name is None and extra and extra.get("vehicle"):
+        vehicle_name = Path(str(extra["vehicle"])).stem
+    write_figures(
+        result,
+        out_dir / "figures",
+        figure_format=figure_format,
+        vehicle_name=vehicle_name,
+        path_points=path_points,
+    )
     return content

@@ -313,7 +313,13 @@ def _plot_axes(spec: SweepSpec, rows: Sequence[dict]) -> list[tuple[str, str, bo
     return found
 
 
-def plot_sweep(spec: SweepSpec, rows: Sequence[dict], folder: str | os.PathLike) -> list[Path]:
+def plot_sweep(
+    spec: SweepSpec,
+    rows: Sequence[dict],
+    folder: str | os.PathLike,
+    *,
+    figure_format: str = "png",
+) -> list[Path]:
     """Summary plots of a sweep (matplotlib, Agg; each file written atomically).
 
     * ``metrics_vs_parameters.png``: settling time, final cross-track error and thruster work
@@ -321,8 +327,10 @@ def plot_sweep(spec: SweepSpec, rows: Sequence[dict], folder: str | os.PathLike)
       triangles, diverged and failed runs as red crosses on the axis);
     * ``settling_time_<a>_<b>.png`` and ``cross_track_error_<a>_<b>.png`` for the first two swept
       numeric grid parameters: the mean over the other parameters in each cell of the plane (grey:
-      no value; ``k/n``: only k of the n runs there have one, e.g. settled; ``D``: a run
-      diverged or failed there).
+      no value), each cell labelled ``k/n``: k of its n runs have a value (settled, for the
+      settling time), and ``D`` if a run diverged or failed there.
+
+    Figures are PNG at 200 dpi, or SVG or PDF with ``figure_format``.
 
     Returns:
         The files written.
@@ -333,9 +341,10 @@ def plot_sweep(spec: SweepSpec, rows: Sequence[dict], folder: str | os.PathLike)
     written: list[Path] = []
 
     def save(fig, name: str) -> None:
-        with atomic_path(folder / name) as temporary:
-            fig.savefig(temporary, dpi=110, format="png")
-        written.append(folder / name)
+        path = folder / Path(name).with_suffix(f".{figure_format}")
+        with atomic_path(path) as temporary:
+            fig.savefig(temporary, dpi=200, format=figure_format)
+        written.append(path)
 
     axes_of = _plot_axes(spec, rows)
     numeric = [key for key, _, _ in axes_of]
@@ -406,15 +415,19 @@ def plot_sweep(spec: SweepSpec, rows: Sequence[dict], folder: str | os.PathLike)
             for (r, c), flag in np.ndenumerate(diverged):
                 items = cells.get((r, c), [])
                 finite = sum(math.isfinite(x) for x in items)
-                text = f"{finite}/{len(items)}" if finite < len(items) else ""
+                text = f"{finite}/{len(items)}" if items else ""
                 text = f"{text} D" if flag else text
                 if text:
-                    ax.text(c, r, text.strip(), ha="center", va="center", color="red", fontsize=8)
+                    colour = "red" if flag or finite < len(items) else "white"
+                    ax.text(c, r, text.strip(), ha="center", va="center", color=colour, fontsize=8)
             ax.set_xticks(range(len(xs)), [f"{v:.4g}" for v in xs])
             ax.set_yticks(range(len(ys)), [f"{v:.4g}" for v in ys])
             ax.set_xlabel(labels[a])
             ax.set_ylabel(labels[b])
-            ax.set_title(f"{label} over ({labels[a]}, {labels[b]})", fontsize=9)
+            counted = "settled" if name == "settling_time" else "with a value"
+            ax.set_title(
+                f"{label} over ({labels[a]}, {labels[b]}); cells: runs {counted}/runs", fontsize=9
+            )
             save(fig, f"{name}_{labels[a]}_{labels[b]}.png")
     return written
 
@@ -537,6 +550,7 @@ def run_sweep(
     progress: bool = True,
     plots: bool = True,
     on_record: Callable[[dict], None] | None = None,
+    figure_format: str = "png",
 ) -> SweepReport:
     """Run every run of a spec that has no record in ``out`` yet, on Dask.
 
@@ -551,6 +565,7 @@ def run_sweep(
         progress: Show a progress bar over the runs (tqdm, on standard error).
         plots: Write the summary plots into ``out/figures``.
         on_record: Called with each record after it is written (in the client process).
+        figure_format: Format of the summary plots: ``"png"`` (200 dpi), ``"svg"`` or ``"pdf"``.
 
     Returns:
         What was done.
@@ -597,7 +612,12 @@ def run_sweep(
         table, counts = _write_outputs(out, points, spec_text)
     figures: list[Path] = []
     if plots:
-        figures = plot_sweep(spec, table_rows(points, read_records(out)), out / "figures")
+        figures = plot_sweep(
+            spec,
+            table_rows(points, read_records(out)),
+            out / "figures",
+            figure_format=figure_format,
+        )
     return SweepReport(
         out=out,
         total=len(points),
@@ -713,6 +733,12 @@ def add_sweep_subcommand(subparsers) -> None:
     )
     parser.add_argument("--out", type=Path, help="output folder (results/sweeps/<spec name>/)")
     parser.add_argument("--no-plots", action="store_true", help="do not write figures/")
+    parser.add_argument(
+        "--figure-format",
+        choices=("png", "svg", "pdf"),
+        default="png",
+        help="figures as PNG at 200 dpi, or vector SVG or PDF (png)",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(handler=run_sweep_command)
 
@@ -733,6 +759,7 @@ def run_sweep_command(args) -> int:
         workers=args.workers,
         progress=not args.quiet,
         plots=not args.no_plots,
+        figure_format=args.figure_format,
     )
     counts = ", ".join(f"{n} {s}" for s, n in report.counts.items() if n)
     print(

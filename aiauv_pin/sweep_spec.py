@@ -1,27 +1,10 @@
 """Sweep specifications: TOML files naming a grid and/or a random sample of scenario parameters.
 
-A spec is a TOML table with three parts, all optional::
-
-    case = "uniform"              # fixed parameters: the same for every run
-    duration = 60.0
-    vehicle = "my_vehicle.urdf"   # relative to the spec file; default: the bundled URDF of `case`
-
-    [grid]                        # cartesian product of the listed values
-    k_e = [0.025, 0.05, 0.1]
-    "initial_offset.y" = { linspace = [1.0, 3.0, 3] }
-
-    [random]                      # Monte Carlo: `samples` draws, each run on every grid point
-    samples = 20
-    seed = 1
-    "current.y" = { uniform = [-0.2, 0.2] }
-    feedforward = { choice = ["exact", "paper"] }
-
-Grid values are a list, ``{ linspace = [start, stop, count] }`` or ``{ geomspace = [start, stop,
-count] }``. Random parameters are ``{ uniform = [low, high] }``, ``{ loguniform = [low, high] }``,
-``{ normal = [mean, std] }`` or ``{ choice = [value, ...] }``. The runs are the cartesian product of
-the grid with the random samples (the same draws for every grid point, so grid points are compared
-on common random numbers); draws come from ``numpy.random.default_rng(seed)`` sample by sample, in
-the sorted order of the random parameter names, so raising ``samples`` keeps the earlier draws.
+A spec is a TOML table with fixed parameters, a ``[grid]`` and a ``[random]`` sample; the format
+is documented in ``docs/source/sweep.md`` ("Sweep spec" on the documentation site). The runs are
+the cartesian product of the grid with the random samples (the same draws for every grid point);
+draws come from ``numpy.random.default_rng(seed)`` sample by sample, in the sorted order of the
+random parameter names, so raising ``samples`` keeps the earlier draws.
 
 Parameter names (:data:`PARAMETERS`) are the fields of :class:`aiauv_pin.scenario.PaperScenario` and
 of :class:`control.path_following.PathFollowingGains`, with components of vectors addressable on

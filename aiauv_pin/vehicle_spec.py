@@ -4,42 +4,10 @@ A spec is a small TOML file; :func:`load_spec` reads it and :func:`spec_from_dic
 parsed table into frozen dataclasses. :mod:`aiauv_pin.builder` turns a :class:`VehicleSpec` into a
 URDF.
 
-Spec format (keys not listed here are errors)::
-
-    name = "paper_uniform"      # required; letters, digits, "_", "-", "."
-    radius = 0.085              # [m] default radius of the modules (required unless every module
-                                #     gives its own)
-    fluid_density = 1000.0      # [kg/m^3] optional, default 1000
-    gravity = 9.81              # [m/s^2] optional, default 9.81
-    joint_limit_deg = 65        # [deg] optional, default 65; every joint moves in [-lim, +lim]
-    joint_effort = 1000.0       # [N m] optional, default 1000 (URDF <limit effort>)
-    joint_velocity = 10.0       # [rad/s] optional, default 10 (URDF <limit velocity>)
-    max_thrust = 50.0           # [N] optional, default 50; default for thrusters without one
-
-    [[module]]                  # at least two, tail first
-    name = "link1"              # required, unique
-    length = 0.62               # [m] required
-    mass = 14.3                 # [kg] exactly one of mass or density [kg/m^3]
-                                #      (density: mass = density * pi r^2 L)
-    radius = 0.085              # [m] optional, overrides the top-level radius
-    cg_offset = [0, 0, 0]       # [m] optional, centre of gravity minus module centre (L/2, 0, 0)
-    cb_offset = [0, 0, 0]       # [m] optional, centre of buoyancy minus the module centre
-    volume = 0.0143             # [m^3] optional, default mass / fluid_density (neutrally buoyant on
-                                #       its own), NOT the cylinder volume
-    joint = "z"                 # axis ("x", "y" or "z") of the revolute joint at the FRONT of the
-                                # module; required on every module but the head, forbidden there
-
-    [[module.thruster]]         # optional, any number per module
-    name = "link3_z"            # required, unique in the vehicle
-    x = 0.237                   # [m] required, in [0, L] along the module from its rear end
-    y = 0.0                     # [m] optional, default 0
-    z = 0.0                     # [m] optional, default 0
-    direction = "z"             # "x", "y", "z", "-x", "-y", "-z" or a nonzero [dx, dy, dz]
-    max_thrust = 50.0           # [N] optional, default: the top-level max_thrust
-
-Positions are in the module's link frame: origin on the module's rear joint axis (the tail
-module's rear end), x forward along the module, z up. The centre of gravity and of buoyancy must
-lie inside the module's cylinder.
+The spec format (every key, its unit and default; keys not listed there are errors) is documented in
+``docs/source/vehicle_spec.md`` ("Vehicle spec" on the documentation site). Positions are in the
+module's link frame: origin on the module's rear joint axis (the tail module's rear end), x forward
+along the module, z up.
 """
 
 from __future__ import annotations

@@ -1,0 +1,78 @@
+"""The one-time numba compilation: a notice while it runs, and a warm-up outside timed runs.
+
+numba compiles :mod:`aiauv_pin.fast`'s kernels on their first use in an installation (20-60 s)
+and caches them on disk (``cache=True``); later processes load them in well under a second. The
+command line prints :data:`COMPILE_NOTICE` when no cache of the compiled scenario loop is found,
+and runs a few steps of the scenario before the timed run (:func:`warm_up`), so that the
+real-time factor in ``summary.json`` measures the simulation and not the compilation.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import os
+import sys
+from pathlib import Path
+
+#: Printed (to standard error) before the first compilation in an installation.
+COMPILE_NOTICE = "aiauv: compiling kernels once for this installation, ~20 s"
+
+
+def _cache_folders() -> list[Path]:
+    """Where numba may keep this package's cache (its locators, in order)."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return [Path(os.environ["NUMBA_CACHE_DIR"])]  # numba then uses this folder only
+    folders = []
+    spec = importlib.util.find_spec("aiauv_pin.fast")
+    if spec is not None and spec.submodule_search_locations:
+        folders.extend(Path(p) / "__pycache__" for p in spec.submodule_search_locations)
+    folders.append(Path.home() / ".cache" / "numba")
+    return folders
+
+
+def kernels_cached() -> bool:
+    """Whether numba's on-disk cache holds the compiled scenario loop (``path_following``)."""
+    for folder in _cache_folders():
+        if not folder.is_dir():
+            continue
+        pattern = "path_following.*.nbi"
+        direct = next(folder.glob(pattern), None)
+        if direct is not None or next(folder.rglob(pattern), None) is not None:
+            return True
+    return False
+
+
+def announce_compilation(stream=None) -> bool:
+    """Print :data:`COMPILE_NOTICE` if the kernels will be compiled now; return whether they will.
+
+    Args:
+        stream: Where to print (standard error by default).
+    """
+    if importlib.util.find_spec("numba") is None or kernels_cached():
+        return False
+    print(COMPILE_NOTICE, file=stream if stream is not None else sys.stderr, flush=True)
+    return True
+
+
+def warm_up(vehicle, scenario) -> None:
+    """Run two controller samples of ``scenario`` so that its compiled code is built or loaded.
+
+    Does nothing on the Pinocchio backend (nothing to compile).
+
+    Args:
+        vehicle: The :class:`~aiauv_pin.Vehicle` of the run.
+        scenario: The :class:`~aiauv_pin.scenario.PaperScenario` about to run.
+    """
+    if vehicle.active_backend != "numba":
+        return
+    from .errors import SimulationDiverged
+    from .scenario import run_paper_scenario
+
+    short = dataclasses.replace(
+        scenario, duration=min(scenario.duration, 2 * scenario.steps_per_control * scenario.dt)
+    )
+    try:
+        run_paper_scenario(vehicle, short, progress=False)
+    except SimulationDiverged:
+        pass  # the compiled code is built all the same; the timed run reports the divergence
