@@ -44,33 +44,63 @@ def positive_seconds(text: str) -> float:
     return value
 
 
+def _three_numbers(text: str) -> float:
+    """argparse type for one component of a vector flag: a finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be finite, got '{text}'")
+    return value
+
+
 def _add_simulate(subparsers) -> None:
     parser = subparsers.add_parser(
         "simulate",
-        help="run the paper's path-following scenario",
-        description="Run the paper's path-following scenario and write timeseries.csv, "
-        "summary.json, figures/ and playback.html into the output folder. If the simulation "
-        "diverges, the files are written for what was computed before (without playback.html), "
-        "and the command fails naming the time and the cause.",
+        help="run a scenario (default: the paper's path-following scenario)",
+        description="Run a scenario file (vehicle, path, start, current, controller; see the "
+        "docs' scenario page), or the paper's scenario without one, and write timeseries.csv, "
+        "summary.json, figures/ and playback.html into the output folder. Flags override the "
+        "file. If the simulation diverges, the files are written for what was computed before "
+        "(without playback.html), and the command fails naming the time and the cause.",
     )
     parser.add_argument(
-        "--vehicle", type=Path, help="URDF file (default: the bundled paper vehicle)"
+        "scenario", nargs="?", type=Path, help="scenario file (TOML); default: the paper's scenario"
+    )
+    parser.add_argument(
+        "--vehicle", type=Path, help="URDF file (default: the bundled paper vehicle of --case)"
     )
     parser.add_argument(
         "--case",
         choices=("uniform", "stabilised"),
-        default="uniform",
+        default=None,
         help="the paper's vehicle case and its gains: uniform density (k_D = 19) or passively "
         "roll-stabilised (k_D = 12) (uniform)",
     )
-    parser.add_argument("--duration", type=positive_seconds, default=300.0, help="[s] (300)")
+    parser.add_argument("--duration", type=positive_seconds, default=None, help="[s] (300)")
     parser.add_argument("--dt", type=positive_seconds, default=None, help="step [s] (0.01)")
-    parser.add_argument("--out", type=Path, default=None, help="output folder (results/<case>/)")
+    parser.add_argument("--method", choices=("rk4", "euler"), default=None, help="integrator (rk4)")
+    parser.add_argument(
+        "--current",
+        nargs=3,
+        type=_three_numbers,
+        metavar=("VX", "VY", "VZ"),
+        default=None,
+        help="constant water velocity in the world frame [m/s] (0 0 0)",
+    )
+    parser.add_argument(
+        "--controller",
+        choices=("paper", "none"),
+        default=None,
+        help="the paper's path following, or none: a passive run (paper)",
+    )
+    parser.add_argument("--out", type=Path, default=None, help="output folder (results/<name>/)")
     parser.add_argument("--no-html", action="store_true", help="do not write playback.html")
     parser.add_argument(
         "--feedforward",
         choices=("exact", "paper"),
-        default="exact",
+        default=None,
         help="attitude-law feedforward: the exact one, or eq. (23) as printed (exact)",
     )
     parser.add_argument(
@@ -86,21 +116,47 @@ def _add_simulate(subparsers) -> None:
     parser.set_defaults(handler=_run_simulate)
 
 
+def scenario_for_args(args):
+    """The scenario of ``aiauv simulate``'s arguments: the file's (or the paper's), flags applied."""
+    from hydro.currents import Current
+
+    from .scenario import Scenario
+    from .scenario_file import load_scenario
+
+    scenario = load_scenario(args.scenario) if args.scenario is not None else Scenario()
+    changes = {}
+    if args.case is not None:
+        changes["case"] = args.case
+        if scenario.gains is None or args.scenario is None:
+            changes["gains"] = None
+    for name in ("duration", "dt", "method", "controller"):
+        if getattr(args, name) is not None:
+            changes[name] = getattr(args, name)
+    if args.vehicle is not None:
+        changes["vehicle"] = str(args.vehicle)
+    if args.current is not None:
+        changes["current"] = Current.constant(args.current)
+    scenario = dataclasses.replace(scenario, **changes)
+    if args.feedforward is not None:
+        gains = scenario.controller_gains.with_changes(feedforward=args.feedforward)
+        scenario = dataclasses.replace(scenario, gains=gains)
+    return scenario
+
+
 def _run_simulate(args) -> int:
     from . import loading
     from .errors import AiauvError, SimulationDiverged
     from .outputs import preload_plotting, write_results
-    from .scenario import PaperScenario, ScenarioResult, run_paper_scenario
+    from .scenario import ScenarioResult, run_scenario
 
-    options = {"dt": args.dt} if args.dt is not None else {}
-    scenario = PaperScenario(case=args.case, duration=args.duration, **options)
+    scenario = scenario_for_args(args)
     steps = scenario.duration / scenario.dt
     if steps > MAX_STEPS:
         raise AiauvError(
             f"duration / dt = {steps:.3g} steps exceeds {MAX_STEPS}; "
             "use a larger --dt or a shorter --duration"
         )
-    path = args.vehicle if args.vehicle is not None else loading.bundled_urdf(args.case)
+    path = scenario.vehicle if scenario.vehicle is not None else loading.bundled_urdf(scenario.case)
     from .compilation import announce_compilation, warm_up
 
     compiling = announce_compilation()
@@ -112,13 +168,12 @@ def _run_simulate(args) -> int:
             "using the Pinocchio reference, about 50x slower",
             file=sys.stderr,
         )
-    gains = scenario.controller_gains.with_changes(feedforward=args.feedforward)
-    scenario = dataclasses.replace(scenario, gains=gains)
     # compile (or load) the kernels before the timed run: summary.json's real-time factor is the
     # simulation's alone; the set-up time is recorded beside it
     warm_up(vehicle, scenario)
     timing = {"setup_time": time.perf_counter() - compile_start, "compiled_now": compiling}
-    out = args.out if args.out is not None else Path("results") / args.case
+    name = args.scenario.stem if args.scenario is not None else scenario.case
+    out = args.out if args.out is not None else Path("results") / name
     on_log = None
     if args.view:
         from .viewer import live_view
@@ -126,7 +181,7 @@ def _run_simulate(args) -> int:
         on_log = live_view(vehicle)
     start = time.perf_counter()
     try:
-        result = run_paper_scenario(
+        result = run_scenario(
             vehicle,
             scenario,
             progress=not args.quiet,
@@ -138,6 +193,9 @@ def _run_simulate(args) -> int:
         partial = exc.trajectory
         if partial is None or len(partial.t) == 0:
             raise AiauvError(f"simulation diverged: {cause}; nothing to write") from None
+        from .scenario import add_path_errors
+
+        add_path_errors(vehicle, scenario, partial)
         result = ScenarioResult(
             scenario,
             partial,
@@ -160,11 +218,16 @@ def _run_simulate(args) -> int:
 
         write_playback(vehicle, result.trajectory, out / "playback.html")
     final = content["final"]
+    errors = (
+        f"final p_y = {final['p_y']:+.4f} m, p_z = {final['p_z']:+.4f} m"
+        if "p_y" in final
+        else f"final cross-track error = {final['cross_track_error']:.4f} m"
+    )
+    if "u" in final:
+        errors += f", u = {final['u']:.4f} m/s, phi_tilde = {final['phi_tilde']:.4f} rad"
     print(
-        f"{args.case}: {content['simulated_time']:.1f} s simulated in {content['wall_time']:.1f} s "
-        f"({content['real_time_factor']:.0f}x real time); final p_y = {final['p_y']:+.4f} m, "
-        f"p_z = {final['p_z']:+.4f} m, u = {final['u']:.4f} m/s, "
-        f"phi_tilde = {final['phi_tilde']:.4f} rad -> {out}"
+        f"{name}: {content['simulated_time']:.1f} s simulated in {content['wall_time']:.1f} s "
+        f"({content['real_time_factor']:.0f}x real time); {errors} -> {out}"
     )
     return 0
 

@@ -51,7 +51,13 @@ def _wait_for_preload() -> None:
 
 
 def timeseries_columns(result: ScenarioResult) -> dict[str, np.ndarray]:
-    """Columns of ``timeseries.csv`` by name, in order."""
+    """Columns of ``timeseries.csv`` by name, in order.
+
+    Always: time, the end-effector's world position ``p_x, p_y, p_z``, the cross-track errors
+    along the path's normals ``e_1, e_2`` and the path parameter ``s``, every joint angle and the base
+    position. With the paper's controller also its diagnostics (surge, errors, base angles,
+    reference and actual pointing direction, joint references and torques, thrusts).
+    """
     tr = result.trajectory
     info = tr.info
     columns: dict[str, np.ndarray] = {
@@ -59,25 +65,35 @@ def timeseries_columns(result: ScenarioResult) -> dict[str, np.ndarray]:
         "p_x": info["p"][:, 0],
         "p_y": info["p"][:, 1],
         "p_z": info["p"][:, 2],
-        "u": info["u"],
-        "phi_tilde": info["phi_tilde"],
-        "omega_tilde_y": info["omega_tilde"][:, 0],
-        "omega_tilde_z": info["omega_tilde"][:, 1],
-        "q_y0": info["base_angles"][:, 0],
-        "q_z0": info["base_angles"][:, 1],
+        "e_1": info["cross_track"][:, 0],
+        "e_2": info["cross_track"][:, 1],
+        "s": info["path_s"],
     }
-    for k, axis in enumerate("xyz"):
-        columns[f"x_ref_{axis}"] = info["x_ref"][:, k]
-    for k, axis in enumerate("xyz"):
-        columns[f"pointing_{axis}"] = info["pointing"][:, k]
+    paper = "u" in info
+    if paper:
+        columns.update(
+            {
+                "u": info["u"],
+                "phi_tilde": info["phi_tilde"],
+                "omega_tilde_y": info["omega_tilde"][:, 0],
+                "omega_tilde_z": info["omega_tilde"][:, 1],
+                "q_y0": info["base_angles"][:, 0],
+                "q_z0": info["base_angles"][:, 1],
+            }
+        )
+        for k, axis in enumerate("xyz"):
+            columns[f"x_ref_{axis}"] = info["x_ref"][:, k]
+        for k, axis in enumerate("xyz"):
+            columns[f"pointing_{axis}"] = info["pointing"][:, k]
     for k, name in enumerate(result.joint_names):
         columns[f"q_{name}"] = tr.q[:, 7 + k]
-    for k, name in enumerate(result.joint_names):
-        columns[f"qref_{name}"] = info["joint_references"][:, k]
-    for k, name in enumerate(result.joint_names):
-        columns[f"tau_{name}"] = info["joint_torque"][:, k]
-    for k, name in enumerate(result.thruster_names):
-        columns[f"thrust_{name}"] = info["thrust"][:, k]
+    if paper:
+        for k, name in enumerate(result.joint_names):
+            columns[f"qref_{name}"] = info["joint_references"][:, k]
+        for k, name in enumerate(result.joint_names):
+            columns[f"tau_{name}"] = info["joint_torque"][:, k]
+        for k, name in enumerate(result.thruster_names):
+            columns[f"thrust_{name}"] = info["thrust"][:, k]
     base = tr.q[:, :3]
     for k, axis in enumerate("xyz"):
         columns[f"base_{axis}"] = base[:, k]
@@ -168,6 +184,17 @@ FIGURES = (
 )
 """File names of the figures, in drawing order."""
 
+#: Figures every run has (the others need the paper controller's diagnostics).
+PATH_FIGURES = ("fig2_cross_track.png", "path_3d.png")
+
+
+def figures_of(result: ScenarioResult) -> tuple[str, ...]:
+    """The figures drawn for ``result``: all of :data:`FIGURES` with the paper's controller, else
+    :data:`PATH_FIGURES`."""
+    if "u" in result.trajectory.info:
+        return FIGURES
+    return PATH_FIGURES
+
 
 def _error_axes(plt, title: str):
     """A figure with an error panel above its log-scale companion (``|error|``, shared time axis)."""
@@ -189,10 +216,13 @@ def _plot_error(ax, ax_log, t, y, **kwargs) -> None:
     _plot(ax_log, t, np.where(magnitude > 0.0, magnitude, np.nan), **kwargs)
 
 
-def default_path_points(result: ScenarioResult) -> np.ndarray:
-    """The drawn path when none is given: the world x-axis over the end-effector's x-range (N, 3)."""
-    p = result.trajectory.info["p"]
-    return np.array([[p[0, 0], 0.0, 0.0], [p[-1, 0], 0.0, 0.0]])
+def default_path_points(result: ScenarioResult, n: int = 400) -> np.ndarray:
+    """The drawn path when none is given: the scenario's path over the arc length the end-effector
+    covered (its closest points' range, with a margin), (n, 3) world points [m]."""
+    s = result.trajectory.info["path_s"]
+    low, high = float(np.min(s)), float(np.max(s))
+    margin = 0.05 * max(high - low, 1.0)
+    return result.scenario.path_to_follow.sample((low - margin, high + margin), n)
 
 
 def _set_equal_axes(ax, points: np.ndarray) -> None:
@@ -229,8 +259,10 @@ def _draw(
     case = vehicle_name if vehicle_name else result.scenario.case
     if name == "fig2_cross_track.png":
         fig, ax, ax_log = _error_axes(plt, f"Cross-track errors ({case})")
-        _plot_error(ax, ax_log, t, info["p"][:, 1], label="$p_y$")
-        _plot_error(ax, ax_log, t, info["p"][:, 2], label="$p_z$")
+        # on the paper's x-axis the path normals are y and z: e_1 = p_y, e_2 = p_z
+        labels = ("$p_y$", "$p_z$") if result.scenario.on_x_axis else ("$e_1$", "$e_2$")
+        _plot_error(ax, ax_log, t, info["cross_track"][:, 0], label=labels[0])
+        _plot_error(ax, ax_log, t, info["cross_track"][:, 1], label=labels[1])
         ax.set_ylabel("cross-track error [m]")
         ax_log.set_ylabel("|error| [m]")
         ax.legend()
@@ -365,9 +397,10 @@ def write_figures(
     import mpl_toolkits.mplot3d  # noqa: F401
 
     folder = Path(folder)
+    names = figures_of(result)
     context = _fork_context() if parallel and (os.cpu_count() or 1) > 1 else None
-    if context is None:
-        return _render(result, folder, FIGURES, figure_format, **drawing)
+    if context is None or len(names) < len(FIGURES):
+        return _render(result, folder, names, figure_format, **drawing)
     from concurrent.futures import ProcessPoolExecutor
 
     # the 3-D path and the 3-panel figure are the slowest: split the work about evenly

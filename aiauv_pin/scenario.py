@@ -1,6 +1,9 @@
-"""The paper's simulation scenario (Sec. 4): straight-path following from an offset start.
+"""Scenarios: a vehicle, a path, a start, a current and a controller, run for a duration.
 
-Choices the paper leaves open, documented here and in the README:
+:class:`Scenario` describes one run (scenario files build it: :mod:`aiauv_pin.scenario_file`);
+:func:`run_scenario` runs it and :func:`summary` computes its figures of merit. Its defaults are
+the paper's scenario (Sec. 4): straight-path following from an offset start. Choices the paper
+leaves open, documented here and in the README:
 
 * the path is the world x-axis; the vehicle starts straight, at rest, parallel to the path, with its
   end-effector at ``(0, 2, 2)`` m (a few metres off in y and z, PAPER_DATA "Start");
@@ -19,31 +22,40 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 
+from control.guidance import X_AXIS
 from control.path_following import PathFollowingGains
+from control.paths import LinePath, Path
+from hydro.currents import Current, as_current
 
+from .controllers import CompiledController
 from .path_following import END_EFFECTOR, VehiclePathFollowing, compiled_path_following_reason
 from .simulation import Trajectory, simulate
 from .vehicle import Vehicle
 
 CASES = ("uniform", "stabilised")
+#: Controllers a scenario can name: the paper's path following, or none (passive run).
+CONTROLLERS = ("paper", "none")
 
 
 @dataclass(frozen=True)
-class PaperScenario:
-    """Parameters of one path-following run.
+class Scenario:
+    """Parameters of one run (defaults: the paper's scenario).
 
     Attributes:
-        case: ``"uniform"`` or ``"stabilised"`` (selects the paper's ``k_D``).
+        case: ``"uniform"`` or ``"stabilised"`` (selects the paper's ``k_D`` and the bundled
+            vehicle when ``vehicle`` is not given).
         duration: Simulated time [s].
         dt: Integration step [s].
-        initial_offset: End-effector start ``(p_y, p_z)`` [m]; ``p_x = 0``.
+        initial_offset: End-effector start ``(p_y, p_z)`` [m] with ``p_x = 0``, used when
+            ``start_position`` is not given.
         initial_surge: Initial forward speed of the straight vehicle [m/s].
         method: Integrator, ``"rk4"`` or ``"euler"``.
-        current: Constant water velocity in the world frame [m/s].
+        current: Water velocity: a constant world velocity (3) [m/s] or a
+            :class:`hydro.currents.Current`.
         gains: Controller gains; ``None`` means the paper's for the case.
         continuous_joints: Joint PD as a continuous servo (True) or sampled with the controller.
         control_period: Sampling period of the guidance, base-angle and surge loops [s], a whole
@@ -51,6 +63,12 @@ class PaperScenario:
         csv_period: Time between rows of ``timeseries.csv`` [s], rounded to a whole number of
             logged samples (at least one); ``None`` writes every logged sample. The run is still
             logged at every sample and ``summary.json`` uses them all.
+        path: The path to follow (:mod:`control.paths`); ``None`` is the world x-axis.
+        start_position: End-effector start in the world [m] (default ``(0, *initial_offset)``).
+        heading: Direction the straight vehicle points at the start (default: the path's tangent
+            at the point closest to the start).
+        controller: ``"paper"`` (path following) or ``"none"`` (passive).
+        vehicle: URDF file of the vehicle (``None``: the bundled vehicle of ``case``).
     """
 
     case: str = "uniform"
@@ -64,8 +82,28 @@ class PaperScenario:
     continuous_joints: bool = True
     control_period: float | None = None
     csv_period: float | None = 0.05
+    path: Path | None = None
+    start_position: tuple[float, float, float] | None = None
+    heading: tuple[float, float, float] | None = None
+    controller: str = "paper"
+    vehicle: str | None = None
 
     def __post_init__(self) -> None:
+        if self.controller not in CONTROLLERS:
+            raise ValueError(
+                f"unknown controller '{self.controller}' (expected {' or '.join(CONTROLLERS)})"
+            )
+        if self.path is not None and not isinstance(self.path, Path):
+            raise ValueError(f"path must be a control.paths.Path, got {type(self.path).__name__}")
+        for name in ("start_position", "heading"):
+            value = getattr(self, name)
+            if value is not None:
+                value = tuple(float(x) for x in value)
+                if len(value) != 3 or not all(map(math.isfinite, value)):
+                    raise ValueError(f"{name} must be three finite numbers")
+                object.__setattr__(self, name, value)
+        if self.heading is not None and math.hypot(*self.heading) == 0.0:
+            raise ValueError("heading must not be the zero vector")
         if self.case not in CASES:
             raise ValueError(f"unknown case '{self.case}' (expected uniform or stabilised)")
         for name in ("duration", "dt"):
@@ -98,8 +136,10 @@ class PaperScenario:
             raise ValueError("initial_offset must be two finite numbers (p_y, p_z) [m]")
         if not math.isfinite(self.initial_surge):
             raise ValueError("initial_surge must be finite")
-        if len(self.current) != 3 or not all(map(math.isfinite, self.current)):
-            raise ValueError("current must be three finite numbers [m/s]")
+        if not isinstance(self.current, Current) and (
+            len(self.current) != 3 or not all(map(math.isfinite, self.current))
+        ):
+            raise ValueError("current must be three finite numbers [m/s] or a Current")
 
     @property
     def steps_per_control(self) -> int:
@@ -109,16 +149,64 @@ class PaperScenario:
         return max(1, round(self.control_period / self.dt))
 
     @property
+    def path_to_follow(self) -> Path:
+        """The path in force (the world x-axis by default)."""
+        return X_AXIS if self.path is None else self.path
+
+    @property
+    def start(self) -> np.ndarray:
+        """End-effector start position in the world [m]."""
+        if self.start_position is not None:
+            return np.array(self.start_position)
+        return np.array([0.0, *self.initial_offset])
+
+    @property
+    def water(self) -> Current:
+        """The current as a :class:`hydro.currents.Current`."""
+        return as_current(self.current)
+
+    @property
+    def on_x_axis(self) -> bool:
+        """Whether the path is the paper's (the world x-axis), for which p_y, p_z are reported."""
+        path = self.path_to_follow
+        return isinstance(path, LinePath) and path.describe() == X_AXIS.describe()
+
+    @property
     def controller_gains(self) -> PathFollowingGains:
         """The gains in force: the given ones or the paper's for the case."""
         return self.gains if self.gains is not None else PathFollowingGains.for_case(self.case)
 
 
-def initial_state(vehicle: Vehicle, scenario: PaperScenario) -> tuple[np.ndarray, np.ndarray]:
-    """Straight vehicle parallel to the x-axis with its end-effector at ``(0, p_y, p_z)``."""
+def _heading_rotation(heading: np.ndarray) -> np.ndarray:
+    """Rotation taking the vehicle's x-axis to ``heading`` by yaw then pitch (no roll)."""
+    h = heading / np.linalg.norm(heading)
+    yaw = math.atan2(h[1], h[0])
+    pitch = -math.asin(max(-1.0, min(1.0, h[2])))
+    cy, sy, cp, sp = math.cos(yaw), math.sin(yaw), math.cos(pitch), math.sin(pitch)
+    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    return rz @ ry
+
+
+def initial_state(vehicle: Vehicle, scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
+    """Straight vehicle at rest (or at ``initial_surge``), end-effector at the start, pointing along
+    ``heading`` (default: the path's tangent at the point closest to the start)."""
+    import pinocchio as pin
+
+    start = scenario.start
+    heading = (
+        np.array(scenario.heading)
+        if scenario.heading is not None
+        else np.array(scenario.path_to_follow.closest(start).tangent)
+    )
     q = vehicle.neutral_configuration()
-    tip = vehicle.frame_placement(q, END_EFFECTOR).translation
-    q[:3] = np.array([0.0, *scenario.initial_offset]) - tip
+    tip = vehicle.frame_placement(q, END_EFFECTOR).translation  # in the base frame at q = neutral
+    rotation = _heading_rotation(heading)
+    if np.allclose(rotation, np.eye(3), rtol=0.0, atol=0.0):
+        q[:3] = start - tip
+    else:
+        q[:3] = start - rotation @ tip
+        q[3:7] = pin.Quaternion(rotation).coeffs()
     v = np.zeros(vehicle.nv)
     v[0] = scenario.initial_surge
     return q, v
@@ -144,9 +232,9 @@ class ScenarioResult:
     extra: dict = field(default_factory=dict)
 
 
-def run_paper_scenario(
+def run_scenario(
     vehicle: Vehicle,
-    scenario: PaperScenario,
+    scenario: Scenario,
     *,
     progress: bool = False,
     on_log=None,
@@ -154,7 +242,7 @@ def run_paper_scenario(
     compiled: bool | None = None,
     after_first_chunk: Callable[[], None] | None = None,
 ) -> ScenarioResult:
-    """Simulate the path-following scenario on a vehicle.
+    """Simulate a scenario on a vehicle.
 
     ``on_log(t, q, info)`` is called at every logged sample (see :func:`aiauv_pin.simulate`).
 
@@ -181,24 +269,37 @@ def run_paper_scenario(
         SimulationDiverged: With the partial trajectory, if the state became non-finite.
         ValueError: ``compiled=True`` but the compiled path cannot run this controller.
     """
-    if controller is None:
-        controller = VehiclePathFollowing(
-            vehicle, scenario.controller_gains, continuous_joints=scenario.continuous_joints
-        )
-    reason = compiled_path_following_reason(controller)
-    if compiled and reason is not None:
-        raise ValueError(f"compiled path following unavailable: {reason}")
-    use_compiled = reason is None and compiled is not False
     q0, v0 = initial_state(vehicle, scenario)
-    current = np.asarray(scenario.current, dtype=float)
     options = dict(
         method=scenario.method,
-        current=current if np.any(current) else None,
+        current=scenario.water,
         progress=progress,
         control_period=scenario.control_period,
         log_every=scenario.steps_per_control,
         on_log=on_log,
     )
+    if scenario.controller == "none" and controller is None:
+        use_compiled = vehicle.fast is not None and compiled is not False
+        if compiled and not use_compiled:
+            raise ValueError(
+                f"compiled run unavailable: the vehicle runs on {vehicle.active_backend}"
+            )
+        law = CompiledController.passive() if use_compiled else None
+        servo = None
+    else:
+        if controller is None:
+            controller = VehiclePathFollowing(
+                vehicle,
+                scenario.controller_gains,
+                continuous_joints=scenario.continuous_joints,
+                path=scenario.path_to_follow,
+            )
+        reason = compiled_path_following_reason(controller)
+        if compiled and reason is not None:
+            raise ValueError(f"compiled path following unavailable: {reason}")
+        use_compiled = reason is None and compiled is not False
+        law = controller.compiled() if use_compiled else controller
+        servo = controller.joint_servo if controller.continuous_joints else None
     start = time.perf_counter()
     trajectory = simulate(
         vehicle,
@@ -206,19 +307,49 @@ def run_paper_scenario(
         v0,
         scenario.duration,
         scenario.dt,
-        controller.compiled() if use_compiled else controller,
-        servo=controller.joint_servo if controller.continuous_joints else None,
+        law,
+        servo=servo,
         after_first_chunk=after_first_chunk if use_compiled else None,
         **options,
     )
+    wall_time = time.perf_counter() - start
+    add_path_errors(vehicle, scenario, trajectory)
     return ScenarioResult(
         scenario=scenario,
         trajectory=trajectory,
-        wall_time=time.perf_counter() - start,
+        wall_time=wall_time,
         joint_names=vehicle.joint_names,
         thruster_names=vehicle.thruster_names,
         extra={"backend": vehicle.active_backend, "compiled_controller": use_compiled},
     )
+
+
+def add_path_errors(vehicle: Vehicle, scenario: Scenario, trajectory: Trajectory) -> None:
+    """Log the end-effector position ``p`` and the cross-track errors when the controller did not.
+
+    A passive run (or a user's controller) logs no path quantities; they are computed here from
+    the logged configurations (:meth:`Vehicle.frame_placement`, :meth:`control.paths.Path.closest`).
+    """
+    info = trajectory.info
+    n = len(trajectory.t)
+    if "p" not in info:
+        frame = vehicle.frame_id(END_EFFECTOR)
+        zero = np.zeros(vehicle.nv)
+        info["p"] = np.array([vehicle.frame_motion(q, zero, frame)[1] for q in trajectory.q])
+    if "cross_track" not in info:
+        path = scenario.path_to_follow
+        points = [path.closest(p) for p in info["p"]]
+        info["cross_track"] = np.array([path.cross_track_error(p) for p in info["p"]]).reshape(n, 2)
+        info["path_s"] = np.array([point.s for point in points])
+
+
+def run_paper_scenario(vehicle: Vehicle, scenario: Scenario, **options) -> ScenarioResult:
+    """:func:`run_scenario` (kept for the paper's scripts and notebooks)."""
+    return run_scenario(vehicle, scenario, **options)
+
+
+#: The paper's scenario is a :class:`Scenario` with its defaults.
+PaperScenario = Scenario
 
 
 def settling_time(t: np.ndarray, error: np.ndarray, band: float) -> float | None:
@@ -231,58 +362,93 @@ def settling_time(t: np.ndarray, error: np.ndarray, band: float) -> float | None
     return float(t[outside[-1] + 1])
 
 
+def _parameters(scenario: Scenario) -> dict:
+    """The scenario's parameters as JSON-friendly values (path and current described)."""
+    out = {}
+    for f in fields(scenario):
+        value = getattr(scenario, f.name)
+        if f.name == "gains":
+            continue
+        if f.name == "path":
+            value = scenario.path_to_follow.describe()
+        elif f.name == "current":
+            value = scenario.water.describe()
+        elif isinstance(value, tuple):
+            value = list(value)
+        out[f.name] = value
+    out["gains"] = asdict(scenario.controller_gains)
+    return out
+
+
 def summary(result: ScenarioResult) -> dict:
-    """Figures of merit of a run (all SI units)."""
+    """Figures of merit of a run (all SI units).
+
+    For every path: ``final.cross_track_error`` (distance from the end-effector to the path [m]) and
+    ``settling_time.cross_track_5cm``; on the paper's x-axis also ``p_y``, ``p_z`` (the same
+    errors, in world axes). The paper controller's quantities (surge, pointing error, work) are
+    reported when it ran.
+    """
     scenario = result.scenario
     tr = result.trajectory
     t, info = tr.t, tr.info
-    gains = scenario.controller_gains
-    p, u = info["p"], info["u"]
+    p = info["p"]
+    cross = info["cross_track"]
+    distance = np.hypot(cross[:, 0], cross[:, 1])
     last30 = t >= t[-1] - 30.0
     dt_log = np.diff(t)
-    thruster_power = np.abs(info["thruster_power"][:-1])
-    joint_power = np.abs(info["joint_torque"][:-1] * tr.v[:-1, 6:])
-    steps = len(t) - 1
-    gains_dict = asdict(gains)
-    return {
+    final: dict = {
+        "position": [float(x) for x in p[-1]],
+        "cross_track_error": float(distance[-1]),
+        "cross_track": [float(x) for x in cross[-1]],
+        "max_cross_track_error_last_30s": float(distance[last30].max()),
+    }
+    settling = {"cross_track_5cm": settling_time(t, distance, 0.05)}
+    if scenario.on_x_axis:
+        final["p_y"], final["p_z"] = float(p[-1, 1]), float(p[-1, 2])
+        settling["p_y_5cm"] = settling_time(t, p[:, 1], 0.05)
+        settling["p_z_5cm"] = settling_time(t, p[:, 2], 0.05)
+    content = {
         "case": scenario.case,
+        "controller": scenario.controller,
         "status": tr.status,
         "message": tr.message,
-        "parameters": {
-            **{k: v for k, v in asdict(scenario).items() if k != "gains"},
-            "gains": gains_dict,
-        },
+        "parameters": _parameters(scenario),
+        "path": scenario.path_to_follow.describe(),
         "dt": scenario.dt,
         "method": scenario.method,
-        "steps": steps,
+        "steps": len(t) - 1,
         "simulated_time": float(t[-1]),
         "wall_time": result.wall_time,
         "real_time_factor": float(t[-1] / result.wall_time) if result.wall_time > 0 else None,
         "backend": result.extra.get("backend"),
         "compiled_controller": result.extra.get("compiled_controller"),
-        "final": {
-            "p_y": float(p[-1, 1]),
-            "p_z": float(p[-1, 2]),
-            "u": float(u[-1]),
-            "phi_tilde": float(info["phi_tilde"][-1]),
-            "omega_tilde": [float(x) for x in info["omega_tilde"][-1]],
-            "max_abs_u_error_last_30s": float(np.abs(u[last30] - gains.u_d).max()),
-            "max_phi_tilde_last_30s": float(np.abs(info["phi_tilde"][last30]).max()),
-        },
-        "settling_time": {
-            "p_y_5cm": settling_time(t, p[:, 1], 0.05),
-            "p_z_5cm": settling_time(t, p[:, 2], 0.05),
-            "u_1cm_s": settling_time(t, u - gains.u_d, 0.01),
-            "phi_tilde_0.02rad": settling_time(t, info["phi_tilde"], 0.02),
-        },
-        "thruster_work": {
+        "final": final,
+        "settling_time": settling,
+    }
+    if "u" in info:
+        gains = scenario.controller_gains
+        u = info["u"]
+        thruster_power = np.abs(info["thruster_power"][:-1])
+        joint_power = np.abs(info["joint_torque"][:-1] * tr.v[:-1, 6:])
+        final.update(
+            {
+                "u": float(u[-1]),
+                "phi_tilde": float(info["phi_tilde"][-1]),
+                "omega_tilde": [float(x) for x in info["omega_tilde"][-1]],
+                "max_abs_u_error_last_30s": float(np.abs(u[last30] - gains.u_d).max()),
+                "max_phi_tilde_last_30s": float(np.abs(info["phi_tilde"][last30]).max()),
+            }
+        )
+        settling["u_1cm_s"] = settling_time(t, u - gains.u_d, 0.01)
+        settling["phi_tilde_0.02rad"] = settling_time(t, info["phi_tilde"], 0.02)
+        content["thruster_work"] = {
             name: float(np.sum(thruster_power[:, k] * dt_log))
             for k, name in enumerate(result.thruster_names)
-        },
-        "joint_work": {
+        }
+        content["joint_work"] = {
             name: float(np.sum(joint_power[:, k] * dt_log))
             for k, name in enumerate(result.joint_names)
-        },
-        "total_thruster_work": float(np.sum(thruster_power.sum(axis=1) * dt_log)),
-        "total_joint_work": float(np.sum(joint_power.sum(axis=1) * dt_log)),
-    }
+        }
+        content["total_thruster_work"] = float(np.sum(thruster_power.sum(axis=1) * dt_log))
+        content["total_joint_work"] = float(np.sum(joint_power.sum(axis=1) * dt_log))
+    return content
