@@ -31,15 +31,33 @@ def _cache_folders() -> list[Path]:
     return folders
 
 
+def _index_is_current(index: Path) -> bool:
+    """Whether a numba cache index was written for the current sources.
+
+    numba writes its version, then the pickled ``(source stamp, overloads)``; the stamp of this
+    project's functions is :func:`hydro.jit.source_hash` (content-keyed, see :mod:`hydro.jit`).
+    """
+    import pickle
+
+    from hydro.jit import source_hash
+
+    try:
+        with index.open("rb") as stream:
+            pickle.load(stream)  # numba's version
+            stamp, _ = pickle.loads(stream.read())
+    except Exception:  # unreadable or foreign index: treat as missing
+        return False
+    return stamp == source_hash()
+
+
 def kernels_cached() -> bool:
-    """Whether numba's on-disk cache holds the compiled scenario loop (``path_following``)."""
+    """Whether numba's on-disk cache holds the compiled simulation loop for the current sources."""
     for folder in _cache_folders():
         if not folder.is_dir():
             continue
-        pattern = "path_following.*.nbi"
-        direct = next(folder.glob(pattern), None)
-        if direct is not None or next(folder.rglob(pattern), None) is not None:
-            return True
+        for index in folder.rglob("loop.run_chunk-*.nbi"):
+            if _index_is_current(index):
+                return True
     return False
 
 

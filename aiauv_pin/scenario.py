@@ -11,7 +11,7 @@ leaves open, documented here and in the README:
   base-angle and surge loops are sampled every step (zero-order hold; ``control_period`` samples them
   more slowly, with states logged at the controller's rate) and the joint PD (eq. 24) runs as a
   continuous servo evaluated at every integrator stage (see
-  :class:`aiauv_pin.path_following.VehiclePathFollowing`);
+  :class:`aiauv_pin.paper_controller.VehiclePathFollowing`);
 * ``timeseries.csv`` holds one row every ``csv_period = 0.05`` s (every fifth step); the summary's
   integrals and settling times use every step;
 * the base-angle saturation ``q_max`` is :class:`control.path_following.PathFollowingGains`' default.
@@ -32,7 +32,7 @@ from control.paths import LinePath, Path
 from hydro.currents import Current, as_current
 
 from .controllers import CompiledController
-from .path_following import END_EFFECTOR, VehiclePathFollowing, compiled_path_following_reason
+from .paper_controller import END_EFFECTOR, VehiclePathFollowing, compiled_path_following_reason
 from .simulation import Trajectory, simulate
 from .vehicle import Vehicle
 
@@ -247,8 +247,7 @@ def run_scenario(
     ``on_log(t, q, info)`` is called at every logged sample (see :func:`aiauv_pin.simulate`).
 
     With the numba backend and the paper's controller the whole run (dynamics, controller every
-    step, logging) executes in compiled code (:func:`aiauv_pin.fast.path_following.
-    run_path_following`), in chunks of one simulated second between which the progress bar and
+    step, logging) executes in compiled code (:func:`aiauv_pin.fast.loop.run_chunk`), in chunks of one simulated second between which the progress bar and
     ``on_log`` run; otherwise (Pinocchio backend, a subclass of :class:`VehiclePathFollowing` or
     of its controller) the Python controller is called every step. Both give the same trajectory
     and the same logged keys.

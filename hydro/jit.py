@@ -14,8 +14,9 @@ The on-disk cache is keyed on content. numba's own cache keys each compiled func
 source file only, so a compiled loop that inlines a law from another file would keep serving stale
 machine code after that file changed. :class:`ProjectCacheLocator` replaces the source stamp of
 every function defined in this project's packages by one hash of all their ``.py`` files (read
-once per process), so any edit anywhere in ``hydro``, ``control`` or ``aiauv_pin`` recompiles
-everything that depends on it, and no manual cache flush is ever needed.
+once per process; :data:`COMPILED_SOURCES`), so an edit to any file with compiled code recompiles
+everything that may inline it, and no manual cache flush is ever needed. Compiled functions of the
+project must therefore live in those files (a test checks this).
 """
 
 from __future__ import annotations
@@ -32,6 +33,10 @@ F = TypeVar("F", bound=Callable)
 #: The packages whose compiled functions share one content-keyed cache stamp.
 PROJECT_PACKAGES = ("hydro", "control", "aiauv_pin")
 
+#: Where the project's compiled code lives (folders or files, relative to the project root): the
+#: stamp hashes exactly these sources, so editing e.g. the CLI recompiles nothing.
+COMPILED_SOURCES = ("hydro", "control", "aiauv_pin/fast", "aiauv_pin/disturbances.py")
+
 _ROOT = Path(__file__).resolve().parent.parent
 
 try:  # pragma: no cover - exercised by the no-numba test in a subprocess
@@ -47,16 +52,18 @@ NUMBA_AVAILABLE = numba is not None and os.environ.get("NUMBA_DISABLE_JIT", "0")
 
 def _project_files() -> list[Path]:
     files: list[Path] = []
-    for package in PROJECT_PACKAGES:
-        folder = _ROOT / package
-        if folder.is_dir():
-            files.extend(sorted(folder.rglob("*.py")))
+    for source in COMPILED_SOURCES:
+        path = _ROOT / source
+        if path.is_dir():
+            files.extend(sorted(path.rglob("*.py")))
+        elif path.is_file():
+            files.append(path)
     return files
 
 
 @lru_cache(maxsize=1)
 def source_hash() -> str:
-    """SHA-256 over the content of every ``.py`` file of the project's packages (hex digest)."""
+    """SHA-256 over the content of every ``.py`` file of :data:`COMPILED_SOURCES` (hex digest)."""
     digest = hashlib.sha256()
     for path in _project_files():
         digest.update(str(path.relative_to(_ROOT)).encode())

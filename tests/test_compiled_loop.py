@@ -2,7 +2,7 @@
 
 The laws themselves are written once (:mod:`control.laws`, tested in tests/test_laws.py); here the
 vehicle side is checked: the compiled controller's measurement and action against the Python
-adapter (:class:`aiauv_pin.path_following.VehiclePathFollowing`) on the same state, whole compiled
+adapter (:class:`aiauv_pin.paper_controller.VehiclePathFollowing`) on the same state, whole compiled
 runs against Python-controller runs and against the Pinocchio reference, logging, divergence, and
 the reproduction of the runs recorded before the laws were moved (to 1e-9).
 """
@@ -18,7 +18,7 @@ pytest.importorskip("numba")
 
 import aiauv_pin
 from aiauv_pin.errors import SimulationDiverged
-from aiauv_pin.path_following import VehiclePathFollowing, compiled_path_following_reason
+from aiauv_pin.paper_controller import VehiclePathFollowing, compiled_path_following_reason
 from aiauv_pin.scenario import PaperScenario, run_paper_scenario
 from control.path_following import PathFollowingGains
 

@@ -5,14 +5,12 @@ tested against it (tests/test_fast.py). The kernels cover a free-flyer root with
 prismatic joints, which is every vehicle :func:`aiauv_pin.load_vehicle` accepts except URDFs with
 other joint types; those, and machines without numba, fall back to Pinocchio.
 
-:mod:`aiauv_pin.fast.path_following` adds the paper's path-following controller and a whole
-compiled scenario loop (used by :func:`aiauv_pin.scenario.run_paper_scenario` on this backend).
+:mod:`aiauv_pin.fast.loop` runs a whole simulation (any compiled controller of
+:mod:`aiauv_pin.fast.controllers`, logging, integration) in compiled code.
 
-Set-up cost: the first use in a fresh installation compiles the kernels (about half a minute);
-they are cached on disk (numba ``cache=True``) so later processes start in well under a second.
-numba's cache checks only the file that defines a function: after editing ``kernels.py``, delete
-``aiauv_pin/fast/__pycache__/*.nb[ic]`` (or touch ``path_following.py``) so that the compiled
-scenario loop, which inlines the kernels, is rebuilt.
+Set-up cost: the first use in a fresh installation compiles the kernels; they are cached on disk,
+keyed on the content of every source file they depend on (:mod:`hydro.jit`), so an edit anywhere
+recompiles what depends on it and a stale cache is never served.
 """
 
 from __future__ import annotations

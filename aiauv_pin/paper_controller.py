@@ -1,4 +1,4 @@
-"""The paper's path-following controller (``control``) wired to a Pinocchio vehicle.
+"""The paper's path-following controller (``control``) wired to a vehicle (measurement and action).
 
 :class:`VehiclePathFollowing` measures what :class:`control.path_following.PathFollowingController`
 needs from the simulator state ``(q, v)`` (end-effector pose and velocity, joint states, the joints'
