@@ -168,7 +168,7 @@ def scenario_from_mapping(table: Mapping[str, Any], base_dir: str | Path = ".") 
     if "path" in table:
         try:
             options["path"] = path_from_mapping(table["path"], where="path")
-        except PathError as exc:
+        except (PathError, ValueError) as exc:
             raise ScenarioFileError(str(exc)) from None
     if "current" in table:
         try:

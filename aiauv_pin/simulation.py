@@ -388,7 +388,7 @@ def _simulate_compiled(
     after_first_chunk,
 ) -> Trajectory:
     """:func:`simulate` with a compiled controller: the whole loop in compiled code."""
-    from .fast.loop import run_chunk
+    from .fast.loop import loop_for
     from .fast.model import METHOD_CODES
 
     fast = vehicle.fast
@@ -420,6 +420,7 @@ def _simulate_compiled(
     tau = np.zeros(nv)
     info = np.full(width, np.nan)
     workspace = fast.workspace
+    run_chunk = loop_for(environment, controller.function, controller.parameters)
     if chunk_seconds is None:
         chunk_seconds = 1.0 if on_log is not None else 10.0
     chunk = max(1, round(chunk_seconds / dt))

@@ -295,6 +295,11 @@ class Vehicle:
                 raise ValueError(f"numba backend unavailable: {self._fast_reason}")
 
     def _build_fast(self):
+        from hydro.jit import NUMBA_AVAILABLE
+
+        if not NUMBA_AVAILABLE:
+            self._fast_reason = "numba is disabled (NUMBA_DISABLE_JIT)"
+            return None
         try:
             from .fast import load_fast_model
 

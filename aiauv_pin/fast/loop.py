@@ -9,7 +9,9 @@ a progress bar and ``on_log`` callbacks still run between them.
 
 from __future__ import annotations
 
-from hydro.jit import compiled
+from functools import lru_cache
+
+from hydro.jit import NUMBA_AVAILABLE, PROJECT_PACKAGES, compiled
 
 from .kernels import is_finite_state, step_into
 
@@ -76,3 +78,43 @@ def run_chunk(
         q[:] = W.q_next
         v[:] = W.v_next
         k += 1
+
+
+def _dispatchers(value, found: list) -> list:
+    """Every numba dispatcher inside ``value`` (named tuples and tuples searched recursively)."""
+    if hasattr(value, "py_func"):
+        found.append(value)
+    elif isinstance(value, tuple):
+        for item in value:
+            _dispatchers(item, found)
+    return found
+
+
+def is_project_function(function) -> bool:
+    """Whether a compiled function is one of the project's own (its module is in its packages)."""
+    module = getattr(function, "__module__", "") or ""
+    return module.split(".")[0] in PROJECT_PACKAGES
+
+
+@lru_cache(maxsize=1)
+def _run_chunk_uncached():
+    import numba
+
+    return numba.njit(nogil=True, error_model="numpy")(run_chunk.py_func)
+
+
+def loop_for(*arguments):
+    """The compiled loop to call with these arguments.
+
+    numba's on-disk cache stores each specialisation's signature, which names the first-class
+    functions it was compiled for; a user's own function (a controller, path, current or
+    disturbance defined outside the project) cannot be found again by a later process, so its
+    specialisations are compiled in memory, once per process, by an uncached copy of the same loop
+    (:func:`run_chunk`'s source). With only built-in functions the cached loop is used.
+    """
+    if not NUMBA_AVAILABLE:
+        return run_chunk
+    functions = _dispatchers(tuple(arguments), [])
+    if all(is_project_function(function) for function in functions):
+        return run_chunk
+    return _run_chunk_uncached()
