@@ -247,8 +247,8 @@ def run_scenario(
     ``on_log(t, q, info)`` is called at every logged sample (see :func:`aiauv_pin.simulate`).
 
     With the numba backend and the paper's controller the whole run (dynamics, controller every
-    step, logging) executes in compiled code (:func:`aiauv_pin.fast.loop.run_chunk`), in chunks of one simulated second between which the progress bar and
-    ``on_log`` run; otherwise (Pinocchio backend, a subclass of :class:`VehiclePathFollowing` or
+    step, logging) executes in compiled code (:func:`aiauv_pin.fast.loop.run_chunk`), in chunks
+    of simulated time between which the progress bar and ``on_log`` run; otherwise (Pinocchio backend, a subclass of :class:`VehiclePathFollowing` or
     of its controller) the Python controller is called every step. Both give the same trajectory
     and the same logged keys.
 
