@@ -1,0 +1,108 @@
+"""The ``aiauv`` pytest plugin: ``--aiauv-vehicle URDF`` (repeatable) and ``--aiauv-seed N``.
+
+With at least one ``--aiauv-vehicle``, the consistency suite :mod:`aiauv_pin.testing.suite` is added
+to the collection (alone when no test paths are given on the command line, else besides them) and
+every test that requests the ``aiauv_vehicle`` fixture is parametrised over the given vehicles, with
+the URDF's robot name (else the file stem) as the id. Importing this module is cheap: Pinocchio and
+numba are imported only when a vehicle is loaded.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+SUITE = "aiauv_pin.testing.suite"
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    group = parser.getgroup("aiauv", "aiauv-pin dynamics-consistency checks")
+    group.addoption(
+        "--aiauv-vehicle",
+        action="append",
+        default=[],
+        metavar="URDF",
+        help="run the dynamics-consistency suite on this vehicle URDF (repeatable)",
+    )
+    group.addoption(
+        "--aiauv-seed",
+        type=int,
+        default=None,
+        metavar="N",
+        help="seed of the random states of the consistency checks (default: a fixed seed)",
+    )
+
+
+def _robot_name(path: Path) -> str:
+    """The URDF's ``<robot name>``, or the file stem if it cannot be read."""
+    from hydro.spec import HydroError
+    from hydro.urdf_block import parse_robot_text
+
+    try:
+        name = parse_robot_text(path.read_text(encoding="utf-8"), str(path)).get("name", "")
+    except (HydroError, OSError, UnicodeDecodeError):
+        name = ""
+    name = "".join(c if c.isalnum() or c in "_-." else "_" for c in name.strip())
+    return name or path.stem
+
+
+def vehicle_ids(paths: list[Path]) -> list[str]:
+    """Readable, unique test ids: robot names, numbered from the second repeat (``name-2``)."""
+    ids: list[str] = []
+    for path in paths:
+        name = _robot_name(path)
+        candidate, k = name, 1
+        while candidate in ids:
+            k += 1
+            candidate = f"{name}-{k}"
+        ids.append(candidate)
+    return ids
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    paths = [Path(p) for p in config.getoption("aiauv_vehicle") or []]
+    for path in paths:
+        if not path.is_file():
+            raise pytest.UsageError(f"--aiauv-vehicle {path}: no such file")
+    config.stash[_PATHS] = paths
+    if not paths:
+        return
+    suite = SUITE if config.option.pyargs else importlib.util.find_spec(SUITE).origin
+    if config.args_source != pytest.Config.ArgsSource.ARGS:
+        config.args[:] = [suite]  # no paths given: run only the suite
+    elif suite not in config.args:
+        config.args.append(suite)
+
+
+_PATHS = pytest.StashKey[list]()
+
+
+def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
+    if "aiauv_vehicle_path" in metafunc.fixturenames:
+        paths = metafunc.config.stash.get(_PATHS, [])
+        metafunc.parametrize(
+            "aiauv_vehicle_path", paths, ids=vehicle_ids(paths), scope="session"
+        )
+
+
+@pytest.fixture(scope="session")
+def aiauv_seed(request: pytest.FixtureRequest) -> int:
+    """Seed of the consistency checks' random states (``--aiauv-seed``)."""
+    from aiauv_pin.consistency import SEED
+
+    seed = request.config.getoption("aiauv_seed")
+    return SEED if seed is None else seed
+
+
+@pytest.fixture(scope="session")
+def aiauv_vehicle(aiauv_vehicle_path: Path):
+    """The vehicle loaded from one ``--aiauv-vehicle`` URDF (one load per file and session)."""
+    from aiauv_pin.errors import AiauvError
+    from aiauv_pin.loading import load_vehicle
+
+    try:
+        return load_vehicle(aiauv_vehicle_path)
+    except AiauvError as exc:
+        pytest.fail(f"cannot load the vehicle: {exc}", pytrace=False)
