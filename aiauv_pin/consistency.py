@@ -127,7 +127,9 @@ def _result(
         passed = figure >= tolerance
     passed = passed and math.isfinite(figure)
     extra = _EMPTY if not measurements else types.MappingProxyType(dict(measurements))
-    return CheckResult(name, figure, tolerance, passed, detail, relation, tuple(warnings), False, extra)
+    return CheckResult(
+        name, figure, tolerance, passed, detail, relation, tuple(warnings), False, extra
+    )
 
 
 def _skipped(name: str, reason: str) -> CheckResult:
@@ -323,7 +325,11 @@ def check_added_mass_positive_semidefinite(
 def check_kinetic_energy(
     vehicle: Vehicle, *, samples: int = 5, seed: int = SEED, tolerance: float = 1e-12
 ) -> CheckResult:
-    """``v^T M(q) v / 2`` equals the bodies' rigid plus added-mass energies (:func:`kinetic_energy_by_body`)."""
+    """``v^T M(q) v / 2`` equals the bodies' rigid plus added-mass energies.
+
+    The reference is :func:`kinetic_energy_by_body`; the tolerance, 1e-12 relative, is far above the
+    round-off of a sum of a few dozen terms (about 1e-15).
+    """
     rng = np.random.default_rng(seed)
     errors = []
     for _ in range(samples):
@@ -399,9 +405,11 @@ def ideal_fluid_run(
     for step in (dt, dt / 2):
         trajectory, why = _run(ideal, q0, v0, duration, step, log_every=max(1, round(0.05 / step)))
         stopped = stopped or why
-        e = np.array([ideal.kinetic_energy(q, v) for q, v in zip(trajectory.q, trajectory.v)])
+        e = np.array(
+            [ideal.kinetic_energy(q, v) for q, v in zip(trajectory.q, trajectory.v, strict=True)]
+        )
         p = np.array(
-            [ideal.momentum_in_world(q, v) for q, v in zip(trajectory.q, trajectory.v)]
+            [ideal.momentum_in_world(q, v) for q, v in zip(trajectory.q, trajectory.v, strict=True)]
         )
         energy.append(float(np.max(np.abs(e - e[0])) / e[0]))
         impulse.append(float(np.max(np.abs(p - p[0])) / max(np.linalg.norm(p[0]), 1e-300)))
@@ -534,7 +542,7 @@ def check_energy_decays(
     energy = np.array(
         [
             vehicle.kinetic_energy(q, v) + potential_energy(vehicle, q)
-            for q, v in zip(trajectory.q, trajectory.v)
+            for q, v in zip(trajectory.q, trajectory.v, strict=True)
         ]
     )
     spread = float(np.ptp(energy))
@@ -676,10 +684,13 @@ def trim(vehicle: Vehicle) -> Trim:
     cb = np.full(3, np.nan)
     if volume > 0:
         placements = vehicle.link_placements(q0)
-        cb = sum(
-            link.volume * pose.act(link.center_of_buoyancy)
-            for link, pose in zip(hydro.links, placements, strict=True)
-        ) / volume
+        cb = (
+            sum(
+                link.volume * pose.act(link.center_of_buoyancy)
+                for link, pose in zip(hydro.links, placements, strict=True)
+            )
+            / volume
+        )
     net = (hydro.fluid_density * volume - mass) * g
     weight = mass * g
     roll = pitch = math.nan
@@ -709,8 +720,8 @@ def check_hydrostatics(
     Five-point central difference (:func:`derivative`) of ``U`` along the geodesic
     ``integrate(q, t v)``; the figure is the error relative to ``max(|v . g|, 0.01 W)``. With
     ``h = 1e-3`` the truncation error is about ``h^4 |U^(5)| / 30`` (1e-12 of ``m g L`` for speeds
-    of order 1) and the round-off ``1e-16 |U| / h`` (4e-10 W for ``|U|`` of 2 kJ). The trim (:func:`trim`) is reported in the detail; not being neutrally buoyant
-    is a warning.
+    of order 1) and the round-off ``1e-16 |U| / h`` (4e-10 W for ``|U|`` of 2 kJ). The trim
+    (:func:`trim`) is reported in the detail; not being neutrally buoyant is a warning.
     """
     if not vehicle.restoring:
         return _skipped("hydrostatics", "weight and buoyancy are off")
@@ -821,7 +832,9 @@ def check_backends_agree(
         tau = 10.0 * rng.normal(size=reference.nv)
         for c in (None, water):
             errors.append(
-                mixed_error(compiled.acceleration(q, v, tau, c), reference.acceleration(q, v, tau, c))
+                mixed_error(
+                    compiled.acceleration(q, v, tau, c), reference.acceleration(q, v, tau, c)
+                )
             )
         errors.append(mixed_error(compiled.restoring_forces(q), reference.restoring_forces(q)))
         errors.append(mixed_error(compiled.thrust_matrix(q), reference.thrust_matrix(q)))
@@ -897,7 +910,9 @@ def check_thrusters(
     errors = []
     for _ in range(samples):
         q, _ = random_state(vehicle, rng)
-        errors.append(mixed_error(vehicle.thrust_matrix(q), thrust_matrix_by_virtual_work(vehicle, q)))
+        errors.append(
+            mixed_error(vehicle.thrust_matrix(q), thrust_matrix_by_virtual_work(vehicle, q))
+        )
     return _result(
         "thrusters",
         max(errors),

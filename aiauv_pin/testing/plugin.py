@@ -1,7 +1,8 @@
 """The ``aiauv`` pytest plugin: ``--aiauv-vehicle URDF`` (repeatable) and ``--aiauv-seed N``.
 
-With at least one ``--aiauv-vehicle``, the consistency suite :mod:`aiauv_pin.testing.suite` is added
-to the collection (alone when no test paths are given on the command line, else besides them) and
+With at least one ``--aiauv-vehicle``, the tests of the consistency suite :mod:`aiauv_pin.testing.suite`
+are added to the collection under the node id ``aiauv_pin/testing/suite.py`` (alone when no test
+paths are given on the command line, else after the tests collected from them) and
 every test that requests the ``aiauv_vehicle`` fixture is parametrised over the given vehicles, with
 the URDF's robot name (else the file stem) as the id. Importing this module is cheap: Pinocchio and
 numba are imported only when a vehicle is loaded.
@@ -61,30 +62,42 @@ def vehicle_ids(paths: list[Path]) -> list[str]:
     return ids
 
 
+_PATHS = pytest.StashKey[list]()
+#: Node id of the suite's module: short and the same wherever the package is installed.
+SUITE_NODEID = "aiauv_pin/testing/suite.py"
+
+
 def pytest_configure(config: pytest.Config) -> None:
     paths = [Path(p) for p in config.getoption("aiauv_vehicle") or []]
     for path in paths:
         if not path.is_file():
             raise pytest.UsageError(f"--aiauv-vehicle {path}: no such file")
     config.stash[_PATHS] = paths
-    if not paths:
+    if paths and config.args_source != pytest.Config.ArgsSource.ARGS:
+        config.args[:] = []  # no test paths given: run the suite alone
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(session: pytest.Session, config: pytest.Config, items) -> None:
+    """Append the suite's tests (before ``-k``/``-m`` deselection, which runs after this hook)."""
+    if not config.stash.get(_PATHS, []):
         return
-    suite = SUITE if config.option.pyargs else importlib.util.find_spec(SUITE).origin
-    if config.args_source != pytest.Config.ArgsSource.ARGS:
-        config.args[:] = [suite]  # no paths given: run only the suite
-    elif suite not in config.args:
-        config.args.append(suite)
-
-
-_PATHS = pytest.StashKey[list]()
+    origin = importlib.util.find_spec(SUITE).origin
+    module = pytest.Module.from_parent(session, path=Path(origin), nodeid=SUITE_NODEID)
+    suite_items = [node for node in module.collect() if isinstance(node, pytest.Item)]
+    for item in suite_items:
+        config.hook.pytest_itemcollected(item=item)
+    # counted in "collected N items" like any collected module
+    config.hook.pytest_collectreport(
+        report=pytest.CollectReport(SUITE_NODEID, "passed", None, suite_items)
+    )
+    items.extend(suite_items)
 
 
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
     if "aiauv_vehicle_path" in metafunc.fixturenames:
         paths = metafunc.config.stash.get(_PATHS, [])
-        metafunc.parametrize(
-            "aiauv_vehicle_path", paths, ids=vehicle_ids(paths), scope="session"
-        )
+        metafunc.parametrize("aiauv_vehicle_path", paths, ids=vehicle_ids(paths), scope="session")
 
 
 @pytest.fixture(scope="session")
@@ -105,4 +118,5 @@ def aiauv_vehicle(aiauv_vehicle_path: Path):
     try:
         return load_vehicle(aiauv_vehicle_path)
     except AiauvError as exc:
-        pytest.fail(f"cannot load the vehicle: {exc}", pytrace=False)
+        reason = str(exc)
+    pytest.fail(f"cannot load the vehicle: {reason}", pytrace=False)

@@ -79,4 +79,3 @@ def test_backends_agree(aiauv_vehicle, aiauv_seed):
 
 def test_thrusters(aiauv_vehicle, aiauv_seed):
     assert_check(checks.check_thrusters(aiauv_vehicle, seed=aiauv_seed))
-
