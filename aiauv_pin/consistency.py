@@ -49,6 +49,7 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
+from .check import BUOYANCY_TOLERANCE
 from .errors import SimulationDiverged
 from .integrators import rk4_step
 from .simulation import Trajectory, simulate
@@ -59,7 +60,7 @@ SEED = 20261121
 #: Current used by the checks that need one, world frame [m/s].
 CURRENT = (0.3, -0.2, 0.15)
 #: Relative net buoyancy (fraction of the weight) beyond which :func:`trim` warns (as ``aiauv check``).
-NEUTRAL_TOLERANCE = 0.01
+NEUTRAL_TOLERANCE = BUOYANCY_TOLERANCE
 
 _LOCAL = pin.ReferenceFrame.LOCAL
 _EMPTY: Mapping[str, float] = types.MappingProxyType({})
@@ -130,6 +131,13 @@ def _result(
     return CheckResult(
         name, figure, tolerance, passed, detail, relation, tuple(warnings), False, extra
     )
+
+
+def _rng(seed: int, samples: int = 1) -> np.random.Generator:
+    """The checks' random generator; ``samples`` must be a positive whole number."""
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
+        raise ValueError(f"samples must be a positive whole number, got {samples!r}")
+    return np.random.default_rng(seed)
 
 
 def _skipped(name: str, reason: str) -> CheckResult:
@@ -263,7 +271,7 @@ def _run(vehicle: Vehicle, q0, v0, duration: float, dt: float, **options) -> tup
 
 # ---------------------------------------------------------------- 1. mass matrix
 def _mass_matrices(vehicle: Vehicle, samples: int, seed: int):
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed, samples)
     data = vehicle.model.createData()
     for _ in range(samples):
         q, _ = random_state(vehicle, rng)
@@ -330,7 +338,7 @@ def check_kinetic_energy(
     The reference is :func:`kinetic_energy_by_body`; the tolerance, 1e-12 relative, is far above the
     round-off of a sum of a few dozen terms (about 1e-15).
     """
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed, samples)
     errors = []
     for _ in range(samples):
         q, v = random_state(vehicle, rng)
@@ -351,7 +359,7 @@ def check_aba_without_fluid(
 ) -> CheckResult:
     """With added mass, damping, weight and buoyancy off, ``acceleration == pinocchio.aba``."""
     dry = vehicle_variant(vehicle, added_mass=False, damping=False, restoring=False)
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed, samples)
     data = dry.model.createData()
     errors = []
     for _ in range(samples):
@@ -493,7 +501,7 @@ def check_damping_dissipates(
     damped = vehicle_variant(vehicle, backend="pinocchio")
     undamped = vehicle_variant(vehicle, damping=False, backend="pinocchio")
     water = np.asarray(current, dtype=float)
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed, samples)
     powers = []
     for _ in range(samples):
         q, v = random_state(vehicle, rng, speed * 10.0 ** rng.uniform(-2.0, 0.0))
@@ -603,7 +611,7 @@ def check_power_balance(
     (5e-10 measured). The tolerance, 1e-6 relative, leaves room for vehicles up to ~10x faster.
     """
     undamped = vehicle_variant(vehicle, damping=False) if vehicle.damping else None
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed, samples)
     errors = []
     for _ in range(samples):
         q, v = random_state(vehicle, rng, speed)
@@ -725,7 +733,7 @@ def check_hydrostatics(
     """
     if not vehicle.restoring:
         return _skipped("hydrostatics", "weight and buoyancy are off")
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed, samples)
     model = vehicle.model
     errors = []
     for _ in range(samples):
@@ -776,7 +784,7 @@ def check_invariance(
     water = np.asarray(current, dtype=float)
     free = vehicle_variant(vehicle, restoring=False) if vehicle.restoring else vehicle
     cases = [(free, False)] + ([(vehicle, True)] if vehicle.restoring else [])
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed, samples)
     errors = []
     for _ in range(samples):
         for model_vehicle, vertical_only in cases:
@@ -825,7 +833,7 @@ def check_backends_agree(
     water = np.asarray(current, dtype=float)
     links = [link.link for link in vehicle.hydro.links]
     frame = reference.frame_id(links[-1]) if links else len(reference.model.frames) - 1
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed, samples)
     errors = []
     for _ in range(samples):
         q, v = random_state(reference, rng)
@@ -906,7 +914,7 @@ def check_thrusters(
     """
     if not vehicle.hydro.thrusters:
         return _skipped("thrusters", "the vehicle has no thrusters")
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed, samples)
     errors = []
     for _ in range(samples):
         q, _ = random_state(vehicle, rng)
@@ -991,9 +999,11 @@ def run_physics_check(path) -> int:
         AiauvError: One line naming the failed checks (the table is printed first), or the
             vehicle's load error.
     """
+    from .check import check_vehicle
     from .errors import AiauvError
     from .loading import load_vehicle
 
+    check_vehicle(path)  # a usable vehicle, else its one-line reason (e.g. a singular M(q))
     vehicle = load_vehicle(path)
     results = run_checks(vehicle)
     title = f"vehicle '{vehicle.name}' from {path}"

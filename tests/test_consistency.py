@@ -261,3 +261,19 @@ def test_cli_physics_bad_input_is_one_line(tmp_path, capfd):
     assert main(["check", "--physics", str(tmp_path / "missing.urdf")]) == 1
     out, err = capfd.readouterr()
     assert out == "" and err == f"aiauv: error: {tmp_path / 'missing.urdf'}: no such file\n"
+
+
+def test_cli_physics_unusable_vehicle_is_one_line(tmp_path, capfd):
+    path = tmp_path / "ghost.urdf"
+    path.write_text(
+        '<robot name="ghost"><link name="a"><inertial><mass value="0"/>'
+        '<inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link></robot>'
+    )
+    assert main(["check", "--physics", str(path)]) == 1
+    out, err = capfd.readouterr()
+    assert out == "" and err.count("\n") == 1 and "singular" in err
+
+
+def test_bad_sample_count_is_a_clear_error(paper_vehicle):
+    with pytest.raises(ValueError, match="samples must be a positive whole number, got 0"):
+        consistency.check_thrusters(paper_vehicle, samples=0)

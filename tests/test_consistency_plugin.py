@@ -9,6 +9,7 @@ import pytest
 
 import aiauv_pin
 from aiauv_pin import consistency
+from aiauv_pin.cli import main
 
 pytest_plugins = ["pytester"]
 
@@ -29,24 +30,66 @@ def test_plugin_is_registered_as_a_pytest11_entry_point():
     assert [e.value for e in entry_points if e.name == "aiauv"] == ["aiauv_pin.testing.plugin"]
 
 
+SPEC = """
+name = "my_aiauv"
+radius = 0.08
+fluid_density = 1025.0
+{modules}
+"""
+MODULE = """
+[[module]]
+name = "m{k}"
+length = {length}
+mass = {mass}
+{joint}
+[[module.thruster]]
+name = "t{k}"
+x = 0.1
+y = 0.02
+direction = "{direction}"
+"""
+
+
+def generated_vehicle(pytester) -> Path:
+    """A 10-link vehicle from ``aiauv build`` (three joint axes, thrusters on every module)."""
+    modules = "".join(
+        MODULE.format(
+            k=k,
+            length=0.3 + 0.03 * k,
+            mass=14.0 + k,
+            joint=f'joint = "{"zyx"[k % 3]}"' if k < 9 else "",
+            direction="xyz"[k % 3],
+        )
+        for k in range(10)
+    )
+    (pytester.path / "my_aiauv.toml").write_text(SPEC.format(modules=modules))
+    urdf = pytester.path / "my_aiauv.urdf"
+    assert main(["build", str(pytester.path / "my_aiauv.toml"), "-o", str(urdf)]) == 0
+    return urdf
+
+
 def test_good_vehicles_pass_with_readable_ids(pytester):
     stabilised = copy_in(pytester, aiauv_pin.bundled_urdf("stabilised"))
     two_link = copy_in(pytester, DATA / "two_link_hydro.urdf")
+    generated = generated_vehicle(pytester)
     result = pytester.runpytest(
         "--aiauv-vehicle",
         str(stabilised),
         "--aiauv-vehicle",
         str(two_link),
+        "--aiauv-vehicle",
+        str(generated),
         "-v",
         "-W",
         "default::aiauv_pin.testing.ConsistencyWarning",
     )
-    result.assert_outcomes(passed=2 * N_CHECKS, warnings=1)
+    result.assert_outcomes(passed=3 * N_CHECKS, warnings=1)
     result.stdout.fnmatch_lines(
         [
             "*::test_energy_conserved[[]paper_stabilised[]] PASSED*",
             "*::test_energy_conserved[[]two_link[]] PASSED*",
             "*::test_thrusters[[]two_link[]] PASSED*",
+            "*::test_energy_conserved[[]my_aiauv[]] PASSED*",
             # the two-link vehicle is positively buoyant: a warning, not a failure
             "*ConsistencyWarning: hydrostatics: not neutrally buoyant: positively buoyant*",
         ]
