@@ -15,10 +15,10 @@ The checks (:data:`CHECKS`, in the order :func:`run_checks` runs them):
    ``nu_i^T M_i nu_i / 2`` (Pinocchio's rigid-body energy plus each link's added-mass energy from
    its own twist), which checks how the added mass is assembled.
 2. ``aba_without_fluid``: with every fluid effect off the acceleration is ``pinocchio.aba``.
-3. ``energy_conserved``, ``impulse_conserved``: in an ideal fluid (added mass only, no damping,
-   weight or buoyancy) the kinetic energy and the world-frame impulse of body plus fluid
-   (Kirchhoff's, Lamb 1932, Sec. 119) are constants of the motion; integrated with the project's
-   RK4 at ``dt`` and ``dt/2``, the drift must shrink as the integrator's error does.
+3. ``energy_conserved``, ``impulse_conserved``: in an ideal fluid (added mass, if the vehicle has
+   it on, but no damping, weight or buoyancy) the kinetic energy and the world-frame impulse of
+   body plus fluid (Kirchhoff's, Lamb 1932, Sec. 119) are constants of the motion; integrated with
+   the project's RK4 at ``dt`` and ``dt/2``, the drift must shrink as the integrator's error does.
 4. ``damping_dissipates``: the power of the damping forces relative to the water,
    ``v_r . tau_D``, is negative (still water and a current); ``energy_decays``: with damping on and no
    input the total energy ``T + U`` never increases along a simulated run.
@@ -464,8 +464,6 @@ def check_energy_conserved(
     vehicle: Vehicle, *, run: IdealFluidRun | None = None, seed: int = SEED
 ) -> CheckResult:
     """Ideal fluid: the kinetic energy of body plus fluid is conserved (see :func:`ideal_fluid_run`)."""
-    if not vehicle.added_mass:
-        return _skipped("energy_conserved", "added mass is off")
     run = ideal_fluid_run(vehicle, seed=seed) if run is None else run
     return _conservation("energy_conserved", "kinetic energy", run.energy_drift, run)
 
@@ -474,8 +472,6 @@ def check_impulse_conserved(
     vehicle: Vehicle, *, run: IdealFluidRun | None = None, seed: int = SEED
 ) -> CheckResult:
     """Ideal fluid: the world-frame impulse of body plus fluid is conserved."""
-    if not vehicle.added_mass:
-        return _skipped("impulse_conserved", "added mass is off")
     run = ideal_fluid_run(vehicle, seed=seed) if run is None else run
     return _conservation("impulse_conserved", "impulse", run.impulse_drift, run)
 
@@ -954,7 +950,7 @@ CHECKS: Mapping[str, Callable[..., CheckResult]] = types.MappingProxyType(
 
 def run_checks(vehicle: Vehicle, *, seed: int = SEED) -> list[CheckResult]:
     """Every check of :data:`CHECKS` on one vehicle (the ideal-fluid run is shared)."""
-    run = ideal_fluid_run(vehicle, seed=seed) if vehicle.added_mass else None
+    run = ideal_fluid_run(vehicle, seed=seed)
     results = []
     for name, check in CHECKS.items():
         if name in ("energy_conserved", "impulse_conserved"):

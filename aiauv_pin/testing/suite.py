@@ -16,8 +16,6 @@ from aiauv_pin.testing import assert_check
 @pytest.fixture(scope="session")
 def aiauv_ideal_fluid_run(aiauv_vehicle, aiauv_seed):
     """The ideal-fluid run shared by the two conservation tests."""
-    if not aiauv_vehicle.added_mass:
-        return None
     return checks.ideal_fluid_run(aiauv_vehicle, seed=aiauv_seed)
 
 
