@@ -1,4 +1,10 @@
-"""The ``aiauv`` pytest plugin, run in a nested pytest session (pytester) (issue 17)."""
+"""The ``aiauv`` pytest plugin, run in nested pytest sessions (pytester) (issue 17).
+
+The nested sessions run in subprocesses: pytester's in-process mode removes every module imported
+during a test from ``sys.modules`` afterwards, and extension modules imported that way (numba's,
+trimesh's manifold3d) abort the interpreter when a later test imports them again. For the same
+reason the builder (yourdfpy, trimesh) is imported here, before any pytester test starts.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +14,7 @@ from pathlib import Path
 import pytest
 
 import aiauv_pin
+import aiauv_pin.builder  # before pytester's sys.modules snapshot (see above)
 from aiauv_pin import consistency
 from aiauv_pin.cli import main
 
@@ -72,7 +79,7 @@ def test_good_vehicles_pass_with_readable_ids(pytester):
     stabilised = copy_in(pytester, aiauv_pin.bundled_urdf("stabilised"))
     two_link = copy_in(pytester, DATA / "two_link_hydro.urdf")
     generated = generated_vehicle(pytester)
-    result = pytester.runpytest(
+    result = pytester.runpytest_subprocess(
         "--aiauv-vehicle",
         str(stabilised),
         "--aiauv-vehicle",
@@ -103,7 +110,7 @@ def test_own_tests_run_beside_the_suite_and_use_the_fixture(pytester):
             assert len(aiauv_vehicle.hydro.links) == 9
         """
     )
-    result = pytester.runpytest(
+    result = pytester.runpytest_subprocess(
         "test_mine.py", "--aiauv-vehicle", str(copy_in(pytester, aiauv_pin.bundled_urdf())), "-v"
     )
     result.assert_outcomes(passed=N_CHECKS + 1)
@@ -120,7 +127,7 @@ def test_inconsistent_vehicle_fails_with_figure_and_tolerance(pytester):
             "<linear_damping>-4 -20 -20 -0.5 -3 -3</linear_damping>",
         ).replace('<robot name="two_link">', '<robot name="leaky">')
     )
-    result = pytester.runpytest("--aiauv-vehicle", str(bad), "-rf")
+    result = pytester.runpytest_subprocess("--aiauv-vehicle", str(bad), "-rf")
     result.assert_outcomes(passed=N_CHECKS - 2, failed=2, warnings=1)
     result.stdout.fnmatch_lines(
         [
@@ -156,7 +163,7 @@ def test_inconsistent_model_in_a_users_own_test(pytester):
             assert_check(check_thrusters(Leverless(vehicle.model, vehicle.hydro)))
         """
     )
-    result = pytester.runpytest("-rf")
+    result = pytester.runpytest_subprocess("-rf")
     result.assert_outcomes(failed=1)
     result.stdout.fnmatch_lines(
         [
@@ -167,7 +174,7 @@ def test_inconsistent_model_in_a_users_own_test(pytester):
 
 
 def test_missing_vehicle_is_a_usage_error(pytester):
-    result = pytester.runpytest("--aiauv-vehicle", "nowhere.urdf")
+    result = pytester.runpytest_subprocess("--aiauv-vehicle", "nowhere.urdf")
     assert result.ret == pytest.ExitCode.USAGE_ERROR
     result.stderr.fnmatch_lines(["*--aiauv-vehicle nowhere.urdf: no such file*"])
 
@@ -175,7 +182,7 @@ def test_missing_vehicle_is_a_usage_error(pytester):
 def test_unloadable_vehicle_errors_in_one_line(pytester):
     broken = pytester.path / "broken.urdf"
     broken.write_text("<robot name='broken'><link name='a'/><joint/></robot>")
-    result = pytester.runpytest("--aiauv-vehicle", str(broken), "-x", "-rE")
+    result = pytester.runpytest_subprocess("--aiauv-vehicle", str(broken), "-x", "-rE")
     result.assert_outcomes(errors=1)
     result.stdout.fnmatch_lines(
         [
@@ -189,7 +196,7 @@ def test_unloadable_vehicle_errors_in_one_line(pytester):
 
 def test_without_the_option_the_plugin_does_nothing(pytester):
     pytester.makepyfile(test_x="def test_x():\n    pass\n")
-    result = pytester.runpytest("-v")
+    result = pytester.runpytest_subprocess("-v")
     result.assert_outcomes(passed=1)
 
 
