@@ -981,8 +981,10 @@ def format_results(
         if not r.passed:
             lines.append(f"failed: {r.message()}")
     failed = sum(1 for r in results if not r.passed)
+    skipped = sum(1 for r in results if r.skipped)
     lines.append(
-        f"{len(results) - failed} of {len(results)} checks passed"
+        f"{len(results) - failed - skipped} of {len(results)} checks passed"
+        + (f", {skipped} skipped" if skipped else "")
         + (f", {failed} FAILED" if failed else "")
     )
     return "\n".join(lines)

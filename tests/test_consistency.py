@@ -274,6 +274,20 @@ def test_cli_physics_unusable_vehicle_is_one_line(tmp_path, capfd):
     assert out == "" and err.count("\n") == 1 and "singular" in err
 
 
+def test_table_counts_skipped_checks(tmp_path):
+    """A single body without thrusters: the thruster check is skipped, and said to be."""
+    from conftest import single_body_urdf
+
+    path = tmp_path / "single_body.urdf"
+    path.write_text(single_body_urdf()[0])
+    results = consistency.run_checks(aiauv_pin.load_vehicle(path))
+    skipped = [r for r in results if r.skipped]
+    assert [r.name for r in skipped] == ["thrusters"]
+    assert skipped[0].message() == "thrusters: skipped (the vehicle has no thrusters)"
+    table = consistency.format_results(results)
+    assert table.endswith(f"{len(results) - 1} of {len(results)} checks passed, 1 skipped")
+
+
 def test_bad_sample_count_is_a_clear_error(paper_vehicle):
     with pytest.raises(ValueError, match="samples must be a positive whole number, got 0"):
         consistency.check_thrusters(paper_vehicle, samples=0)
