@@ -119,15 +119,15 @@ class EnergyInjectingDamping(Vehicle):
             backend="pinocchio",
         )
 
-    def fluid_forces(self, q, v, current=None):
-        forces = super().fluid_forces(q, v, current)
+    def fluid_forces(self, q, v, current=None, **options):
+        forces = super().fluid_forces(q, v, current, **options)
         if not self.damping:
             return forces
-        undamped = self._undamped.fluid_forces(q, v, current).bias
+        undamped = self._undamped.fluid_forces(q, v, current, **options).bias
         return dataclasses.replace(forces, bias=2.0 * undamped - forces.bias)
 
-    def acceleration(self, q, v, tau, current=None):
-        forces = self.fluid_forces(q, v, current)
+    def acceleration(self, q, v, tau, current=None, **options):
+        forces = self.fluid_forces(q, v, current, **options)
         return np.linalg.solve(forces.mass_matrix, np.asarray(tau) - forces.bias)
 
 
@@ -145,8 +145,8 @@ def test_energy_injecting_damping_fails_dissipation_and_decay():
 class DriftingPinocchio(Vehicle):
     """The Pinocchio path's acceleration off by one part in a million."""
 
-    def acceleration(self, q, v, tau, current=None):
-        dv = super().acceleration(q, v, tau, current)
+    def acceleration(self, q, v, tau, current=None, **options):
+        dv = super().acceleration(q, v, tau, current, **options)
         return dv * (1.0 + 1e-6) if self.active_backend == "pinocchio" else dv
 
 
@@ -173,10 +173,10 @@ def test_restoring_forces_without_buoyancy_fail_hydrostatics(paper_vehicle):
 class NotInvariant(Vehicle):
     """A damping force tied to the world x axis (not to the vehicle): breaks invariance."""
 
-    def acceleration(self, q, v, tau, current=None):
+    def acceleration(self, q, v, tau, current=None, **options):
         tau = np.array(tau, dtype=float)
         tau[0] -= 3.0 * q[0]  # a spring to the world origin along the base x
-        return super().acceleration(q, v, tau, current)
+        return super().acceleration(q, v, tau, current, **options)
 
 
 def test_world_anchored_force_fails_invariance(paper_vehicle):
