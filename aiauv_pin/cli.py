@@ -263,12 +263,23 @@ def _add_check(subparsers) -> None:
         "1 with a one-line reason otherwise.",
     )
     parser.add_argument("urdf", type=Path, help="URDF file")
+    parser.add_argument(
+        "--physics",
+        action="store_true",
+        help="run the dynamics-consistency checks instead (energy, impulse, damping, power "
+        "balance, hydrostatics, invariance, backends, thrusters; see aiauv_pin.consistency) and "
+        "print a table of figures and tolerances; exit status 1 if any fails",
+    )
     parser.set_defaults(handler=_run_check)
 
 
 def _run_check(args) -> int:
     from .check import check_vehicle, format_report
 
+    if args.physics:
+        from .consistency import run_physics_check
+
+        return run_physics_check(args.urdf)
     report = check_vehicle(args.urdf)
     print(format_report(report))
     return 0
