@@ -8,7 +8,7 @@ that is unusual but simulable is a *warning*: the report lists it and the comman
 (exit status 0). Warnings:
 
 * the vehicle is not neutrally buoyant (net buoyancy ``(rho V - m) g`` beyond 1 % of its weight);
-* a link has mass but no hydrodynamic parameters (no buoyancy, added mass or damping); the warning
+* a link has mass but no hydrodynamic parameters (no buoyancy, added mass or damping); a further warning
   suggests ``aiauv annotate``, which estimates them;
 * an inertia breaks the triangle inequality ``I_a + I_b >= I_c`` (no real body has it);
 * the vehicle has no thrusters, or none along a link x-axis (the path-following controller needs
@@ -139,14 +139,15 @@ def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
         diagonal = np.diag(link.added_mass).copy() if link is not None else np.zeros(6)
         rows.append(LinkRow(name, mass, volume, _margin(rho * volume, mass, g), cg, cb, diagonal))
         if link is None and mass > 0.0:
-            warnings.append(
-                f"link '{name}' has mass but no hydrodynamic parameters "
-                f"(estimate them with 'aiauv annotate {path} -o OUT.urdf')"
-            )
+            warnings.append(f"link '{name}' has mass but no hydrodynamic parameters")
         if inertial is not None:
             moments = np.linalg.eigvalsh(inertial.inertia)
             if moments[0] + moments[1] < moments[2] * (1.0 - 1e-6):
                 warnings.append(f"link '{name}': inertia breaks the triangle inequality")
+    if any("no hydrodynamic parameters" in warning for warning in warnings):
+        warnings.append(
+            f"estimate the missing hydrodynamics with 'aiauv annotate {path} -o OUT.urdf'"
+        )
     total_mass = sum(row.mass for row in rows)
     total_volume = sum(row.volume for row in rows)
     margin = _margin(rho * total_volume, total_mass, g)

@@ -21,11 +21,13 @@ import sys
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from xml.etree import ElementTree
 
 import pinocchio as pin
 
 from hydro.spec import HydroError
 from hydro.urdf_block import parse_robot_text, read_hydrodynamics
+from hydro.uuv_simulator import freeze_thruster_joints
 
 from .errors import VehicleLoadError
 from .urdf_validation import UrdfStructure, validate_urdf
@@ -182,6 +184,8 @@ def load_vehicle(
         root = parse_robot_text(text, str(source))
     except HydroError as exc:
         raise VehicleLoadError(str(exc)) from None
+    if freeze_thruster_joints(root):  # UUV Simulator propeller joints: rigid for the dynamics
+        text = ElementTree.tostring(root, encoding="unicode")
     try:
         structure = validate_urdf(root)
     except VehicleLoadError as exc:

@@ -112,9 +112,10 @@ def expand_xacro(
         except VehicleLoadError:
             raise
         except Exception as exc:  # xacro raises XacroException, ArgException, NameError, ...
-            kind = exc.__class__.__name__
-            if kind == "ArgException":
-                message = f"undefined xacro argument {exc} (give --arg {exc}=VALUE)"
+            cause = getattr(exc, "exc", None)  # XacroException wraps the original error
+            if "ArgException" in (exc.__class__.__name__, cause.__class__.__name__):
+                name = cause if cause is not None else exc
+                message = f"undefined xacro argument '{name}' (give --arg {name}=VALUE)"
             else:
                 message = _one_line(exc)
             raise VehicleLoadError(f"{path}: xacro: {message}") from None
