@@ -257,3 +257,15 @@ def test_uuv_xacro_vehicle_annotate_check_simulate(tmp_path, capsys):
     assert run.q[-1, 2] < q0[2]  # net buoyancy is negative: it sinks
     placement = pin.XYZQUATToSE3(run.q[-1, :7])
     assert np.isfinite(placement.translation).all()
+    # playback: every link drawn (collision boxes; the propellers as their inertia ellipsoids)
+    from aiauv_pin import playback, viewer
+
+    page = playback.write_playback(damped, run, tmp_path / "playback.html")
+    commands = playback.read_commands(page.read_text(encoding="utf-8"))
+    drawn = {
+        c["path"][len(viewer.LINKS) + 1 :].rsplit("/", 1)[0]
+        for c in commands
+        if c["type"] == "set_object" and "/visual_" in c["path"]
+    }
+    assert {"minirov/base_link", "minirov/arm/wrist_link", "minirov/thruster_7"} <= drawn
+    assert "thruster force" in page.read_text(encoding="utf-8")
