@@ -96,7 +96,7 @@ def html_page(
 body {{ margin: 0; }}
 #meshcat-pane {{ width: 100vw; height: 100vh; overflow: hidden; }}
 #aiauv-legend {{ position: fixed; left: 8px; bottom: 8px; padding: 4px 8px; font: 12px sans-serif;
-  color: #eee; background: rgba(0, 0, 0, 0.45); border-radius: 4px; pointer-events: none; }}
+  color: #111; background: rgba(255, 255, 255, 0.8); border-radius: 4px; pointer-events: none; }}
 </style>
 </head>
 <body>

@@ -22,6 +22,8 @@ from .ros_packages import find_package, package_search_path
 
 #: File suffixes expanded with xacro (``robot.urdf.xacro`` ends in ``.xacro`` too).
 XACRO_SUFFIXES = (".xacro",)
+#: Largest expanded description accepted [characters] (as plain URDFs: 50 MB).
+MAX_EXPANDED_CHARACTERS = 50_000_000
 
 
 def is_xacro(path: str | os.PathLike) -> bool:
@@ -113,13 +115,20 @@ def expand_xacro(
             raise
         except Exception as exc:  # xacro raises XacroException, ArgException, NameError, ...
             cause = getattr(exc, "exc", None)  # XacroException wraps the original error
+            if isinstance(cause, VehicleLoadError):  # ours, from $(find) or the safety check
+                raise VehicleLoadError(f"{path}: {cause}") from None
             if "ArgException" in (exc.__class__.__name__, cause.__class__.__name__):
                 name = cause if cause is not None else exc
                 message = f"undefined xacro argument '{name}' (give --arg {name}=VALUE)"
             else:
                 message = _one_line(exc)
             raise VehicleLoadError(f"{path}: xacro: {message}") from None
-    return document.toxml()
+    text = document.toxml()
+    if len(text) > MAX_EXPANDED_CHARACTERS:
+        raise VehicleLoadError(
+            f"{path}: expands to more than {MAX_EXPANDED_CHARACTERS} characters, not a vehicle"
+        )
+    return text
 
 
 def read_description(

@@ -62,6 +62,19 @@ def test_xacro_errors_are_one_line(monkeypatch, options, message):
     with pytest.raises(VehicleLoadError) as error:
         aiauv_pin.load_vehicle(MINIROV, **options)
     assert message in str(error.value) and "\n" not in str(error.value)
+    assert "<class" not in str(error.value) and str(error.value).count("package not found") <= 1
+
+
+def test_cli_xacro_errors(capsys, monkeypatch):
+    monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
+    assert main(["check", str(MINIROV)]) == 1
+    error = capsys.readouterr().err
+    assert error.startswith("aiauv: error: ") and "--package-path" in error
+    assert error.count("\n") == 1
+    with pytest.raises(SystemExit) as exit_info:
+        main(["check", str(MINIROV), "--arg", "no_equals_sign"])
+    assert exit_info.value.code == 2
+    assert "NAME=VALUE" in capsys.readouterr().err
 
 
 def test_xacro_include_with_entities_is_refused(tmp_path):
