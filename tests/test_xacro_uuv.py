@@ -282,3 +282,22 @@ def test_uuv_xacro_vehicle_annotate_check_simulate(tmp_path, capsys):
     }
     assert {"minirov/base_link", "minirov/arm/wrist_link", "minirov/thruster_7"} <= drawn
     assert "thruster force" in page.read_text(encoding="utf-8")
+
+
+def test_lauv_thruster_with_swapped_clamps_and_coupled_damping():
+    """LAUV's file swaps clampMin/clampMax: the plugin drops the clamp, thrustMin/Max limit it."""
+    lauv = Path(__file__).parent / "data" / "lauv_uuv_simulator.urdf"
+    with pytest.warns(UserWarning, match="off-diagonal"):
+        vehicle = aiauv_pin.load_vehicle(lauv)
+    (thruster,) = vehicle.hydro.thrusters
+    assert thruster.max_thrust == 50.0
+    q = vehicle.neutral_configuration()
+    column = vehicle.thrust_matrix(q)[:, 0]
+    # joint axis x turned by pi about z: positive thrust pushes the hull backwards, on its axis
+    np.testing.assert_allclose(column[:6], [-1, 0, 0, 0, 0, 0], atol=1e-12)
+    (link,) = vehicle.hydro.links
+    # FRD sway-yaw coupling 11.5 of DLin becomes -11.5 in our FLU, positive-dissipative form
+    # (D_L = -T DLin T with T = diag(1, -1, -1, 1, -1, -1))
+    assert link.linear_damping[1, 5] == pytest.approx(-11.5)
+    assert link.linear_damping[5, 1] == pytest.approx(3.1)
+    assert link.linear_damping[1, 1] == pytest.approx(23.0)
