@@ -171,33 +171,40 @@ def _geometry_element(link: Element) -> tuple[Element, Element, str] | None:
     return None
 
 
+@dataclass(frozen=True)
 class _Inertial:
-    def __init__(self, link: Element, name: str):
-        self.mass = 0.0
-        self.xyz = np.zeros(3)
-        self.rotation = np.eye(3)
-        self.inertia = np.zeros((3, 3))
-        inertial = link.find("inertial")
-        if inertial is None:
-            return
-        mass = inertial.find("mass")
-        if mass is not None:
-            self.mass = parse_scalar(mass.get("value"), f"link '{name}' mass")
-        self.xyz, rpy = _origin(inertial, f"link '{name}' inertial")
-        self.rotation = rpy_matrix(rpy)
-        element = inertial.find("inertia")
-        if element is not None:
-            values = {
-                key: parse_scalar(element.get(key, "0"), f"link '{name}' inertia {key}")
-                for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-            }
-            self.inertia = np.array(
-                [
-                    [values["ixx"], values["ixy"], values["ixz"]],
-                    [values["ixy"], values["iyy"], values["iyz"]],
-                    [values["ixz"], values["iyz"], values["izz"]],
-                ]
-            )
+    """A link's ``<inertial>``: mass [kg], centre of mass [m], inertia frame, inertia [kg m^2]."""
+
+    mass: float
+    xyz: np.ndarray
+    rotation: np.ndarray
+    inertia: np.ndarray
+
+
+def _link_inertial(link: Element, name: str) -> _Inertial:
+    inertial = link.find("inertial")
+    if inertial is None:
+        return _Inertial(0.0, np.zeros(3), np.eye(3), np.zeros((3, 3)))
+    mass_element = inertial.find("mass")
+    mass = 0.0
+    if mass_element is not None:
+        mass = parse_scalar(mass_element.get("value"), f"link '{name}' mass")
+    xyz, rpy = _origin(inertial, f"link '{name}' inertial")
+    inertia = np.zeros((3, 3))
+    element = inertial.find("inertia")
+    if element is not None:
+        v = {
+            key: parse_scalar(element.get(key, "0"), f"link '{name}' inertia {key}")
+            for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+        }
+        inertia = np.array(
+            [
+                [v["ixx"], v["ixy"], v["ixz"]],
+                [v["ixy"], v["iyy"], v["iyz"]],
+                [v["ixz"], v["iyz"], v["izz"]],
+            ]
+        )
+    return _Inertial(mass, xyz, rpy_matrix(rpy), inertia)
 
 
 def _inertia_shape(inertial: _Inertial, fluid_density: float) -> tuple[Ellipsoid, str]:
@@ -276,7 +283,7 @@ def annotate_robot(
     chosen: list[tuple[str, float, str, str, tuple[float, ...]]] = []
     for link in root.findall("link"):
         name = link.get("name")
-        inertial = _Inertial(link, name)
+        inertial = _link_inertial(link, name)
         if name in described:
             chosen.append((name, inertial.mass, "already in the file", "-", ()))
             continue
@@ -291,10 +298,8 @@ def annotate_robot(
             owner, shape, kind = found
             length = parse_scalar(shape.get("length"), f"link '{name}' cylinder length")
             radius = parse_scalar(shape.get("radius"), f"link '{name}' cylinder radius")
+            # the reader takes the same cylinder: the first collision one, else the first visual
             element.set("model", "slender_cylinder")
-            if kind == "visual" and link.find("collision/geometry/cylinder") is not None:
-                element.set("length", repr(length))  # the reader takes collision first
-                element.set("radius", repr(radius))
             if neutral:
                 ET.SubElement(element, "volume").text = repr(inertial.mass / rho)
             block.append(element)
