@@ -189,6 +189,23 @@ def convert_fossen_matrices(
     return added_mass, linear, quadratic
 
 
+def convert_forward_speed_damping(forward: np.ndarray) -> np.ndarray:
+    """UUV Simulator's ``linear_damping_forward_speed`` in our axes and sign (not applied yet).
+
+    ``HMFossen::ComputeDampingMatrix`` has ``D(nu) = -DLin - u DLinForwardSpeed - ...`` and applies
+    ``-D nu``: a wrench ``u DLinForwardSpeed nu`` in FRD axes, with ``u`` the relative surge speed
+    (the same in FRD and FLU). In FLU axes with positive-dissipative sign that is a wrench
+    ``-u D_F nu`` with ``D_F = -T DLinForwardSpeed T``, ``T = diag(1, -1, -1, 1, -1, -1)``.
+
+    Args:
+        forward: ``DLinForwardSpeed`` as given (6x6, FRD) [per m/s].
+
+    Returns:
+        ``D_F`` (6x6, FLU).
+    """
+    return -(FRD_TO_FLU @ np.asarray(forward, dtype=float) @ FRD_TO_FLU)
+
+
 def _uuv_matrix(element: Element | None, what: str, allow_diagonal: bool) -> np.ndarray:
     if element is None:
         return np.zeros((6, 6))
@@ -439,10 +456,11 @@ def _uuv_link(
     if np.any(forward != 0.0):
         # D(nu) = -DLin - u DLinForwardSpeed (HMFossen::ComputeDampingMatrix): a wrench
         # u * DLinForwardSpeed nu, bilinear in the velocity; no term of this package has that form
+        converted = convert_forward_speed_damping(forward)
         warnings.warn(
-            f"{what}: linear_damping_forward_speed (damping proportional to surge speed, "
-            f"largest |entry| {float(np.max(np.abs(forward))):.4g}) is read but not applied: "
-            "this package has no such term",
+            f"{what}: linear_damping_forward_speed (a wrench -u D_F nu, largest |entry| of D_F "
+            f"{float(np.max(np.abs(converted))):.4g}) is read but not applied: this package has "
+            "no damping proportional to the surge speed",
             stacklevel=4,
         )
     if (
@@ -624,13 +642,14 @@ def uuv_thrusters(root: Element, links: dict[str, UrdfLink]) -> list[Thruster]:
     """Thrusters of the UUV Simulator thruster plugins, as this package's thrusters.
 
     ``max_thrust`` is the steady-state thrust at the largest command ``clampMax`` (positive
-    direction), capped by ``thrustMax``; a plugin with neither gives no finite limit and is
-    refused (add ``<thrustMax>``, or describe the thruster in our ``<hydrodynamics>`` block). A
+    direction), capped by ``thrustMax``; a plugin with neither gives no finite limit and is left
+    out with a warning (add ``<thrustMax>``, or describe the thruster in our ``<hydrodynamics>``
+    block), so that the vehicle still loads. A
     negative-direction limit that differs by more than 1 % is reported by a warning, since ours is
     symmetric.
 
     Raises:
-        HydroError: Unknown link or joint, missing or unsupported conversion, no finite limit.
+        HydroError: Unknown link or joint, missing or unsupported conversion.
     """
     joints = {joint.get("name"): joint for joint in root.findall("joint")}
     result = []
@@ -666,6 +685,7 @@ def uuv_thrusters(root: Element, links: dict[str, UrdfLink]) -> list[Thruster]:
         scale = _efficiency(plugin, "propeller_efficiency", what) * gain
         efficiency = _efficiency(plugin, "thrust_efficiency", what)
         conversion = plugin.find("conversion")
+        _conversion_thrust(conversion, 0.0, what)  # a known, well-formed conversion
 
         def steady(
             command: float, conversion=conversion, scale=scale, efficiency=efficiency, what=what
@@ -679,10 +699,13 @@ def uuv_thrusters(root: Element, links: dict[str, UrdfLink]) -> list[Thruster]:
         if thrust_min is not None:
             backward = min(backward, -thrust_min)
         if not (math.isfinite(forward) and forward > 0.0):
-            raise HydroError(
-                f"{what}: no finite positive thrust limit (give <thrustMax> or <clampMax>, or "
-                "describe the thruster in the <hydrodynamics> block)"
+            # as shipped for RexROV and ECA A9: UUV Simulator applies no limit at all
+            warnings.warn(
+                f"{what}: no finite positive thrust limit, left out (give <thrustMax> or "
+                "<clampMax>, or describe the thruster in the <hydrodynamics> block)",
+                stacklevel=3,
             )
+            continue
         if math.isfinite(backward) and abs(backward - forward) > 0.01 * forward:
             warnings.warn(
                 f"{what}: reverse thrust limit {backward:.4g} N differs from forward {forward:.4g} N; "

@@ -238,9 +238,15 @@ def test_thruster_limit_is_the_steady_state_thrust_at_the_largest_command(plugin
     assert thruster.link == "t"
 
 
-def test_thruster_without_a_limit_is_refused():
+def test_thruster_without_a_limit_is_left_out_with_a_warning():
     plugin = "<conversion><type>Basic</type><rotorConstant>0.01</rotorConstant></conversion>"
-    with pytest.raises(HydroError, match="thrustMax"):
+    with pytest.warns(UserWarning, match="thrustMax"):
+        assert read_hydrodynamics(_thruster_robot(plugin)).thrusters == ()
+
+
+def test_unknown_conversion_is_refused():
+    plugin = "<conversion><type>Magic</type></conversion><thrustMax>5</thrustMax>"
+    with pytest.raises(HydroError, match="Magic"):
         read_hydrodynamics(_thruster_robot(plugin))
 
 
@@ -301,3 +307,32 @@ def test_lauv_thruster_with_swapped_clamps_and_coupled_damping():
     assert link.linear_damping[1, 5] == pytest.approx(-11.5)
     assert link.linear_damping[5, 1] == pytest.approx(3.1)
     assert link.linear_damping[1, 1] == pytest.approx(23.0)
+
+
+def test_eca_a9_loads_and_says_what_it_cannot_apply():
+    """As shipped, ECA A9's only damping is forward-speed damping and its thruster has no limit."""
+    eca = Path(__file__).parent / "data" / "eca_a9_uuv_simulator.urdf"
+    with pytest.warns(UserWarning) as record:
+        vehicle = aiauv_pin.load_vehicle(eca)
+    messages = " ".join(str(item.message) for item in record)
+    assert "linear_damping_forward_speed" in messages and "not applied" in messages
+    assert "no finite positive thrust limit" in messages
+    assert vehicle.hydro.thrusters == ()
+    (link,) = vehicle.hydro.links
+    np.testing.assert_allclose(np.diag(link.added_mass), [4, 95, 75, 0.4, 27, 32])
+    assert not np.any(link.linear_damping) and not np.any(link.quadratic_damping)
+
+
+def test_forward_speed_damping_conversion():
+    from hydro.uuv_simulator import convert_forward_speed_damping
+
+    forward = np.zeros((6, 6))
+    forward[1, 5], forward[1, 1] = 150.0, -162.0
+    converted = convert_forward_speed_damping(forward)
+    # UUV wrench u F nu (FRD) equals our -u D_F nu (FLU) for any velocity
+    rng = np.random.default_rng(2)
+    flip = np.diag([1.0, -1, -1, 1, -1, -1])
+    for _ in range(3):
+        nu = rng.normal(size=6)
+        theirs = flip @ (nu[0] * forward @ (flip @ nu))
+        np.testing.assert_allclose(-nu[0] * converted @ nu, theirs, atol=1e-12)
