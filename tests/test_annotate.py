@@ -252,3 +252,38 @@ def test_cli_annotate_bad_density_is_a_usage_error(capsys):
         main(["annotate", "in.urdf", "-o", "x.urdf", "--fluid-density", "-1"])
     assert exit_info.value.code == 2
     assert "positive density" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("case", "fragments"),
+    [
+        ("laughs", ("refused", "DTD")),
+        ("negative volume", ("volume",)),
+        ("nan mass", ("mass",)),
+        ("binary", ("not a text file",)),
+        ("directory", ("directory",)),
+        ("laughs xacro", ("refused", "DTD")),
+    ],
+)
+def test_cli_annotate_hostile_input_is_one_line(tmp_path, capfd, case, fragments):
+    from test_hostile_input import BILLION_LAUGHS, assert_one_line_error, run_cli, vehicle_urdf
+
+    path = tmp_path / "vehicle.urdf"
+    if case == "laughs":
+        path.write_text(BILLION_LAUGHS, encoding="utf-8")
+    elif case == "negative volume":
+        path.write_text(vehicle_urdf(volume="-1"), encoding="utf-8")
+    elif case == "nan mass":
+        path.write_text(vehicle_urdf(mass="nan"), encoding="utf-8")
+    elif case == "binary":
+        path.write_bytes(bytes(range(256)) * 4)
+    elif case == "directory":
+        path = tmp_path
+    else:
+        path = tmp_path / "vehicle.urdf.xacro"
+        path.write_text(BILLION_LAUGHS, encoding="utf-8")
+    out = tmp_path / "out.urdf"
+    code, printed, err = run_cli(capfd, ["annotate", path, "-o", out])
+    assert_one_line_error(code, err, *fragments)
+    assert "lollol" not in err + printed
+    assert not out.exists()
