@@ -8,7 +8,8 @@ that is unusual but simulable is a *warning*: the report lists it and the comman
 (exit status 0). Warnings:
 
 * the vehicle is not neutrally buoyant (net buoyancy ``(rho V - m) g`` beyond 1 % of its weight);
-* a link has mass but no hydrodynamic parameters (no buoyancy, added mass or damping);
+* a link has mass but no hydrodynamic parameters (no buoyancy, added mass or damping); a further warning
+  suggests ``aiauv annotate``, which estimates them;
 * an inertia breaks the triangle inequality ``I_a + I_b >= I_c`` (no real body has it);
 * the vehicle has no thrusters, or none along a link x-axis (the path-following controller needs
   them for surge), no ``end_effector`` frame, or joints other than equal numbers of y- and z-axis
@@ -92,15 +93,19 @@ class CheckReport:
     warnings: tuple[str, ...]
 
 
-def check_vehicle(path: str | os.PathLike) -> CheckReport:
-    """Validate a vehicle URDF and collect its report.
+def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
+    """Validate a vehicle URDF (or ``.xacro``) and collect its report.
+
+    Args:
+        path: The URDF or xacro file.
+        load_options: ``xacro_args`` and ``package_path`` of :func:`aiauv_pin.load_vehicle`.
 
     Raises:
         VehicleLoadError: The vehicle is not usable; the message is one line naming the reason.
     """
     path = Path(path)
-    vehicle = load_vehicle(path)
-    structure = validate_urdf(parse_robot(path))
+    vehicle = load_vehicle(path, **load_options)
+    structure = validate_urdf(parse_robot(vehicle.urdf_text))
     hydro = vehicle.hydro
     rho, g = hydro.fluid_density, hydro.gravity
     model = vehicle.model
@@ -139,6 +144,10 @@ def check_vehicle(path: str | os.PathLike) -> CheckReport:
             moments = np.linalg.eigvalsh(inertial.inertia)
             if moments[0] + moments[1] < moments[2] * (1.0 - 1e-6):
                 warnings.append(f"link '{name}': inertia breaks the triangle inequality")
+    if any("no hydrodynamic parameters" in warning for warning in warnings):
+        warnings.append(
+            f"estimate the missing hydrodynamics with 'aiauv annotate {path} -o OUT.urdf'"
+        )
     total_mass = sum(row.mass for row in rows)
     total_volume = sum(row.volume for row in rows)
     margin = _margin(rho * total_volume, total_mass, g)

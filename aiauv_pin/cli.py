@@ -69,8 +69,11 @@ def _add_simulate(subparsers) -> None:
         "scenario", nargs="?", type=Path, help="scenario file (TOML); default: the paper's scenario"
     )
     parser.add_argument(
-        "--vehicle", type=Path, help="URDF file (default: the bundled paper vehicle of --case)"
+        "--vehicle",
+        type=Path,
+        help="URDF or .xacro file (default: the bundled paper vehicle of --case)",
     )
+    _add_description_options(parser)
     parser.add_argument(
         "--case",
         choices=("uniform", "stabilised"),
@@ -161,7 +164,7 @@ def _run_simulate(args) -> int:
 
     compiling = announce_compilation()
     compile_start = time.perf_counter()
-    vehicle = loading.load_vehicle(path)
+    vehicle = loading.load_vehicle(path, **_description_options(args))
     if vehicle.fallback_reason is not None:
         print(
             f"aiauv: warning: compiled backend unavailable ({vehicle.fallback_reason}); "
@@ -262,7 +265,8 @@ def _add_check(subparsers) -> None:
         "usable vehicle, even with warnings (e.g. not neutrally buoyant, no surge thruster); "
         "1 with a one-line reason otherwise.",
     )
-    parser.add_argument("urdf", type=Path, help="URDF file")
+    parser.add_argument("urdf", type=Path, help="URDF or .xacro file")
+    _add_description_options(parser)
     parser.add_argument(
         "--physics",
         action="store_true",
@@ -280,7 +284,7 @@ def _run_check(args) -> int:
         from .consistency import run_physics_check
 
         return run_physics_check(args.urdf)
-    report = check_vehicle(args.urdf)
+    report = check_vehicle(args.urdf, **_description_options(args))
     print(format_report(report))
     return 0
 
@@ -294,6 +298,107 @@ def _version() -> str:
         from . import __version__
 
         return __version__
+
+
+def _xacro_argument(text: str) -> tuple[str, str]:
+    """argparse type: ``NAME=VALUE``."""
+    name, sep, value = text.partition("=")
+    if not sep or not name.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, got '{text}'")
+    return name.strip(), value
+
+
+def _add_description_options(parser) -> None:
+    """``--arg`` and ``--package-path``: for ``.xacro`` files and ``package://`` URIs."""
+    parser.add_argument(
+        "--arg",
+        dest="xacro_args",
+        metavar="NAME=VALUE",
+        type=_xacro_argument,
+        action="append",
+        default=[],
+        help="xacro argument for a .xacro vehicle (repeatable)",
+    )
+    parser.add_argument(
+        "--package-path",
+        dest="package_path",
+        metavar="DIR",
+        type=Path,
+        action="append",
+        default=[],
+        help="folder searched for ROS packages named by $(find pkg) and package:// "
+        "(repeatable; searched before ROS_PACKAGE_PATH and example-robot-data)",
+    )
+
+
+def _description_options(args) -> dict:
+    return {"xacro_args": dict(args.xacro_args), "package_path": list(args.package_path)}
+
+
+def _positive_density(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive density in kg/m^3, got '{text}'")
+    return value
+
+
+def _add_annotate(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "annotate",
+        help="estimate hydrodynamics for every link of a URDF",
+        description="Write a copy of a URDF (or .xacro) with a <hydrodynamics> block estimated per "
+        "link from its collision geometry (cylinder: slender-cylinder model; box, sphere: the "
+        "equivalent ellipsoid with Lamb's added-mass coefficients; mesh: an ellipsoid fitted to "
+        "the mesh), or from its inertia when it has none, and print a table of what was chosen "
+        "per link for review. Links that already have hydrodynamics, and massless links, are left "
+        "alone.",
+    )
+    parser.add_argument("urdf", type=Path, help="input URDF or .xacro file")
+    parser.add_argument(
+        "-o", "--output", type=Path, required=True, help="annotated URDF file to write"
+    )
+    parser.add_argument(
+        "--fluid-density",
+        type=_positive_density,
+        default=None,
+        metavar="RHO",
+        help="water density [kg/m^3] (default: the file's, else 1025)",
+    )
+    parser.add_argument(
+        "--neutral",
+        action="store_true",
+        help="give each link the volume m / rho (neutrally buoyant link by link) instead of its "
+        "shape's volume",
+    )
+    _add_description_options(parser)
+    parser.set_defaults(handler=_run_annotate)
+
+
+def _run_annotate(args) -> int:
+    from .annotation import annotate_file
+    from .errors import AiauvError
+
+    if args.output.resolve() == args.urdf.resolve():
+        raise AiauvError(f"{args.output}: would overwrite the input; choose another output file")
+    annotation = annotate_file(
+        args.urdf,
+        args.output,
+        fluid_density=args.fluid_density,
+        neutral=args.neutral,
+        **_description_options(args),
+    )
+    from hydro.annotate import format_annotation
+
+    print(format_annotation(annotation))
+    written = sum(1 for row in annotation.links if row.model != "-")
+    print(
+        f"wrote {args.output} ({written} links annotated); review the table, then "
+        f"'aiauv check {args.output}'"
+    )
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -313,6 +418,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_simulate(subparsers)
     _add_build(subparsers)
     _add_check(subparsers)
+    _add_annotate(subparsers)
     add_bench_parser(subparsers)
     add_sweep_subcommand(subparsers)
     add_interop_subcommands(subparsers)

@@ -21,15 +21,18 @@ import sys
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from xml.etree import ElementTree
 
 import pinocchio as pin
 
 from hydro.spec import HydroError
 from hydro.urdf_block import parse_robot_text, read_hydrodynamics
+from hydro.uuv_simulator import freeze_thruster_joints
 
 from .errors import VehicleLoadError
 from .urdf_validation import UrdfStructure, validate_urdf
 from .vehicle import Vehicle
+from .xacro_loading import read_description
 
 #: Cases of the paper's vehicle shipped with the package (PAPER_DATA.md, Sec. 4.2 of the paper).
 BUNDLED_CASES = ("uniform", "stabilised")
@@ -146,6 +149,8 @@ def load_vehicle(
     damping: bool = True,
     restoring: bool = True,
     backend: str | None = None,
+    xacro_args: dict[str, str] | None = None,
+    package_path: list[str | os.PathLike] | tuple = (),
 ) -> Vehicle:
     """Load an underwater vehicle from a URDF with an optional ``<hydrodynamics>`` block.
 
@@ -159,6 +164,10 @@ def load_vehicle(
         restoring: Include weight and buoyancy.
         backend: ``"auto"`` (compiled numba kernels when available, else Pinocchio), ``"numba"`` or
             ``"pinocchio"`` (the reference); ``None`` takes ``AIAUV_BACKEND`` or ``"auto"``.
+        xacro_args: ``$(arg NAME)`` values when ``path`` is a ``.xacro`` file
+            (:mod:`aiauv_pin.xacro_loading`).
+        package_path: Folders searched first for ``$(find pkg)`` and ``package://``
+            (then ``ROS_PACKAGE_PATH``, example-robot-data).
 
     Returns:
         The vehicle, with a free-flyer joint on the URDF's root link.
@@ -168,11 +177,15 @@ def load_vehicle(
             XML, broken tree, unknown link, non-physical parameter, unsupported joint, ...).
     """
     source = bundled_urdf("uniform") if path is None else Path(path)
-    text = _read_text(source).removeprefix("\ufeff")
+    text = read_description(source, xacro_args, package_path)  # None unless .xacro
+    if text is None:
+        text = _read_text(source).removeprefix("\ufeff")
     try:
         root = parse_robot_text(text, str(source))
     except HydroError as exc:
         raise VehicleLoadError(str(exc)) from None
+    if freeze_thruster_joints(root):  # UUV Simulator propeller joints: rigid for the dynamics
+        text = ElementTree.tostring(root, encoding="unicode")
     try:
         structure = validate_urdf(root)
     except VehicleLoadError as exc:
@@ -202,4 +215,6 @@ def load_vehicle(
         backend=backend,
     )
     vehicle.urdf_path = source
+    vehicle.urdf_text = text  # the expanded description (xacro files have no URDF on disk)
+    vehicle.package_path = tuple(package_path)
     return vehicle

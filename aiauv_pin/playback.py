@@ -27,7 +27,20 @@ import pinocchio as pin
 from .atomic import atomic_path
 from .simulation import Trajectory
 from .vehicle import Vehicle
-from .viewer import LOS, ROOT, VehicleScene, set_property, set_transform, translation
+from .viewer import (
+    LEGEND,
+    LOS,
+    PATH,
+    ROOT,
+    TRAIL,
+    TRAIL_COLOR,
+    VehicleScene,
+    line_object,
+    set_object,
+    set_property,
+    set_transform,
+    translation,
+)
 
 #: Default upper bound on the size of the keyframe data [bytes].
 KEYFRAME_BUDGET = 16_000_000
@@ -44,19 +57,36 @@ def meshcat_bundle() -> str:
     return path.read_text(encoding="utf-8")
 
 
-def html_page(commands: list[dict], *, title: str = "aiauv-pin playback") -> str:
+def _escape(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+def html_page(
+    commands: list[dict],
+    *,
+    title: str = "aiauv-pin playback",
+    legend: list[tuple[str, str]] | None = None,
+) -> str:
     """A self-contained page showing the meshcat scene the commands build.
 
     Args:
         commands: meshcat commands (``set_object``, ``set_transform``, ``set_property``,
             ``set_animation``), JSON-able dicts.
         title: Page title.
+        legend: ``(CSS colour, text)`` rows of a legend in the lower left corner.
     """
+    rows = "".join(
+        f'<div><span style="display:inline-block;width:14px;height:4px;margin:0 6px 3px 0;'
+        f"outline:1px solid #999;"
+        f'background:{_escape(colour)}"></span>{_escape(text)}</div>'
+        for colour, text in (legend or [])
+    )
+    legend_html = f'<div id="aiauv-legend">{rows}</div>' if rows else ""
     bundle = meshcat_bundle()
     if "</script" in bundle.lower():
         raise RuntimeError("meshcat's bundle contains '</script' and cannot be inlined")
     data = json.dumps(commands, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
-    safe_title = title.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    safe_title = _escape(title)
     return f"""<!DOCTYPE html>
 <html>
 <head>
@@ -65,10 +95,13 @@ def html_page(commands: list[dict], *, title: str = "aiauv-pin playback") -> str
 <style>
 body {{ margin: 0; }}
 #meshcat-pane {{ width: 100vw; height: 100vh; overflow: hidden; }}
+#aiauv-legend {{ position: fixed; left: 8px; bottom: 8px; padding: 4px 8px; font: 12px sans-serif;
+  color: #111; background: rgba(255, 255, 255, 0.8); border-radius: 4px; pointer-events: none; }}
 </style>
 </head>
 <body>
 <div id="meshcat-pane"></div>
+{legend_html}
 <script>
 {bundle}
 </script>
@@ -118,6 +151,32 @@ def frame_indices(t: np.ndarray, fps: float, max_frames: int | None = None) -> n
     return index
 
 
+def _distance_to_path(point: np.ndarray, path: np.ndarray) -> float:
+    """Distance from a point to a polyline (N, 3) [m]."""
+    a, b = path[:-1], path[1:]
+    ab = b - a
+    lengths = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+    s = np.clip(np.einsum("ij,ij->i", point - a, ab) / lengths, 0.0, 1.0)
+    return float(np.min(np.linalg.norm(a + s[:, None] * ab - point, axis=1)))
+
+
+def legend_entries(commands: list[dict]) -> list[tuple[str, str]]:
+    """``(CSS colour, text)`` of what a playback's commands draw besides the vehicle."""
+    paths = {c.get("path", "") for c in commands if c["type"] == "set_object"}
+    shown = []
+    if any("/thrusters/" in p for p in paths):
+        shown.append("thrust")
+    if any(
+        c["type"] == "set_property" and c["path"] == LOS and c["value"] is True for c in commands
+    ):
+        shown.append("los")
+    if TRAIL in paths:
+        shown.append("trail")
+    if PATH in paths:
+        shown.append("path")
+    return [LEGEND[key] for key in shown]
+
+
 def _round(values: np.ndarray) -> list[float]:
     rounded = np.round(np.asarray(values, dtype=float), _DIGITS).ravel()
     rounded[rounded == 0.0] = 0.0  # no "-0.0"
@@ -135,8 +194,14 @@ def playback_commands(
     fps: float = 25.0,
     max_frames: int | None = None,
     urdf: str | os.PathLike | None = None,
+    path_points: np.ndarray | None = None,
 ) -> list[dict]:
     """The meshcat commands of a playback: the scene, the first frame, and the animation.
+
+    Besides the vehicle: the thruster arrows, the LOS arrow, the path
+    (:func:`aiauv_pin.viewer.path_segments` of ``path_points``), the end-effector trail over the
+    whole run (:data:`aiauv_pin.viewer.TRAIL`) and a camera distance that keeps the path in view
+    from every position of the vehicle.
 
     Args:
         vehicle: The simulated vehicle.
@@ -144,6 +209,8 @@ def playback_commands(
         fps: Frames per simulated second [1/s].
         max_frames: Upper bound on the number of frames; default from :data:`KEYFRAME_BUDGET`.
         urdf: URDF with the visuals (see :func:`aiauv_pin.viewer.vehicle_visuals`).
+        path_points: The path drawn, world points in order (N, 3) [m]; default the world x-axis
+            over the run.
 
     Raises:
         ValueError: A malformed trajectory (one line).
@@ -165,7 +232,10 @@ def playback_commands(
     base_x = q[:, 0]
     margin = 5.0
     scene = VehicleScene(
-        vehicle, urdf=urdf, path_range=(float(base_x.min()) - margin, float(base_x.max()) + margin)
+        vehicle,
+        urdf=urdf,
+        path_range=(float(base_x.min()) - margin, float(base_x.max()) + margin),
+        path_points=path_points,
     )
     show_los = scene.head_frame is not None and "x_ref" in info
 
@@ -178,6 +248,7 @@ def playback_commands(
     poses: dict[str, list[np.ndarray]] = {}
     scales: dict[str, list[np.ndarray]] = {}
     centroid: list[np.ndarray] = []
+    trail: list[np.ndarray] = []
     for k in index:
         state = scene.frame(q[k], _info_at(info, int(k)))
         for path, pose in state.poses.items():
@@ -185,11 +256,19 @@ def playback_commands(
         for path, scale in state.scales.items():
             scales.setdefault(path, []).append(scale)
         centroid.append(state.centroid)
+        trail.append(scene.trail_point(q[k]))
     if not show_los:
         poses.pop(LOS, None)
     times = _round(t[index] - t[0])
+    # camera: far enough to show the path from wherever the vehicle is (the view is centred on it)
+    offset = max(_distance_to_path(c, scene.path_points) for c in centroid)
+    scene.camera_distance = max(scene.camera_distance, 1.2 * offset)
 
     commands = scene.static_commands()
+    if len(trail) >= 2:
+        points = np.array(trail)
+        segments = np.stack((points[:-1], points[1:]), axis=1).reshape(-1, 3)
+        commands.append(set_object(TRAIL, line_object(segments, TRAIL_COLOR)))
     # the first frame, so that the scene is right before the animation starts (and if it is paused)
     for path, frames in poses.items():
         commands.append(set_transform(path, frames[0]))
@@ -244,6 +323,7 @@ def write_playback(
     max_frames: int | None = None,
     fps: float = 25.0,
     urdf: str | os.PathLike | None = None,
+    path_points: np.ndarray | None = None,
 ) -> Path:
     """Write a self-contained ``playback.html`` of a trajectory, animated at real-time speed.
 
@@ -258,12 +338,19 @@ def write_playback(
         max_frames: Upper bound on the number of frames; default keeps the file under about 20 MB.
         fps: Frames per simulated second [1/s].
         urdf: URDF with the visuals (see :func:`aiauv_pin.viewer.vehicle_visuals`).
+        path_points: The path drawn (N, 3) [m]; default the world x-axis.
 
     Returns:
         The path written.
     """
-    commands = playback_commands(vehicle, trajectory, fps=fps, max_frames=max_frames, urdf=urdf)
-    page = html_page(commands, title=f"{vehicle.name}: {float(trajectory.t[-1]):g} s")
+    commands = playback_commands(
+        vehicle, trajectory, fps=fps, max_frames=max_frames, urdf=urdf, path_points=path_points
+    )
+    page = html_page(
+        commands,
+        title=f"{vehicle.name}: {float(trajectory.t[-1]):g} s",
+        legend=legend_entries(commands),
+    )
     with atomic_path(path) as temporary:
         temporary.write_text(page, encoding="utf-8")
     return Path(path)

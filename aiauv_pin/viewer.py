@@ -4,15 +4,20 @@ The scene is described once, as meshcat commands (plain JSON-able dicts in the f
 viewer ``handle_command`` takes), so that the live viewer (:class:`MeshcatViewer`, over meshcat's
 ZeroMQ server) and the self-contained playback page (:mod:`aiauv_pin.playback`) draw the same thing:
 
-- ``/aiauv/links/<link>``: one node per URDF link that has visual geometry, placed at the link's
-  world pose; its children are the link's visuals (cylinders, boxes, spheres, capsules, meshes),
-  read from the URDF's ``<visual>`` elements with Pinocchio, in the colours the URDF gives;
+- ``/aiauv/links/<link>``: one node per link drawn, placed at the link's world pose; its children
+  are the link's shapes (cylinders, boxes, spheres, capsules, meshes) read with Pinocchio from the
+  URDF's ``<visual>`` elements, else its ``<collision>`` elements, else its hydrodynamic or
+  inertial shape (slender cylinder, inertia-equivalent ellipsoid; :func:`vehicle_visuals`), in the
+  colour the URDF gives or else one distinct colour per link;
 - ``/aiauv/links/<link>/thrusters/<name>/arrow``: the thruster's force, an arrow along the
   thruster's positive direction, its length proportional to the thrust (backwards when negative);
 - ``/aiauv/los``: the line-of-sight reference direction ``x_ref`` at the end effector, when the
   controller reports one (``info["x_ref"]``, ``info["p"]``);
-- ``/aiauv/path``: the path, the world x-axis, with a tick every metre, over a grid of 1 m squares
-  1 m below it (meshcat's own grid and axes, fixed at the page's origin, are hidden);
+- ``/aiauv/path``: the path through given world points (by default the world x-axis), with a tick
+  every metre (:func:`path_segments`), over a grid of 1 m squares 1 m below it (meshcat's own grid
+  and axes, fixed at the page's origin, are hidden);
+- ``/aiauv/trail``: in a playback, the end-effector's trail over the run (the ``end_effector``
+  frame, else the link deepest in the tree);
 - ``/aiauv`` itself is translated by minus the vehicle's centroid, so that the vehicle stays in view
   around the page's origin while the path and grid slide past.
 
@@ -28,14 +33,18 @@ meshcat's conventions: three.js cylinders and cones have their axis along ``y``;
 
 from __future__ import annotations
 
+import colorsys
+import contextlib
 import itertools
 import math
 import os
 import time
 import uuid
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from xml.etree import ElementTree
 
 import numpy as np
 import pinocchio as pin
@@ -54,6 +63,15 @@ _LOS_COLOR = (0.1, 0.75, 0.2, 1.0)
 _PATH_COLOR = (1.0, 1.0, 1.0, 1.0)
 _GRID_COLOR = (0.55, 0.6, 0.7, 1.0)
 GRID = f"{ROOT}/grid"
+TRAIL = f"{ROOT}/trail"
+TRAIL_COLOR = (0.05, 0.05, 0.05, 1.0)  # black: no link colour is that dark
+#: Legend of the playback page: node path prefix -> (CSS colour, text).
+LEGEND = {
+    "thrust": ("#d91a1a", "thruster force (length: thrust / max thrust; backwards when negative)"),
+    "los": ("#1abf33", "line-of-sight reference direction at the end effector"),
+    "trail": ("#0d0d0d", "end-effector trail"),
+    "path": ("#ffffff", "path (tick every metre)"),
+}
 _DOUBLE_SIDE = 2  # THREE.DoubleSide: arrows are mirrored (negative scale) for negative thrust
 
 # three.js cylinders/cones lie along y, URDF cylinders along z: rotate y onto z (+90 deg about x)
@@ -128,7 +146,10 @@ def _shape_geometry(shape) -> list[tuple[dict, pin.SE3]]:
         return [(geometry, pin.SE3.Identity())]
     if hasattr(shape, "num_vertices") and hasattr(shape, "num_tris"):
         # a mesh (BVH model; Pinocchio applied the URDF's scale when loading it)
-        vertices = np.array([shape.vertices(i) for i in range(shape.num_vertices)], dtype=float)
+        try:  # coal 3: all vertices at once (vertices(i) is deprecated)
+            vertices = np.asarray(shape.vertices(), dtype=float).reshape(-1, 3)
+        except TypeError:
+            vertices = np.array([shape.vertices(i) for i in range(shape.num_vertices)], float)
         triangles = []
         for i in range(shape.num_tris):
             tri = shape.tri_indices(i)
@@ -151,66 +172,235 @@ def _shape_geometry(shape) -> list[tuple[dict, pin.SE3]]:
     raise ValueError(f"cannot draw a visual of type {kind}")
 
 
-def vehicle_visuals(vehicle: Vehicle, urdf: str | os.PathLike | None = None) -> list[Visual]:
-    """The visual shapes of a vehicle's links, from its URDF's ``<visual>`` elements.
+def _distinct_color(index: int) -> tuple[float, float, float, float]:
+    """The ``index``-th of a sequence of well-separated colours (golden-ratio hue steps)."""
+    hue = (0.08 + 0.618033988749895 * index) % 1.0
+    r, g, b = colorsys.hsv_to_rgb(hue, 0.7, 0.95)
+    return (r, g, b, 1.0)
+
+
+def _prepared_urdf(text: str, search_path, base: Path | None) -> tuple[str, set[str], list[str]]:
+    """URDF text with every mesh ``filename`` resolved to an absolute path.
+
+    Visual and collision elements whose mesh cannot be found are removed (and reported).
+
+    Returns:
+        ``(text, links whose first visual names a material, missing mesh file names)``.
+    """
+    from hydro.urdf_block import parse_robot_text
+
+    from .ros_packages import resolve_uri
+
+    root = parse_robot_text(text)
+    coloured: set[str] = set()
+    missing: list[str] = []
+    for link in root.findall("link"):
+        visuals = link.findall("visual")
+        if visuals and visuals[0].find("material") is not None:
+            coloured.add(link.get("name"))
+        for kind in ("visual", "collision"):
+            for element in link.findall(kind):
+                mesh = element.find("geometry/mesh")
+                if mesh is None:
+                    continue
+                found = resolve_uri(mesh.get("filename", ""), search_path, base)
+                if found is None:
+                    missing.append(mesh.get("filename", ""))
+                    link.remove(element)
+                else:
+                    mesh.set("filename", str(found))
+    return ElementTree.tostring(root, encoding="unicode"), coloured, missing
+
+
+def _geometry_visuals(model, geometry_model, colours=None) -> list[Visual]:
+    visuals = []
+    for obj in geometry_model.geometryObjects:
+        frame = model.frames[obj.parentFrame]  # the link's BODY frame
+        in_link = frame.placement.actInv(obj.placement)
+        color = _rgba(obj.meshColor) if colours is None else colours(frame.name, obj)
+        for geometry, in_shape in _shape_geometry(obj.geometry):
+            placement = (in_link * in_shape).homogeneous
+            visuals.append(Visual(frame.name, placement, geometry, color))
+    return visuals
+
+
+def _crossflow_visual(link, color) -> Visual:
+    c = link.crossflow
+    # crossflow frame c: x-axis on the cylinder axis, origin at the rear end
+    along_x = pin.SE3(np.asarray(c.rotation), np.asarray(c.translation)) * pin.SE3(
+        pin.utils.rotate("z", -math.pi / 2), np.array([c.length / 2.0, 0.0, 0.0])
+    )
+    geometry = {
+        "type": "CylinderGeometry",
+        "radiusTop": float(c.radius),
+        "radiusBottom": float(c.radius),
+        "height": float(c.length),
+        "radialSegments": 32,
+    }
+    return Visual(link.link, along_x.homogeneous, geometry, color)
+
+
+def _ellipsoid_visual(link: str, semi_axes, rotation, center, color) -> Visual:
+    """A unit sphere scaled to the semi-axes, rotated and placed in the link frame."""
+    placement = np.eye(4)
+    placement[:3, :3] = np.asarray(rotation, dtype=float) @ np.diag(semi_axes)
+    placement[:3, 3] = center
+    geometry = {"type": "SphereGeometry", "radius": 1.0, "widthSegments": 32, "heightSegments": 16}
+    return Visual(link, placement, geometry, color)
+
+
+def _shape_visuals(vehicle: Vehicle, links: list[str], inertials: dict) -> list[Visual]:
+    """Visuals of links with nothing to draw: their hydrodynamic or inertial shape.
+
+    A slender-cylinder link is its cylinder; any other link with mass or hydrodynamics is its
+    inertia-equivalent ellipsoid (:func:`hydro.ellipsoid.inertia_equivalent_ellipsoid`), or, when
+    its inertia describes no ellipsoid, a sphere of its displaced volume (else of its mass at the
+    density of water).
+    """
+    from hydro.ellipsoid import inertia_equivalent_ellipsoid
+    from hydro.spec import HydroError
+    from hydro.urdf_block import rpy_matrix
+
+    hydro = {link.link: link for link in vehicle.hydro.links}
+    visuals = []
+    for index, name in enumerate(links):
+        color = _distinct_color(index)
+        link = hydro.get(name)
+        if link is not None and link.crossflow is not None:
+            visuals.append(_crossflow_visual(link, color))
+            continue
+        inertial = inertials.get(name)
+        mass = inertial.mass if inertial is not None else 0.0
+        if mass <= 0.0 and (link is None or link.volume <= 0.0):
+            continue
+        try:
+            shape = inertia_equivalent_ellipsoid(
+                mass, inertial.inertia, rpy_matrix(inertial.rpy), inertial.xyz
+            )
+            visuals.append(
+                _ellipsoid_visual(name, shape.semi_axes, shape.rotation, shape.center, color)
+            )
+        except (HydroError, AttributeError):
+            volume = link.volume if link is not None and link.volume > 0 else mass / 1000.0
+            radius = (3.0 * volume / (4.0 * math.pi)) ** (1.0 / 3.0)
+            center = (
+                link.center_of_buoyancy
+                if link is not None
+                else (inertial.xyz if inertial is not None else np.zeros(3))
+            )
+            visuals.append(_ellipsoid_visual(name, [radius] * 3, np.eye(3), center, color))
+    return visuals
+
+
+def vehicle_visuals(
+    vehicle: Vehicle,
+    urdf: str | os.PathLike | None = None,
+    *,
+    package_path=(),
+) -> list[Visual]:
+    """The shapes drawn for a vehicle's links.
+
+    Per link: its URDF ``<visual>`` elements; without any, its ``<collision>`` elements; without
+    either, its hydrodynamic or inertial shape (a slender-cylinder link's cylinder, else the
+    inertia-equivalent ellipsoid). ``package://`` mesh files are found through the package search
+    path (:mod:`aiauv_pin.ros_packages`: ``package_path``, the vehicle's ``package_path``,
+    ``ROS_PACKAGE_PATH``, example-robot-data); shapes whose mesh is missing are left out. Links
+    whose URDF visual names a material keep its colour; the others get distinct colours.
 
     Args:
         vehicle: The vehicle.
         urdf: URDF file or XML text. Default: ``vehicle.visual_model`` (a ``pin.GeometryModel``) if
-            the vehicle has one, else the URDF it was loaded from (``vehicle.urdf_path``), else
-            cylinders from the links' crossflow hydrodynamics.
+            the vehicle has one, else the description it was loaded from (``vehicle.urdf_text``,
+            the expanded xacro for a ``.xacro`` file, or ``vehicle.urdf_path``), else only the
+            hydrodynamic and inertial shapes.
+        package_path: Extra folders searched first for ``package://`` meshes.
 
     Raises:
         ValueError: Nothing to draw, or a shape meshcat cannot show (one line).
     """
+    from .ros_packages import package_search_path
+    from .urdf_validation import validate_urdf
+
     model = vehicle.model
     geometry_model = None
+    text, base = None, None
     if urdf is None:
         geometry_model = getattr(vehicle, "visual_model", None)
-        if geometry_model is None and getattr(vehicle, "urdf_path", None) is not None:
-            urdf = vehicle.urdf_path
-    if geometry_model is None and urdf is not None:
-        visual = pin.GeometryType.VISUAL
+        if geometry_model is None:
+            text = getattr(vehicle, "urdf_text", None)
+            path = getattr(vehicle, "urdf_path", None)
+            base = Path(path).parent if path is not None else None
+            if text is None and path is not None:
+                text = Path(path).read_text(encoding="utf-8")
+    elif "<robot" in str(urdf):
+        text = str(urdf)
+    else:
+        base = Path(urdf).parent
         try:
-            if "<robot" in str(urdf):
-                geometry_model = pin.buildGeomFromUrdfString(model, str(urdf), visual)
-            else:
-                source = Path(urdf)
-                # meshes are looked up beside the URDF
-                geometry_model = pin.buildGeomFromUrdf(
-                    model, str(source), visual, package_dirs=[str(source.parent)]
+            text = Path(urdf).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ValueError(f"cannot read the URDF {urdf} ({exc.__class__.__name__})") from None
+    if geometry_model is not None:
+        visuals = _geometry_visuals(model, geometry_model)
+    else:
+        visuals = []
+    inertials: dict = {}
+    if text is not None:
+        extra = [*package_path, *getattr(vehicle, "package_path", ())]
+        if base is not None:
+            extra.append(base)  # package://pkg/... with pkg beside the URDF, as before
+        search_path = package_search_path(extra)
+        try:
+            prepared, coloured, missing = _prepared_urdf(text, search_path, base)
+            inertials = validate_urdf(ElementTree.fromstring(prepared)).inertials
+            with _quiet_stderr():
+                visual_model = pin.buildGeomFromUrdfString(model, prepared, pin.GeometryType.VISUAL)
+                collision_model = pin.buildGeomFromUrdfString(
+                    model, prepared, pin.GeometryType.COLLISION
                 )
         except (RuntimeError, ValueError, OSError) as exc:
             reason = " ".join(str(exc).split())
             raise ValueError(f"cannot read the visuals of the URDF ({reason})") from None
-    visuals: list[Visual] = []
-    if geometry_model is not None:
-        for obj in geometry_model.geometryObjects:
-            frame = model.frames[obj.parentFrame]  # the link's BODY frame
-            in_link = frame.placement.actInv(obj.placement)
-            for geometry, in_shape in _shape_geometry(obj.geometry):
-                placement = (in_link * in_shape).homogeneous
-                visuals.append(Visual(frame.name, placement, geometry, _rgba(obj.meshColor)))
-    else:
-        for link in vehicle.hydro.links:
-            if link.crossflow is None:
-                continue
-            c = link.crossflow
-            # crossflow frame c: x-axis on the cylinder axis, origin at the rear end
-            along_x = pin.SE3(np.asarray(c.rotation), np.asarray(c.translation)) * pin.SE3(
-                pin.utils.rotate("z", -math.pi / 2), np.array([c.length / 2.0, 0.0, 0.0])
+        if missing:
+            warnings.warn(
+                f"{len(missing)} mesh file(s) not found, e.g. {missing[0]} (give --package-path)",
+                stacklevel=2,
             )
-            geometry = {
-                "type": "CylinderGeometry",
-                "radiusTop": float(c.radius),
-                "radiusBottom": float(c.radius),
-                "height": float(c.length),
-                "radialSegments": 32,
-            }
-            visuals.append(Visual(link.link, along_x.homogeneous, geometry, (1.0, 0.72, 0.1, 1.0)))
+        link_names = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
+        index = {name: k for k, name in enumerate(link_names)}
+
+        def colour(link: str, obj) -> tuple[float, float, float, float]:
+            if link in coloured:
+                return _rgba(obj.meshColor)
+            return _distinct_color(index.get(link, 0))
+
+        visuals = _geometry_visuals(model, visual_model, colour)
+        drawn = {v.link for v in visuals}
+        visuals += [
+            v for v in _geometry_visuals(model, collision_model, colour) if v.link not in drawn
+        ]
+        drawn = {v.link for v in visuals}
+        bare = [name for name in link_names if name not in drawn]
+        shapes = _shape_visuals(vehicle, bare, inertials)
+        for k, v in enumerate(shapes):  # same colour sequence as the other links
+            shapes[k] = Visual(v.link, v.placement, v.geometry, _distinct_color(index[v.link]))
+        visuals += shapes
+    elif geometry_model is None:
+        visuals = _shape_visuals(
+            vehicle, [f.name for f in model.frames if f.type == pin.FrameType.BODY], {}
+        )
     if not visuals:
         raise ValueError(f"vehicle '{vehicle.name}' has no visual geometry to draw")
     return visuals
+
+
+@contextlib.contextmanager
+def _quiet_stderr():
+    """Keep the C++ mesh loader's messages off the terminal (file descriptor 2)."""
+    from .loading import captured_stderr_fd
+
+    with captured_stderr_fd():
+        yield
 
 
 def _uuid() -> str:
@@ -244,7 +434,7 @@ def _mesh_object(geometry: dict, color, *, double_side: bool = False) -> dict:
     }
 
 
-def _line_object(points: np.ndarray, color) -> dict:
+def line_object(points: np.ndarray, color) -> dict:
     """A three.js ``LineSegments`` JSON (pairs of points)."""
     g = {
         "uuid": _uuid(),
@@ -349,6 +539,61 @@ def _thrust_scale(thrust: float, max_thrust: float, length: float) -> np.ndarray
     return np.array([1.0, s, 1.0])
 
 
+def path_segments(points: np.ndarray, tick: float = 0.04, step: float | None = None) -> np.ndarray:
+    """Line segments drawing a path through world points, with a tick mark every ``step`` metres.
+
+    The polyline is cut at every tick and into pieces of at most ``step``: some WebGL rasterisers
+    (SwiftShader) drop a long line whose ends project far outside the view. A tick is a small cross
+    of half size ``tick`` normal to the local direction of the path.
+
+    Args:
+        points: The path's points in the world, in order (N, 3), N >= 2 [m].
+        tick: Half length of a tick mark [m].
+        step: Arc length between ticks [m]; default 1 m, coarser (a power of ten) on paths longer
+            than 2 km.
+
+    Returns:
+        Segment end points, pairs of rows (2 M, 3) [m].
+    """
+    points = np.asarray(points, dtype=float)
+    lengths = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    keep = np.concatenate(([True], lengths > 0.0))
+    points, lengths = points[keep], lengths[lengths > 0.0]
+    if len(points) < 2:
+        raise ValueError("a path needs two distinct points")
+    arc = np.concatenate(([0.0], np.cumsum(lengths)))
+    total = float(arc[-1])
+    if step is None:
+        step = 10.0 ** math.ceil(math.log10(total / 2000.0)) if total > 2000.0 else 1.0
+    ticks = np.arange(0.0, total + 1e-9, step)
+    stops = np.unique(np.concatenate((arc, ticks, [total])))
+
+    def at(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        k = np.clip(np.searchsorted(arc, s, side="right") - 1, 0, len(lengths) - 1)
+        direction = (points[k + 1] - points[k]) / lengths[k][:, None]
+        return points[k] + (s - arc[k])[:, None] * direction, direction
+
+    along, _ = at(stops)
+    segments = [np.stack((along[:-1], along[1:]), axis=1).reshape(-1, 3)]
+    centres, directions = at(ticks)
+    for centre, direction in zip(centres, directions, strict=True):
+        helper = np.array([0.0, 0.0, 1.0]) if abs(direction[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        first = np.cross(helper, direction)
+        first /= np.linalg.norm(first)
+        second = np.cross(direction, first)
+        segments.append(
+            np.array(
+                [
+                    centre - tick * first,
+                    centre + tick * first,
+                    centre - tick * second,
+                    centre + tick * second,
+                ]
+            )
+        )
+    return np.concatenate(segments)
+
+
 @dataclass
 class FrameState:
     """What moves in one frame: node poses and node scales.
@@ -382,9 +627,11 @@ class VehicleScene:
         urdf: str | os.PathLike | None = None,
         path_range: tuple[float, float] = (-5.0, 100.0),
         camera_distance: float | None = None,
+        path_points: np.ndarray | None = None,
+        package_path=(),
     ) -> None:
         self.vehicle = vehicle
-        self.visuals = vehicle_visuals(vehicle, urdf)
+        self.visuals = vehicle_visuals(vehicle, urdf, package_path=package_path)
         self.links = list(dict.fromkeys(v.link for v in self.visuals))
         self._link_frames = [vehicle.frame_id(name) for name in self.links]
         self._data = vehicle.model.createData()
@@ -394,6 +641,16 @@ class VehicleScene:
                 f"path_range must be two finite numbers, increasing, got {path_range!r}"
             )
         self.path_range = (x0, x1)
+        if path_points is None:
+            path_points = np.array([[x0, 0.0, 0.0], [x1, 0.0, 0.0]])
+        self.path_points = np.asarray(path_points, dtype=float)
+        if (
+            self.path_points.ndim != 2
+            or self.path_points.shape[1] != 3
+            or len(self.path_points) < 2
+            or not np.all(np.isfinite(self.path_points))
+        ):
+            raise ValueError("path_points must be an (N, 3) array of finite points, N >= 2")
         self.size = self._vehicle_size()
         self.camera_distance = (
             float(camera_distance) if camera_distance is not None else 0.75 * self.size + 0.3
@@ -403,6 +660,25 @@ class VehicleScene:
         self.head_frame = (
             vehicle.frame_id("end_effector") if vehicle.model.existFrame("end_effector") else None
         )
+        self.trail_frame = self.head_frame if self.head_frame is not None else self._tip_frame()
+
+    def _tip_frame(self) -> int:
+        """BODY frame of the link farthest down the kinematic tree (last of equals)."""
+        model = self.vehicle.model
+        depth = [0] * model.njoints
+        for j in range(1, model.njoints):
+            depth[j] = depth[model.parents[j]] + 1
+        bodies = [
+            (depth[frame.parentJoint], i)
+            for i, frame in enumerate(model.frames)
+            if frame.type == pin.FrameType.BODY
+        ]
+        return max(bodies)[1]
+
+    def trail_point(self, q: np.ndarray) -> np.ndarray:
+        """World position of the trail's frame (``end_effector``, else the tip link) [m]."""
+        pin.framesForwardKinematics(self.vehicle.model, self._data, q)
+        return self._data.oMf[self.trail_frame].translation.copy()
 
     # ------------------------------------------------------------------ geometry
     def _visual_centres(self, q: np.ndarray) -> np.ndarray:
@@ -419,11 +695,15 @@ class VehicleScene:
         radius = 0.0
         for v in self.visuals:
             g = v.geometry
-            radius = max(
-                radius,
+            stretch = float(np.max(np.linalg.norm(v.placement[:3, :3], axis=0)))
+            own = max(
                 float(g.get("radiusTop", g.get("radius", 0.0))),
                 0.5 * float(g.get("height", 0.0)),
             )
+            if g.get("type") == "BufferGeometry":
+                points = np.asarray(g["data"]["attributes"]["position"]["array"]).reshape(-1, 3)
+                own = float(np.max(np.linalg.norm(points, axis=1))) if len(points) else 0.0
+            radius = max(radius, stretch * own)
         return max(extent + 2.0 * radius, 0.1)
 
     @property
@@ -462,8 +742,8 @@ class VehicleScene:
                 set_transform(f"{LOS}/arrow", np.diag([1.0, self.los_length, 1.0, 1.0]))
             )
             commands.append(set_property(LOS, "visible", False))
-        commands.append(set_object(PATH, _line_object(self._path_points(), _PATH_COLOR)))
-        commands.append(set_object(GRID, _line_object(self._grid_points(), _GRID_COLOR)))
+        commands.append(set_object(PATH, line_object(self._path_points(), _PATH_COLOR)))
+        commands.append(set_object(GRID, line_object(self._grid_points(), _GRID_COLOR)))
         commands.append(set_property("/Grid", "visible", False))
         commands.append(set_property("/Axes", "visible", False))
         # camera: behind, to the side and above the centroid; offset in the rotated (y-up) frame
@@ -474,35 +754,25 @@ class VehicleScene:
         return commands
 
     def _path_points(self) -> np.ndarray:
-        """Line segments of the path (in pieces between ticks) and of its ticks."""
-        x0, x1 = self.path_range
-        step = 10.0 ** math.ceil(math.log10((x1 - x0) / 2000.0)) if x1 - x0 > 2000 else 1.0
-        ticks = np.arange(math.ceil(x0 / step) * step, x1 + 1e-9, step)
-        tick = 0.04 * max(self.size, 1.0)
-        points = []
-        for x in ticks:
-            points += [[x, -tick, 0.0], [x, tick, 0.0], [x, 0.0, -tick], [x, 0.0, tick]]
-        # short pieces: some WebGL rasterisers (SwiftShader) drop a long line whose ends project far
-        # outside the view
-        stops = np.unique(np.concatenate(([x0], ticks, [x1])))
-        for a, b in itertools.pairwise(stops):
-            points += [[a, 0.0, 0.0], [b, 0.0, 0.0]]
-        return np.array(points, dtype=float)
+        """Line segments of the path (:func:`path_segments` of :attr:`path_points`)."""
+        return path_segments(self.path_points, tick=0.04 * max(self.size, 1.0))
 
     def _grid_points(self, half_width: float = 5.0, depth: float = 1.0) -> np.ndarray:
-        """Line segments of a grid of 1 m squares (coarser on long paths), ``depth`` below the path.
+        """Line segments of a grid of 1 m squares (coarser on long paths), ``depth`` below the path,
+        covering the path's extent in x and ``half_width`` beyond it in y.
 
         Every line is cut at each crossing (see :meth:`_path_points` on long lines).
         """
-        x0, x1 = self.path_range
+        low, high = self.path_points.min(axis=0), self.path_points.max(axis=0)
+        x0, x1 = low[0], high[0]
         step = max(1, math.ceil((x1 - x0) / 1000))
         xs = np.arange(math.floor(x0), math.ceil(x1) + 1, step, dtype=float)
-        ys = np.arange(-half_width, half_width + 1e-9, 1.0)
+        ys = np.arange(math.floor(low[1] - half_width), math.ceil(high[1] + half_width) + 1e-9, 1.0)
         segments = [((a, y), (b, y)) for y in ys for a, b in itertools.pairwise(xs)] + [
             ((x, a), (x, b)) for x in xs for a, b in itertools.pairwise(ys)
         ]
         points = np.array(segments, dtype=float).reshape(-1, 2)
-        return np.column_stack((points, np.full(len(points), -depth)))
+        return np.column_stack((points, np.full(len(points), low[2] - depth)))
 
     # ------------------------------------------------------------------ motion
     def frame(self, q: np.ndarray, info: Mapping[str, object] | None = None) -> FrameState:
@@ -581,6 +851,8 @@ class MeshcatViewer:
         zmq_url: Connect to a running meshcat server instead of starting one.
         path_range: ``(x_start, x_end)`` of the path line [m].
         follow: Keep the vehicle in view (by moving ``/aiauv`` by minus its centroid).
+        host: Address the started server listens on (:mod:`aiauv_pin.meshcat_server`); the
+            default, 127.0.0.1, keeps the view on this machine; ``"0.0.0.0"`` shares it.
 
     Example (notebook)::
 
@@ -598,11 +870,18 @@ class MeshcatViewer:
         zmq_url: str | None = None,
         path_range: tuple[float, float] = (-5.0, 500.0),
         follow: bool = True,
+        host: str = "127.0.0.1",
     ) -> None:
         self.scene = VehicleScene(vehicle, urdf=urdf, path_range=path_range)
+        self.server = None
         if visualizer is None:
             import meshcat
 
+            if zmq_url is None:
+                from .meshcat_server import start_server
+
+                self.server = start_server(host)
+                zmq_url = self.server.zmq_url
             visualizer = meshcat.Visualizer(zmq_url=zmq_url)
         self.visualizer = visualizer
         self.follow = bool(follow)
@@ -650,6 +929,7 @@ def live_view(
     real_time: bool = True,
     open_browser: bool = True,
     viewer: MeshcatViewer | None = None,
+    host: str = "127.0.0.1",
 ) -> Callable[[float, np.ndarray, Mapping[str, object] | None], None]:
     """A callback ``show(t, q, info)`` that draws a running simulation in meshcat.
 
@@ -662,11 +942,12 @@ def live_view(
         real_time: Do not run ahead of the wall clock.
         open_browser: Open the viewer page in a browser tab (its URL is printed in any case).
         viewer: Reuse a viewer instead of starting one.
+        host: Address the meshcat server listens on (127.0.0.1: this machine only).
     """
     if not (math.isfinite(fps) and fps > 0):
         raise ValueError(f"fps must be a positive number, got {fps!r}")
     if viewer is None:
-        viewer = MeshcatViewer(vehicle)
+        viewer = MeshcatViewer(vehicle, host=host)
         if open_browser:
             viewer.open()
     state = {"last": -math.inf, "t0": None, "wall0": 0.0}

@@ -32,7 +32,8 @@ the link's own axes. Axis components below 1e-6 are set to zero (URDF files writ
 frame is the link frame.
 
 UUV Simulator blocks (``<gazebo><plugin>`` with ``<link><hydrodynamic_model>``) in the same file are
-read too (:mod:`hydro.uuv_simulator`); for a link named in both, this block wins. Fluid density:
+read too (:mod:`hydro.uuv_simulator`), and so are its thruster plugins; for a link (or a thruster
+name) given in both, this block wins. Fluid density:
 this block's ``fluid_density`` attribute if given, else the UUV Simulator plugin's
 ``<fluid_density>`` (UUV Simulator's default 1028 if the plugin has UUV links but no density), else
 1025.
@@ -563,6 +564,12 @@ def read_hydrodynamics(source: str | os.PathLike | Element) -> HydroSpec:
     # Our block wins for a link that both blocks describe.
     named = {link.link for link in ours}
     uuv_links = uuv_simulator.uuv_links(root, links, fluid_density, skip=named)
+    ours_thrusters = {thruster.name for thruster in thrusters}
+    thrusters += [
+        thruster
+        for thruster in uuv_simulator.uuv_thrusters(root, links)
+        if thruster.name not in ours_thrusters
+    ]
     return HydroSpec(
         fluid_density=fluid_density,
         gravity=gravity,

@@ -1,0 +1,289 @@
+"""``aiauv annotate``: hydrodynamics estimated for any URDF, checked against closed forms."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import aiauv_pin
+from aiauv_pin.annotation import annotate_file
+from aiauv_pin.cli import main
+from aiauv_pin.robots import example_robot_urdf
+from hydro.annotate import annotate_robot
+from hydro.ellipsoid import ellipsoid_added_mass, primitive_ellipsoid
+from hydro.urdf_block import read_hydrodynamics
+
+RHO = 1025.0
+G = 9.81
+
+ONE_LINK = """<robot name="one">
+  <link name="body">
+    <inertial><origin xyz="0 0 0"/><mass value="{mass}"/>
+      <inertia ixx="{i}" ixy="0" ixz="0" iyy="{i}" iyz="0" izz="{i}"/></inertial>
+    {geometry}
+  </link>
+</robot>"""
+
+
+def _one_link(geometry: str, mass: float = 2.0, inertia: float = 0.01) -> str:
+    return ONE_LINK.format(mass=mass, i=inertia, geometry=geometry)
+
+
+def _loaded(annotation):
+    return {link.link: link for link in read_hydrodynamics(annotation.root).links}
+
+
+def test_sphere_added_mass_is_half_the_displaced_mass():
+    radius = 0.2
+    geometry = f'<collision><geometry><sphere radius="{radius}"/></geometry></collision>'
+    annotation = annotate_robot(_one_link(geometry), fluid_density=RHO)
+    link = _loaded(annotation)["body"]
+    volume = 4.0 / 3.0 * math.pi * radius**3
+    assert link.model == "fossen"
+    assert math.isclose(link.volume, volume, rel_tol=1e-12)
+    np.testing.assert_allclose(np.diag(link.added_mass)[:3], 0.5 * RHO * volume, rtol=1e-12)
+    np.testing.assert_allclose(link.added_mass[3:, 3:], 0.0, atol=1e-15)
+    assert annotation.links[0].source == "collision sphere"
+
+
+# Lamb 1932, Sec. 115, table for prolate spheroids (a/b, k1, k2, k'), printed to three decimals:
+# added mass along the axis k1 rho V, across it k2 rho V, rotation across it k' rho V (a^2 + b^2)/5.
+LAMB_TABLE = [
+    (1.0, 0.5, 0.5, 0.0),
+    (2.0, 0.209, 0.702, 0.240),
+    (2.99, 0.122, 0.803, 0.465),
+    (4.99, 0.059, 0.895, 0.701),
+    (9.97, 0.021, 0.960, 0.883),
+]
+
+
+@pytest.mark.parametrize(("ratio", "k1", "k2", "k_rot"), LAMB_TABLE)
+def test_prolate_spheroid_matches_lambs_table(ratio, k1, k2, k_rot):
+    b = 0.1
+    a = ratio * b
+    volume = 4.0 / 3.0 * math.pi * a * b * b
+    added = ellipsoid_added_mass([a, b, b], RHO) / (RHO * volume)
+    # Lamb's entries at a/b = 2 differ from the closed form by up to 2e-3 (table precision)
+    assert added[0] == pytest.approx(k1, abs=3e-3)
+    assert added[1] == pytest.approx(k2, abs=3e-3)
+    assert added[2] == pytest.approx(k2, abs=3e-3)
+    assert added[5] / ((a * a + b * b) / 5.0) == pytest.approx(k_rot, abs=3e-3)
+    assert added[3] == 0.0
+
+
+def test_cylinder_gets_the_slender_cylinder_model_with_strip_theory_added_mass():
+    length, radius = 0.8, 0.05
+    geometry = (
+        f'<collision><origin xyz="{length / 2} 0 0" rpy="0 1.5707963267948966 0"/>'
+        f'<geometry><cylinder length="{length}" radius="{radius}"/></geometry></collision>'
+    )
+    annotation = annotate_robot(_one_link(geometry), fluid_density=RHO)
+    link = _loaded(annotation)["body"]
+    assert link.model == "slender_cylinder"
+    per_length = RHO * math.pi * radius**2  # C_a = 1: the displaced mass per unit length
+    # transverse added mass and, about the rear end (the link origin), int_0^L x^2 dx
+    assert link.added_mass[1, 1] == pytest.approx(per_length * length, rel=1e-9)
+    assert link.added_mass[2, 2] == pytest.approx(per_length * length, rel=1e-9)
+    assert link.added_mass[5, 5] == pytest.approx(per_length * length**3 / 3.0, rel=1e-9)
+    assert link.volume == pytest.approx(math.pi * radius**2 * length, rel=1e-12)
+    assert annotation.links[0].dimensions == (length, radius)
+
+
+def test_box_becomes_the_ellipsoid_of_the_same_volume_and_proportions():
+    geometry = (
+        '<collision><origin xyz="0.1 0 0" rpy="0 0 0.3"/>'
+        '<geometry><box size="0.4 0.2 0.1"/></geometry></collision>'
+    )
+    annotation = annotate_robot(_one_link(geometry), fluid_density=RHO)
+    link = _loaded(annotation)["body"]
+    assert link.volume == pytest.approx(0.4 * 0.2 * 0.1, rel=1e-12)
+    np.testing.assert_allclose(link.center_of_buoyancy, [0.1, 0.0, 0.0], atol=1e-15)
+    semi = np.array(annotation.links[0].dimensions)
+    np.testing.assert_allclose(semi / semi[0], [1.0, 0.5, 0.25], rtol=1e-12)
+    assert np.min(np.linalg.eigvalsh(link.added_mass)) > -1e-12
+
+
+def test_mesh_box_gives_the_same_ellipsoid_as_the_primitive_box(tmp_path):
+    # a solid box's second moments are proportional to its half-extents squared, so the fitted
+    # ellipsoid of its mesh, scaled to its volume, is the primitive box's equivalent ellipsoid
+    import xml.etree.ElementTree as ET
+
+    trimesh = pytest.importorskip("trimesh")
+    trimesh.creation.box(extents=[0.4, 0.2, 0.1]).export(tmp_path / "box.stl")
+    origin = '<origin xyz="0.1 -0.05 0.2" rpy="0.2 -0.4 0.3"/>'
+    mesh = f'<collision>{origin}<geometry><mesh filename="box.stl"/></geometry></collision>'
+    annotation = annotate_robot(
+        _one_link(mesh), fluid_density=RHO, resolve_mesh=lambda name: tmp_path / name
+    )
+    expected = primitive_ellipsoid(
+        ET.fromstring('<box size="0.4 0.2 0.1"/>'),
+        np.array([0.1, -0.05, 0.2]),
+        np.array([0.2, -0.4, 0.3]),
+    )
+    link = _loaded(annotation)["body"]
+    assert annotation.links[0].source == "collision mesh box.stl"
+    # STL stores single-precision vertices: agreement to ~1e-8 relative
+    np.testing.assert_allclose(
+        np.sort(annotation.links[0].dimensions), np.sort(expected.semi_axes), rtol=1e-7
+    )
+    assert link.volume == pytest.approx(expected.volume, rel=1e-7)
+    np.testing.assert_allclose(link.center_of_buoyancy, expected.center, atol=1e-8)
+    from hydro.ellipsoid import ellipsoid_hydrodynamics
+
+    np.testing.assert_allclose(
+        link.added_mass, ellipsoid_hydrodynamics(expected, RHO).added_mass, rtol=1e-6, atol=1e-9
+    )
+
+
+def test_missing_mesh_falls_back_to_the_inertia_and_says_so():
+    mesh = '<collision><geometry><mesh filename="package://nowhere/x.stl"/></geometry></collision>'
+    mass, inertia = 3.0, 0.02  # a sphere: I = 2/5 m r^2 -> r = sqrt(5 I / (2 m))
+    annotation = annotate_robot(_one_link(mesh, mass, inertia), fluid_density=RHO)
+    row = annotation.links[0]
+    assert "not found" in row.source and "inertia" in row.source
+    np.testing.assert_allclose(row.dimensions, math.sqrt(5 * inertia / (2 * mass)), rtol=1e-12)
+
+
+def test_zero_inertia_gets_a_neutral_sphere():
+    annotation = annotate_robot(_one_link("", mass=1.5, inertia=0.0), fluid_density=RHO)
+    row = annotation.links[0]
+    assert "unusable" in row.source
+    assert row.volume == pytest.approx(1.5 / RHO, rel=1e-12)
+
+
+def test_neutral_gives_every_link_its_mass_over_rho_and_keeps_massless_links_bare():
+    annotation = annotate_robot(
+        example_robot_urdf("panda_description/urdf/panda.urdf"), fluid_density=RHO, neutral=True
+    )
+    for row in annotation.links:
+        if row.mass > 0:
+            assert row.volume == pytest.approx(row.mass / RHO, rel=1e-12)
+        else:
+            assert row.model == "-"
+
+
+def test_links_with_hydrodynamics_are_kept():
+    text = _one_link('<collision><geometry><sphere radius="0.1"/></geometry></collision>').replace(
+        "</robot>",
+        '<hydrodynamics fluid_density="1000"><link name="body" model="fossen">'
+        "<volume>0.5</volume></link></hydrodynamics></robot>",
+    )
+    annotation = annotate_robot(text)
+    assert annotation.links[0].source == "already in the file"
+    assert _loaded(annotation)["body"].volume == 0.5
+    assert annotation.fluid_density == 1000.0
+
+
+def _linear_impulse(vehicle, q, v):
+    return vehicle.momentum_in_world(q, v)[:3]
+
+
+@pytest.mark.parametrize(
+    ("arm", "neutral"),
+    [("panda_description/urdf/panda.urdf", False), ("ur_description/urdf/ur5_robot.urdf", True)],
+)
+def test_annotated_arm_floats_passively_with_the_impulse_the_net_buoyancy_gives(
+    tmp_path, arm, neutral
+):
+    """Kirchhoff impulse of body plus fluid: dP/dt = net hydrostatic force (rho V - m) g e_z.
+
+    With damping off the only external forces are weight and buoyancy, whose sum is constant in
+    the world frame (Lamb 1932, Sec. 119); with damping on the run must stay finite and slow down.
+    """
+    out = annotate_file(
+        example_robot_urdf(arm), tmp_path / "arm.urdf", fluid_density=RHO, neutral=neutral
+    )
+    total_mass = sum(row.mass for row in out.links)
+    total_volume = sum(row.volume for row in out.links)
+    net = (RHO * total_volume - total_mass) * G
+    if neutral:
+        assert abs(net) < 1e-9 * total_mass * G
+    vehicle = aiauv_pin.load_vehicle(tmp_path / "arm.urdf", damping=False)
+    q0, v0 = vehicle.neutral_configuration(), np.zeros(vehicle.nv)
+    run = aiauv_pin.simulate(vehicle, q0, v0, duration=1.0, dt=0.002)
+    assert run.status == "complete"
+    impulse = np.array([_linear_impulse(vehicle, q, v) for q, v in zip(run.q, run.v, strict=True)])
+    expected = np.outer(run.t, [0.0, 0.0, net])
+    scale = max(abs(net), total_mass * 0.01)
+    np.testing.assert_allclose(impulse, expected, atol=1e-6 * scale)
+    assert np.ptp(run.q[:, 7:], axis=0).max() > 1e-4  # the arm does move (hydrostatic torques)
+
+    damped = aiauv_pin.load_vehicle(tmp_path / "arm.urdf")
+    run = aiauv_pin.simulate(damped, q0, v0, duration=2.0, dt=0.005)
+    assert run.status == "complete" and np.all(np.isfinite(run.q))
+
+
+def test_cli_annotate_prints_the_table_and_check_suggests_it(tmp_path, capsys):
+    source = example_robot_urdf("ur_description/urdf/ur5_robot.urdf")
+    assert main(["check", str(source)]) == 0
+    assert "aiauv annotate" in capsys.readouterr().out
+    out = tmp_path / "ur5.urdf"
+    assert main(["annotate", str(source), "-o", str(out), "--neutral"]) == 0
+    printed = capsys.readouterr().out
+    assert "upper_arm_link" in printed and "collision mesh upperarm.stl" in printed
+    assert main(["check", str(out)]) == 0
+    assert "no hydrodynamic parameters" not in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        (["missing.urdf", "-o", "x.urdf"], "no such file"),
+        (["in.urdf", "-o", "in.urdf"], "would overwrite the input"),
+        (["in.urdf", "-o", "x.urdf", "--arg", "a=1"], "only for .xacro"),
+        (["bad.urdf", "-o", "x.urdf"], "not well-formed"),
+    ],
+)
+def test_cli_annotate_bad_input_is_one_line(tmp_path, capsys, monkeypatch, arguments, message):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "in.urdf").write_text(_one_link(""), encoding="utf-8")
+    (tmp_path / "bad.urdf").write_text("<robot name='x'><link", encoding="utf-8")
+    assert main(["annotate", *arguments]) == 1
+    error = capsys.readouterr().err
+    assert error.startswith("aiauv: error: ") and message in error
+    assert error.count("\n") == 1
+    assert not (tmp_path / "x.urdf").exists()
+
+
+def test_cli_annotate_bad_density_is_a_usage_error(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["annotate", "in.urdf", "-o", "x.urdf", "--fluid-density", "-1"])
+    assert exit_info.value.code == 2
+    assert "positive density" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("case", "fragments"),
+    [
+        ("laughs", ("refused", "DTD")),
+        ("negative volume", ("volume",)),
+        ("nan mass", ("mass",)),
+        ("binary", ("not a text file",)),
+        ("directory", ("directory",)),
+        ("laughs xacro", ("refused", "DTD")),
+    ],
+)
+def test_cli_annotate_hostile_input_is_one_line(tmp_path, capfd, case, fragments):
+    from test_hostile_input import BILLION_LAUGHS, assert_one_line_error, run_cli, vehicle_urdf
+
+    path = tmp_path / "vehicle.urdf"
+    if case == "laughs":
+        path.write_text(BILLION_LAUGHS, encoding="utf-8")
+    elif case == "negative volume":
+        path.write_text(vehicle_urdf(volume="-1"), encoding="utf-8")
+    elif case == "nan mass":
+        path.write_text(vehicle_urdf(mass="nan"), encoding="utf-8")
+    elif case == "binary":
+        path.write_bytes(bytes(range(256)) * 4)
+    elif case == "directory":
+        path = tmp_path
+    else:
+        path = tmp_path / "vehicle.urdf.xacro"
+        path.write_text(BILLION_LAUGHS, encoding="utf-8")
+    out = tmp_path / "out.urdf"
+    code, printed, err = run_cli(capfd, ["annotate", path, "-o", out])
+    assert_one_line_error(code, err, *fragments)
+    assert "lollol" not in err + printed
+    assert not out.exists()
