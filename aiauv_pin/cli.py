@@ -175,7 +175,12 @@ def _run_simulate(args) -> int:
     # simulation's alone; the set-up time is recorded beside it
     warm_up(vehicle, scenario)
     timing = {"setup_time": time.perf_counter() - compile_start, "compiled_now": compiling}
-    name = args.scenario.stem if args.scenario is not None else scenario.case
+    if args.scenario is not None:
+        name = args.scenario.stem
+    elif scenario.vehicle is not None:
+        name = Path(scenario.vehicle).stem
+    else:
+        name = scenario.case
     out = args.out if args.out is not None else Path("results") / name
     on_log = None
     if args.view:
@@ -217,9 +222,15 @@ def _run_simulate(args) -> int:
         result, out, {"vehicle": str(path), **timing}, figure_format=args.figure_format
     )
     if not args.no_html:
+        from .outputs import default_path_points
         from .playback import write_playback
 
-        write_playback(vehicle, result.trajectory, out / "playback.html")
+        write_playback(
+            vehicle,
+            result.trajectory,
+            out / "playback.html",
+            path_points=default_path_points(result),
+        )
     final = content["final"]
     errors = (
         f"final p_y = {final['p_y']:+.4f} m, p_z = {final['p_z']:+.4f} m"

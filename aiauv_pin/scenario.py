@@ -188,6 +188,20 @@ def _heading_rotation(heading: np.ndarray) -> np.ndarray:
     return rz @ ry
 
 
+def tip_frame(vehicle: Vehicle) -> str:
+    """The frame whose position is the "end-effector" of a run: ``end_effector`` if the vehicle has
+    one, else the link of its last body (the tip of a chain, e.g. an arm's last link)."""
+    if vehicle.model.existFrame(END_EFFECTOR):
+        return END_EFFECTOR
+    import pinocchio as pin
+
+    last_joint = vehicle.model.njoints - 1
+    for frame in reversed(vehicle.model.frames):
+        if frame.parentJoint == last_joint and frame.type == pin.FrameType.BODY:
+            return frame.name
+    return vehicle.model.frames[-1].name
+
+
 def initial_state(vehicle: Vehicle, scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     """Straight vehicle at rest (or at ``initial_surge``), end-effector at the start, pointing along
     ``heading`` (default: the path's tangent at the point closest to the start)."""
@@ -200,7 +214,7 @@ def initial_state(vehicle: Vehicle, scenario: Scenario) -> tuple[np.ndarray, np.
         else np.array(scenario.path_to_follow.closest(start).tangent)
     )
     q = vehicle.neutral_configuration()
-    tip = vehicle.frame_placement(q, END_EFFECTOR).translation  # in the base frame at q = neutral
+    tip = vehicle.frame_placement(q, tip_frame(vehicle)).translation  # base frame, q neutral
     rotation = _heading_rotation(heading)
     if np.allclose(rotation, np.eye(3), rtol=0.0, atol=0.0):
         q[:3] = start - tip
@@ -248,8 +262,9 @@ def run_scenario(
 
     With the numba backend and the paper's controller the whole run (dynamics, controller every
     step, logging) executes in compiled code (:func:`aiauv_pin.fast.loop.run_chunk`), in chunks
-    of simulated time between which the progress bar and ``on_log`` run; otherwise (Pinocchio backend, a subclass of :class:`VehiclePathFollowing` or
-    of its controller) the Python controller is called every step. Both give the same trajectory
+    of simulated time between which the progress bar and ``on_log`` run; otherwise (Pinocchio
+    backend, a subclass of :class:`VehiclePathFollowing` or of its controller) the Python controller
+    is called every step. A passive run (``controller="none"``) is compiled too. Both give the same trajectory
     and the same logged keys.
 
     Args:
@@ -332,7 +347,7 @@ def add_path_errors(vehicle: Vehicle, scenario: Scenario, trajectory: Trajectory
     info = trajectory.info
     n = len(trajectory.t)
     if "p" not in info:
-        frame = vehicle.frame_id(END_EFFECTOR)
+        frame = vehicle.frame_id(tip_frame(vehicle))
         zero = np.zeros(vehicle.nv)
         info["p"] = np.array([vehicle.frame_motion(q, zero, frame)[1] for q in trajectory.q])
     if "cross_track" not in info:
