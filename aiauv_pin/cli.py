@@ -20,39 +20,16 @@ from pathlib import Path
 
 #: Figure formats of ``--figure-format`` (PNG raster, SVG and PDF vector).
 FIGURE_FORMATS = ("png", "svg", "pdf")  # outputs.FIGURE_FORMATS, here so parsing stays light
-EXIT_USAGE = 2
-EXIT_FAILED = 1
+from .arguments import (  # noqa: F401  (positive_seconds is part of the CLI's public helpers)
+    EXIT_FAILED,
+    EXIT_USAGE,
+    OneLineArgumentParser,
+    finite_number,
+    positive_seconds,
+)
+
 #: Largest number of integration steps ``aiauv simulate`` accepts (the logs are preallocated).
 MAX_STEPS = 5_000_000
-
-
-class OneLineArgumentParser(argparse.ArgumentParser):
-    """An argument parser whose usage errors are one line on standard error (exit status 2)."""
-
-    def error(self, message: str):
-        self.exit(EXIT_USAGE, f"{self.prog}: error: {' '.join(message.split())}\n")
-
-
-def positive_seconds(text: str) -> float:
-    """argparse type: a finite number > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got '{text}'")
-    return value
-
-
-def _three_numbers(text: str) -> float:
-    """argparse type for one component of a vector flag: a finite number."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"must be finite, got '{text}'")
-    return value
 
 
 def _add_simulate(subparsers) -> None:
@@ -87,7 +64,7 @@ def _add_simulate(subparsers) -> None:
     parser.add_argument(
         "--current",
         nargs=3,
-        type=_three_numbers,
+        type=finite_number,
         metavar=("VX", "VY", "VZ"),
         default=None,
         help="constant water velocity in the world frame [m/s] (0 0 0)",

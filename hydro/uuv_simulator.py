@@ -79,7 +79,7 @@ import numpy as np
 
 from hydro.spatial import motion_transform
 from hydro.spec import HydroError, HydroSpec, LinkHydrodynamics, Thruster
-from hydro.urdf_block import (
+from hydro.urdf_xml import (
     DEFAULT_GRAVITY,
     MATRIX_TOLERANCE,
     UrdfLink,
