@@ -18,8 +18,6 @@ import time
 import warnings
 from pathlib import Path
 
-#: Figure formats of ``--figure-format`` (PNG raster, SVG and PDF vector).
-FIGURE_FORMATS = ("png", "svg", "pdf")  # outputs.FIGURE_FORMATS, here so parsing stays light
 from .arguments import (  # noqa: F401  (positive_seconds is part of the CLI's public helpers)
     EXIT_FAILED,
     EXIT_USAGE,
@@ -27,6 +25,9 @@ from .arguments import (  # noqa: F401  (positive_seconds is part of the CLI's p
     finite_number,
     positive_seconds,
 )
+
+#: Figure formats of ``--figure-format`` (PNG raster, SVG and PDF vector).
+FIGURE_FORMATS = ("png", "svg", "pdf")  # outputs.FIGURE_FORMATS, here so parsing stays light
 
 #: Largest number of integration steps ``aiauv simulate`` accepts (the logs are preallocated).
 MAX_STEPS = 5_000_000
