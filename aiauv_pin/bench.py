@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .arguments import positive_seconds
+from .cli_types import positive_seconds
 from .atomic import write_text
 
 #: Where ``aiauv bench`` writes its JSON by default.

@@ -11,18 +11,18 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import gc
-import math
 import os
 import sys
 import time
 import warnings
 from pathlib import Path
 
-from .arguments import (  # noqa: F401  (positive_seconds is part of the CLI's public helpers)
+from .cli_types import (  # noqa: F401  (positive_seconds is part of the CLI's public helpers)
     EXIT_FAILED,
     EXIT_USAGE,
     OneLineArgumentParser,
     finite_number,
+    positive_density,
     positive_seconds,
 )
 
@@ -324,16 +324,6 @@ def _description_options(args) -> dict:
     return {"xacro_args": dict(args.xacro_args), "package_path": list(args.package_path)}
 
 
-def _positive_density(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive density in kg/m^3, got '{text}'")
-    return value
-
-
 def _add_annotate(subparsers) -> None:
     parser = subparsers.add_parser(
         "annotate",
@@ -351,7 +341,7 @@ def _add_annotate(subparsers) -> None:
     )
     parser.add_argument(
         "--fluid-density",
-        type=_positive_density,
+        type=positive_density,
         default=None,
         metavar="RHO",
         help="water density [kg/m^3] (default: the file's, else 1025)",

@@ -29,6 +29,7 @@ import numpy as np
 from hydro.jit import compiled
 
 from .errors import AiauvError
+from .fast.kernels import quaternion_rotation
 
 
 @compiled
@@ -48,16 +49,7 @@ def base_wrench_in_world(t, q, v, parameters, tau):
     """
     s = math.sin(parameters[6] * t + parameters[7])
     x, y, z, w = q[3], q[4], q[5], q[6]
-    # R^T of the unit quaternion (x, y, z, w): row i of R^T is column i of R
-    r00 = 1.0 - 2.0 * (y * y + z * z)
-    r01 = 2.0 * (x * y - z * w)
-    r02 = 2.0 * (x * z + y * w)
-    r10 = 2.0 * (x * y + z * w)
-    r11 = 1.0 - 2.0 * (x * x + z * z)
-    r12 = 2.0 * (y * z - x * w)
-    r20 = 2.0 * (x * z - y * w)
-    r21 = 2.0 * (y * z + x * w)
-    r22 = 1.0 - 2.0 * (x * x + y * y)
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = quaternion_rotation(x, y, z, w)
     for k in range(2):
         a0 = parameters[3 * k] * s
         a1 = parameters[3 * k + 1] * s

@@ -210,9 +210,11 @@ def test_constant_current_object_equals_velocity(rng):
 # ---------------------------------------------------------------------- crossflow frame
 def test_rotated_crossflow_cylinder_frame_agrees_between_backends(tmp_path, rng):
     text = aiauv_pin.bundled_urdf("uniform").read_text()
-    # tilt the collision cylinder of link 5: its crossflow frame is then rotated from the link frame
-    pattern = r'(<link name="link5">.*?<collision.*?<origin xyz="[^"]*" rpy=")[^"]*(")'
-    tilted, count = re.subn(pattern, r"\g<1>0.3 1.2 0.4\g<2>", text, flags=re.S)
+    # turn the collision cylinder of link 5 onto the link's y-axis (through the link origin, where
+    # the slender-cylinder model stays exact): its crossflow frame is then rotated from the link's
+    pattern = r'(<link name="link5">.*?<collision.*?<origin )xyz="[^"]*" rpy="[^"]*"'
+    replacement = r'\g<1>xyz="0 0.363 0" rpy="1.5707963267948966 0 0"'
+    tilted, count = re.subn(pattern, replacement, text, flags=re.S)
     assert count == 1
     path = tmp_path / "tilted.urdf"
     path.write_text(tilted)

@@ -43,17 +43,22 @@ RK4, EULER = 0, 1
 
 # ---------------------------------------------------------------------- small linear algebra
 @compiled(fastmath=True)
+def quaternion_rotation(x, y, z, w):
+    """Rotation matrix of a unit quaternion ``(x, y, z, w)`` (Pinocchio's order), as three rows."""
+    return (
+        (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)),
+        (2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)),
+        (2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)),
+    )
+
+
+@compiled(fastmath=True)
 def _quat_to_rot(x, y, z, w, out):
-    """Rotation matrix of a unit quaternion ``(x, y, z, w)``."""
-    out[0, 0] = 1.0 - 2.0 * (y * y + z * z)
-    out[0, 1] = 2.0 * (x * y - z * w)
-    out[0, 2] = 2.0 * (x * z + y * w)
-    out[1, 0] = 2.0 * (x * y + z * w)
-    out[1, 1] = 1.0 - 2.0 * (x * x + z * z)
-    out[1, 2] = 2.0 * (y * z - x * w)
-    out[2, 0] = 2.0 * (x * z - y * w)
-    out[2, 1] = 2.0 * (y * z + x * w)
-    out[2, 2] = 1.0 - 2.0 * (x * x + y * y)
+    """Rotation matrix of a unit quaternion ``(x, y, z, w)`` into ``out``."""
+    rows = quaternion_rotation(x, y, z, w)
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = rows[i][j]
 
 
 @compiled(fastmath=True)
@@ -617,15 +622,7 @@ def integrate(q, xi, out):
     p2 = v2 + a * c2 + c * d2
     x, y, z, w = q[3], q[4], q[5], q[6]
     # R(q0) p
-    r00 = 1.0 - 2.0 * (y * y + z * z)
-    r01 = 2.0 * (x * y - z * w)
-    r02 = 2.0 * (x * z + y * w)
-    r10 = 2.0 * (x * y + z * w)
-    r11 = 1.0 - 2.0 * (x * x + z * z)
-    r12 = 2.0 * (y * z - x * w)
-    r20 = 2.0 * (x * z - y * w)
-    r21 = 2.0 * (y * z + x * w)
-    r22 = 1.0 - 2.0 * (x * x + y * y)
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = quaternion_rotation(x, y, z, w)
     out[0] = q[0] + r00 * p0 + r01 * p1 + r02 * p2
     out[1] = q[1] + r10 * p0 + r11 * p1 + r12 * p2
     out[2] = q[2] + r20 * p0 + r21 * p1 + r22 * p2

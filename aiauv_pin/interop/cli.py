@@ -2,23 +2,12 @@
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
+
+from ..cli_types import positive_density
 
 #: Output suffixes of ``aiauv export`` and the format each selects.
 EXPORT_FORMATS = {".sdf": "sdf", ".xml": "mjcf", ".mjcf": "mjcf"}
-
-
-def _positive_density(text: str) -> float:
-    import argparse
-
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
-    if not (math.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(f"must be a positive density in kg/m^3, got '{text}'")
-    return value
 
 
 def add_interop_subcommands(subparsers) -> None:
@@ -40,7 +29,7 @@ def add_interop_subcommands(subparsers) -> None:
     parser.add_argument("--model", default=None, help="SDF model to read if the file has several")
     parser.add_argument(
         "--fluid-density",
-        type=_positive_density,
+        type=positive_density,
         default=None,
         help="fluid density [kg/m^3] (default: the SDF's Buoyancy plugin, else the URDF's, "
         "else 1000)",

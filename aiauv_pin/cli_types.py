@@ -20,15 +20,26 @@ class OneLineArgumentParser(argparse.ArgumentParser):
         self.exit(EXIT_USAGE, f"{self.prog}: error: {' '.join(message.split())}\n")
 
 
-def positive_seconds(text: str) -> float:
-    """argparse type: a finite number > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got '{text}'")
-    return value
+def positive(what: str):
+    """An argparse type accepting a finite number > 0; ``what`` names it in the error."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+        if not (math.isfinite(value) and value > 0):
+            raise argparse.ArgumentTypeError(f"must be a positive {what}, got '{text}'")
+        return value
+
+    parse.__name__ = f"positive {what}"
+    return parse
+
+
+#: argparse type: a duration or step [s] (a finite number > 0).
+positive_seconds = positive("number of seconds")
+#: argparse type: a fluid density [kg/m^3] (a finite number > 0).
+positive_density = positive("density in kg/m^3")
 
 
 def finite_number(text: str) -> float:
