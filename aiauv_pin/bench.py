@@ -29,8 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .cli_types import positive_seconds
 from .atomic import write_text
+from .cli_types import positive_seconds
 
 #: Where ``aiauv bench`` writes its JSON by default.
 DEFAULT_OUTPUT = Path("benchmarks") / "results.json"
