@@ -71,7 +71,9 @@ def _run_simulate(args) -> int:
     from . import loading
     from .errors import AiauvError, SimulationDiverged
     from .outputs import preload_plotting, write_results
+    from .result_folder import check_output_folder, staged_folder
     from .scenario import PaperScenario, ScenarioResult, run_paper_scenario
+    from .validation import explain_divergence
 
     options = {"dt": args.dt} if args.dt is not None else {}
     scenario = PaperScenario(case=args.case, duration=args.duration, **options)
@@ -92,6 +94,7 @@ def _run_simulate(args) -> int:
     gains = scenario.controller_gains.with_changes(feedforward=args.feedforward)
     scenario = dataclasses.replace(scenario, gains=gains)
     out = args.out if args.out is not None else Path("results") / args.case
+    check_output_folder(out)  # refuse a file or a foreign folder before simulating
     on_log = None
     if args.view:
         from .viewer import live_view
@@ -107,7 +110,7 @@ def _run_simulate(args) -> int:
             after_first_chunk=preload_plotting,
         )
     except SimulationDiverged as exc:
-        cause = " ".join(str(exc).split())
+        cause = " ".join(explain_divergence(vehicle, scenario.dt, str(exc)).split())
         partial = exc.trajectory
         if partial is None or len(partial.t) == 0:
             raise AiauvError(f"simulation diverged: {cause}; nothing to write") from None
@@ -118,16 +121,18 @@ def _run_simulate(args) -> int:
             vehicle.joint_names,
             vehicle.thruster_names,
         )
-        write_results(result, out, {"vehicle": str(path)})
+        with staged_folder(out) as staging:  # nothing of an earlier run survives
+            write_results(result, staging, {"vehicle": str(path)})
         raise AiauvError(
             f"simulation diverged: {cause}; partial results up to t = {partial.t[-1]:.6g} s "
             f"({len(partial.t)} samples) written to {out}"
         ) from None
-    content = write_results(result, out, {"vehicle": str(path)})
-    if not args.no_html:
-        from .playback import write_playback
+    with staged_folder(out) as staging:  # in place only once every file is written
+        content = write_results(result, staging, {"vehicle": str(path)})
+        if not args.no_html:
+            from .playback import write_playback
 
-        write_playback(vehicle, result.trajectory, out / "playback.html")
+            write_playback(vehicle, result.trajectory, staging / "playback.html")
     final = content["final"]
     print(
         f"{args.case}: {content['simulated_time']:.1f} s simulated in {content['wall_time']:.1f} s "

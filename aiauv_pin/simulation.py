@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import SimulationDiverged
+from .arguments import check_timing, configuration, float_array, optional_current
+from .errors import ArgumentError, SimulationDiverged
 from .integrators import INTEGRATORS
 from .vehicle import Vehicle
 
@@ -130,24 +131,23 @@ def check_run_arguments(
     Raises:
         ValueError: A bad argument (one line).
     """
-    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
-        raise ValueError(f"duration must be a positive number of seconds, got {duration!r}")
-    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
-    if method not in INTEGRATORS:
-        raise ValueError(f"unknown method '{method}' (expected one of {', '.join(INTEGRATORS)})")
-    if int(log_every) < 1:
-        raise ValueError(f"log_every must be >= 1, got {log_every!r}")
+    n_steps = check_timing(duration, dt)  # consistent duration and dt, or ArgumentError
+    if not isinstance(method, str) or method not in INTEGRATORS:
+        raise ArgumentError(
+            f"unknown method {method!r:.40} (expected one of {', '.join(INTEGRATORS)})"
+        )
+    if isinstance(log_every, bool) or not isinstance(log_every, int) or log_every < 1:
+        raise ArgumentError(f"log_every must be a whole number >= 1, got {log_every!r:.40}")
     steps_per_control = 1
     if control_period is not None:
         ratio = control_period / dt if math.isfinite(control_period) else math.nan
         if not (control_period > 0 and abs(ratio - round(ratio)) < 1e-9 * max(1.0, ratio)):
-            raise ValueError(
+            raise ArgumentError(
                 f"control_period must be a positive whole multiple of dt = {dt:g} s, "
                 f"got {control_period!r}"
             )
         steps_per_control = max(1, round(ratio))
-    return max(1, round(duration / dt)), steps_per_control
+    return n_steps, steps_per_control
 
 
 def simulate(
@@ -202,11 +202,9 @@ def simulate(
     )
     step = INTEGRATORS[method]
     model = vehicle.model
-    q = np.array(q0, dtype=float)
-    v = np.array(v0, dtype=float)
-    if q.shape != (model.nq,) or v.shape != (model.nv,):
-        raise ValueError(f"q0 must have {model.nq} and v0 {model.nv} entries")
-    current = None if current is None else np.asarray(current, dtype=float).reshape(3)
+    q = configuration(q0, model.nq, "q0").copy()
+    v = float_array(v0, "v0", (model.nv,)).copy()
+    current = optional_current(current)
     log_every = int(log_every)
     n_logs = n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
 

@@ -94,7 +94,9 @@ def _geometry_extent(link: Element) -> float:
             offset = 0.0
             try:
                 if origin is not None:
-                    offset = float(np.linalg.norm(np.array(origin.get("xyz", "0 0 0").split(), float)))
+                    offset = float(
+                        np.linalg.norm(np.array(origin.get("xyz", "0 0 0").split(), float))
+                    )
                 geometry = element.find("geometry")
                 shape = next((c for c in geometry if isinstance(c.tag, str)), None)
                 if shape is None:
@@ -113,7 +115,9 @@ def _geometry_extent(link: Element) -> float:
     return extent
 
 
-def link_sizes(structure: UrdfStructure, root: Element | None, hydro: HydroSpec) -> dict[str, float]:
+def link_sizes(
+    structure: UrdfStructure, root: Element | None, hydro: HydroSpec
+) -> dict[str, float]:
     """Extent of each link from its origin [m]: geometry, CG, CB, origins of its child joints."""
     sizes = dict.fromkeys(structure.links, 0.0)
     if root is not None:
@@ -181,11 +185,14 @@ def validate_parameters(
         if float(np.linalg.norm(inertial.xyz)) > MAX_DISTANCE:
             raise _refuse(where, f"{what}: centre of gravity farther than {MAX_DISTANCE:g} m")
     if total_mass <= 0.0:
-        raise _refuse(where, "every link has zero mass (no mass: the mass matrix would be singular)")
+        raise _refuse(
+            where, "every link has zero mass (no mass: the mass matrix would be singular)"
+        )
     for joint in structure.joints:
         if float(np.linalg.norm(joint.xyz)) > MAX_DISTANCE:
             raise _refuse(
-                where, f"joint '{joint.name}': origin farther than {MAX_DISTANCE:g} m from its parent"
+                where,
+                f"joint '{joint.name}': origin farther than {MAX_DISTANCE:g} m from its parent",
             )
     for link in hydro.links:
         what = f"link '{link.link}'"
@@ -252,7 +259,9 @@ def divergence_suspect(vehicle, dt: float) -> str | None:
         for link in vehicle.hydro.links:
             frame = by_link.get(link.link)
             inertia = (
-                vehicle.model.inertias[int(frame.parentJoint)].matrix() if frame is not None else None
+                vehicle.model.inertias[int(frame.parentJoint)].matrix()
+                if frame is not None
+                else None
             )
             diagonal = np.diag(link.added_mass).copy()
             if inertia is not None:
