@@ -264,7 +264,9 @@ def _distribution(name: str, entry, where: str) -> Distribution:
 
 def file_sha256(path: str | Path) -> str:
     """SHA-256 (hex) of a file's bytes."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    from .input_limits import read_bytes
+
+    return hashlib.sha256(read_bytes(path, "URDF")).hexdigest()
 
 
 def run_id(resolved: Mapping[str, Any]) -> str:
@@ -460,6 +462,8 @@ class SweepSpec:
                 except OSError as exc:
                     reason = exc.strerror or exc.__class__.__name__
                     raise SweepSpecError(f"vehicle {vehicle}: cannot read ({reason})") from None
+                except AiauvError as exc:  # not a regular file, too large (input_limits)
+                    raise SweepSpecError(f"vehicle: {exc}") from None
             given = {k: v for k, v in values.items() if k != "vehicle"}
             try:
                 resolved = resolve_parameters(given, hashes[vehicle])
@@ -574,12 +578,13 @@ def load_sweep_spec(path: str | Path) -> SweepSpec:
     Raises:
         SweepSpecError: One line starting with the file name.
     """
-    path = Path(path)
+    from .input_limits import read_text
+
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        reason = getattr(error, "strerror", None) or str(error)
-        raise SweepSpecError(f"{path}: cannot read sweep spec: {reason}") from None
+        text = read_text(path, "sweep spec")  # regular file, byte cap (aiauv_pin.input_limits)
+    except AiauvError as error:
+        raise SweepSpecError(f"cannot read sweep spec: {error}") from None
+    path = Path(path)
     try:
         return sweep_spec_from_toml(text, path.parent)
     except SweepSpecError as error:
