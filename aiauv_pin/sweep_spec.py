@@ -462,8 +462,9 @@ class SweepSpec:
                 except OSError as exc:
                     reason = exc.strerror or exc.__class__.__name__
                     raise SweepSpecError(f"vehicle {vehicle}: cannot read ({reason})") from None
-                except AiauvError as exc:  # not a regular file, too large (input_limits)
-                    raise SweepSpecError(f"vehicle: {exc}") from None
+                except AiauvError as exc:  # missing, not a regular file, too large
+                    reason = str(exc).removeprefix(f"{vehicle}: ")
+                    raise SweepSpecError(f"vehicle {vehicle}: cannot read ({reason})") from None
             given = {k: v for k, v in values.items() if k != "vehicle"}
             try:
                 resolved = resolve_parameters(given, hashes[vehicle])
@@ -583,7 +584,8 @@ def load_sweep_spec(path: str | Path) -> SweepSpec:
     try:
         text = read_text(path, "sweep spec")  # regular file, byte cap (aiauv_pin.input_limits)
     except AiauvError as error:
-        raise SweepSpecError(f"cannot read sweep spec: {error}") from None
+        reason = str(error).removeprefix(f"{path}: ")
+        raise SweepSpecError(f"{path}: cannot read sweep spec: {reason}") from None
     path = Path(path)
     try:
         return sweep_spec_from_toml(text, path.parent)

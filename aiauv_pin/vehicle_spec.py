@@ -586,7 +586,8 @@ def load_spec(path: str | Path) -> VehicleSpec:
     try:
         text = read_text(path, "vehicle spec")  # regular file, byte cap
     except AiauvError as error:
-        raise SpecError(f"cannot read vehicle spec: {error}") from None
+        reason = str(error).removeprefix(f"{path}: ")
+        raise SpecError(f"{path}: cannot read vehicle spec: {reason}") from None
     path = Path(path)
     try:
         return spec_from_toml(text)
