@@ -170,6 +170,11 @@ def validate_parameters(
         inertia = inertial.inertia
         if not np.all(np.isfinite(inertia)):
             raise _refuse(where, f"{what}: inertia is not finite")
+        peak = float(np.max(np.abs(inertia)))
+        if peak > MAX_INERTIA:
+            raise _refuse(
+                where, f"{what}: moment of inertia {peak:.4g} kg m^2 above {MAX_INERTIA:g}"
+            )
         moments = np.linalg.eigvalsh(0.5 * (inertia + inertia.T))
         if moments[-1] > MAX_INERTIA:
             raise _refuse(

@@ -255,7 +255,7 @@ def _check_sweep(out: Path, report, serial: dict) -> dict[str, dict]:
             expected = serial[point.parameters["k_e.y"]]
             for key in ("final.p_y", "final.p_z", "final.u", "total_thruster_work"):
                 assert math.isclose(float(row[key]), expected[key], rel_tol=1e-12)
-            assert int(row["steps"]) == 500
+            assert int(row["steps"]) == 400
     return records
 
 
