@@ -356,6 +356,9 @@ def resolve_parameters(values: Mapping[str, Any], vehicle_sha256: str) -> dict[s
     resolved["vehicle_sha256"] = vehicle_sha256
     resolved = {name: resolved[name] for name in RESOLVED_NAMES}
     scenario = scenario_from_parameters(resolved)  # the scenario's own checks
+    from .arguments import check_timing
+
+    check_timing(scenario.duration, scenario.dt)  # the verdict simulate() gives (ArgumentError)
     steps = scenario.duration / scenario.dt
     if steps > MAX_STEPS_PER_RUN:
         raise ValueError(
