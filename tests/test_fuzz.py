@@ -7,7 +7,7 @@ same inputs. Each input must end in a result or in a one-line error rooted in
 vehicle is checked against physical invariants computed independently of the validation gate (from
 Pinocchio's model, not from our parsed URDF): so a non-physical input that slips through fails here.
 
-The number of examples per test is ``AIAUV_FUZZ_EXAMPLES`` (default 60: about 40 s in all on one
+The number of examples per test is ``AIAUV_FUZZ_EXAMPLES`` (default 40: about 20 s in all on one
 core); the outcomes are counted in :data:`TALLY` and printed at the end of the session (``-s``).
 """
 
@@ -33,7 +33,7 @@ from aiauv_pin.cli import main  # noqa: E402
 from aiauv_pin.errors import AiauvError  # noqa: E402
 from aiauv_pin.safe_names import NAME_PATTERN  # noqa: E402
 
-EXAMPLES = int(os.environ.get("AIAUV_FUZZ_EXAMPLES", "60"))
+EXAMPLES = int(os.environ.get("AIAUV_FUZZ_EXAMPLES", "40"))
 FUZZ = settings(
     max_examples=EXAMPLES,
     derandomize=True,

@@ -182,3 +182,37 @@ def test_killed_sweep_resumes_to_exactly_the_full_table(tmp_path):
         if point.run_id in partial:  # a run finished before the kill was not run again
             assert partial[point.run_id] == record
     assert text == (out / "spec.toml").read_text()
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="uses /proc and SIGKILL")
+def test_runs_of_a_killed_worker_are_run_again_not_lost(tmp_path):
+    pytest.importorskip("distributed")
+    from aiauv_pin.sweep import read_records
+
+    spec = tmp_path / "s.toml"
+    spec.write_text("duration = 5.0\ndt = 0.01\n[grid]\nk_e = [0.05, 0.06, 0.07, 0.08, 0.09]\n")
+    out = tmp_path / "out"
+    command = _aiauv(
+        "sweep", str(spec), "--out", str(out), "--workers", "1", "--quiet", "--no-plots"
+    )
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    runs = out / "runs"
+    deadline = time.monotonic() + 120
+    while not (runs.is_dir() and any(runs.glob("*.json"))) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    killed = 0
+    for pid in _descendants(process.pid):
+        try:
+            command_line = Path(f"/proc/{pid}/cmdline").read_bytes()
+        except OSError:
+            continue
+        if b"spawn_main" in command_line:  # the worker process (not the resource tracker)
+            os.kill(pid, signal.SIGKILL)
+            killed += 1
+    assert killed == 1
+    _, err = process.communicate(timeout=300)
+    assert process.returncode == 0, err
+    records = read_records(out)
+    assert len(records) == 5
+    assert {record["status"] for record in records.values()} == {"complete"}
+    assert len({record["worker"] for record in records.values()}) == 2  # a new worker took over
