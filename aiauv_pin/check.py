@@ -202,8 +202,10 @@ def _limit(value: float | None) -> str:
 def format_report(report: CheckReport) -> str:
     """The report as a plain-text table (SI units)."""
     s = report.structure
+    shown = str(report.path)
+    shown = shown if shown.isprintable() else repr(shown)  # a path cannot print lines of its own
     lines = [
-        f"vehicle '{s.name}' from {report.path}",
+        f"vehicle '{s.name}' from {shown}",
         f"fluid density {report.fluid_density:g} kg/m^3, gravity {report.gravity:g} m/s^2, "
         f"root link '{s.root}'",
         "",

@@ -43,8 +43,10 @@ _READ_CHUNK = 1 << 20
 
 
 def looks_like_xml_text(value: object) -> bool:
-    """Whether a "path" is in fact XML text (a string whose first non-blank character is ``<``)."""
-    return isinstance(value, str) and (value.lstrip().startswith("<") or "\n" in value)
+    """Whether a "path" is in fact XML or TOML-like text (starts with ``<``, or has tags and lines)."""
+    if not isinstance(value, str):
+        return False
+    return value.lstrip().startswith("<") or ("<" in value and ">" in value and "\n" in value)
 
 
 def read_bytes(path: str | os.PathLike, what: str = "file", limit: int = MAX_FILE_BYTES) -> bytes:

@@ -205,6 +205,10 @@ def simulate(
     q = configuration(q0, model.nq, "q0").copy()
     v = float_array(v0, "v0", (model.nv,)).copy()
     current = optional_current(current)
+    if isinstance(servo, JointServo) and servo.references.shape != (model.nv - 6,):
+        raise ArgumentError(
+            f"servo must have one entry per joint ({model.nv - 6}), got {servo.references.size}"
+        )
     log_every = int(log_every)
     n_logs = n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
 
@@ -268,6 +272,10 @@ def simulate(
             t = k * dt
             if k % steps_per_control == 0 and controller is not None:
                 tau, info = _split(controller(t, q, v))
+                if tau.shape != (model.nv,):  # never hand a short array to a kernel
+                    raise ArgumentError(
+                        f"controller must return tau of shape ({model.nv},), got {tau.shape}"
+                    )
             if k % log_every == 0 or k == n_steps:
                 log(logged, t, tau, info)
                 logged += 1

@@ -28,7 +28,9 @@ import pytest
 from aiauv_pin.outputs import FIGURES
 
 SEED = 20261122
-SIMULATE_KILLS = 3
+#: Kills of ``simulate`` (``AIAUV_KILLS`` for a longer campaign) and of the sweep.
+SIMULATE_KILLS = int(os.environ.get("AIAUV_KILLS", "3"))
+SWEEP_KILLS = int(os.environ.get("AIAUV_SWEEP_KILLS", "1"))
 
 
 def _aiauv(*args: str) -> list[str]:
@@ -148,19 +150,24 @@ def test_killed_sweep_resumes_to_exactly_the_full_table(tmp_path):
         "sweep", str(spec), "--out", str(out), "--workers", "1", "--quiet", "--no-plots"
     )
     rng = np.random.default_rng(SEED)
-    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    time.sleep(float(rng.uniform(3.0, 8.0)))
-    family = _descendants(process.pid)
-    process.send_signal(signal.SIGKILL)
-    process.wait()
-    survivors = _wait_gone(family, 10.0)
-    for pid in survivors:  # reported by the assertion below; not left running
-        os.kill(pid, signal.SIGKILL)
-    assert not survivors, "a worker of the killed sweep survived it"
-    partial = read_records(out)
-    if (out / "results.csv").exists():
-        for row in read_table(out / "results.csv"):
-            assert row["run_id"] in partial and row["status"] == "complete"
+    partial: dict = {}
+    for _ in range(SWEEP_KILLS):
+        process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(float(rng.uniform(3.0, 8.0)))
+        family = _descendants(process.pid)
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+        survivors = _wait_gone(family, 10.0)
+        for pid in survivors:  # reported by the assertion below; not left running
+            os.kill(pid, signal.SIGKILL)
+        assert not survivors, "a worker of the killed sweep survived it"
+        records = read_records(out)
+        for run_id, record in partial.items():  # a finished run is never run again
+            assert records[run_id] == record
+        partial = records
+        if (out / "results.csv").exists():
+            for row in read_table(out / "results.csv"):
+                assert row["run_id"] in partial and row["status"] == "complete"
     done = subprocess.run(command, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     records = read_records(out)

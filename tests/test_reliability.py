@@ -179,6 +179,23 @@ def test_timing_must_be_consistent(paper_vehicle):
         simulate(paper_vehicle, q[:3], v, duration=0.1, dt=0.01)
 
 
+def test_controller_output_and_servo_sizes_are_checked(paper_vehicle):
+    from aiauv_pin.simulation import JointServo
+
+    q, v = paper_vehicle.neutral_configuration(), np.zeros(paper_vehicle.nv)
+    with pytest.raises(ArgumentError, match=r"controller must return tau of shape \(14,\)"):
+        simulate(paper_vehicle, q, v, 0.02, 0.01, controller=lambda t, q, v: np.zeros(7))
+    with pytest.raises(ArgumentError, match="one entry per joint"):
+        simulate(paper_vehicle, q, v, 0.02, 0.01, servo=JointServo.uniform(3, 1.0, 1.0))
+
+
+def test_a_path_cannot_forge_lines_in_the_check_report(tmp_path, capfd):
+    path = _write(tmp_path, PAPER_TEXT, "v\naiauv: error: forged.urdf")
+    assert main(["check", str(path)]) == 0
+    out, _ = capfd.readouterr()
+    assert not any(line.startswith("aiauv: error") for line in out.splitlines())
+
+
 def test_urdf_text_passed_as_a_path_gets_a_short_error():
     with pytest.raises(VehicleLoadError) as error:
         aiauv_pin.load_vehicle(PAPER_TEXT)
@@ -262,6 +279,7 @@ def test_added_mass_matrix_needs_no_bodies_by_nv_by_nv_temporary(paper_vehicle, 
 
 
 # --- 4: the validation gate ------------------------------------------------------------------------
+
 
 def _paper_with_fossen_link(linear: str, quadratic: str) -> str:
     block = (
