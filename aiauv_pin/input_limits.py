@@ -13,8 +13,8 @@ Every file the toolkit reads on a user's behalf (URDF, vehicle spec, sweep spec)
 * the text must be UTF-8;
 * a URDF tree may have at most :data:`MAX_XML_ELEMENTS` elements, :data:`MAX_XML_ATTRIBUTES`
   attributes on any one element and :data:`MAX_LINKS` ``<link>`` elements under ``<robot>`` (a
-  1000-module vehicle is refused here: its forward dynamics would still run, but every algorithm of
-  the toolkit is sized for vehicles of tens of links, not thousands).
+  1000-module vehicle is refused here, with one line, instead of running the machine out of memory:
+  Pinocchio's model data alone grows faster than the square of the number of bodies).
 
 Each violation raises :class:`aiauv_pin.errors.InputLimitError` with one line naming the file and
 the limit; each check takes well under a second at the limits.
@@ -37,7 +37,10 @@ MAX_XML_ELEMENTS = 200_000
 #: Most attributes on one XML element (URDF elements have at most 8).
 MAX_XML_ATTRIBUTES = 64
 #: Most ``<link>`` elements in one URDF (and modules in one vehicle spec, minus the end effector).
-MAX_LINKS = 512
+#: Pinocchio's ``Data`` grows faster than the square of the number of bodies (a vehicle holds two:
+#: 200 links take 1.5 GB and 5 s to set up, 511 links 13 GB and a minute); 128 links stay below
+#: 0.5 GB.
+MAX_LINKS = 128
 
 _READ_CHUNK = 1 << 20
 
