@@ -140,6 +140,10 @@ def check_run_arguments(
         raise ArgumentError(f"log_every must be a whole number >= 1, got {log_every!r:.40}")
     steps_per_control = 1
     if control_period is not None:
+        if isinstance(control_period, bool) or not isinstance(control_period, (int, float)):
+            raise ArgumentError(
+                f"control_period must be a number of seconds, got {control_period!r:.40}"
+            )
         ratio = control_period / dt if math.isfinite(control_period) else math.nan
         if not (control_period > 0 and abs(ratio - round(ratio)) < 1e-9 * max(1.0, ratio)):
             raise ArgumentError(
