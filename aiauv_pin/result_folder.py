@@ -91,7 +91,10 @@ def check_output_folder(out: str | os.PathLike) -> Path:
     Raises:
         ResultFolderError: ``out`` exists and is not a folder, or is a folder of something else.
     """
-    out = Path(out)
+    given = out
+    out = Path(os.path.abspath(out))  # "." or "sub/.." get a real name and parent
+    if not out.name:
+        raise ResultFolderError(f"{given}: not a folder that can be replaced; give a named folder")
     if out.is_symlink():
         raise ResultFolderError(f"{out}: is a symbolic link; give a new or a result folder")
     if out.exists():

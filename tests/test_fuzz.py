@@ -274,13 +274,16 @@ def test_fuzzed_command_lines_fail_in_one_line(tmp_path_factory, data):
         argv = ["check", path]
     elif command == "build":
         argv = ["build", path, "-o", _materialise(data.draw(st.sampled_from(_PATHS)), folder)]
-    elif command == "sweep":
-        argv = ["sweep", path, "--workers", value, "--out", str(folder / "o")]
+    elif command == "sweep":  # an empty spec is a valid one-run sweep: only bad worker counts
+        workers = data.draw(st.sampled_from(["0", "-1", "100000", "abc", "1.5", "", "nan"]))
+        argv = ["sweep", path, "--workers", workers, "--out", str(folder / "o")]
     elif command == "simulate":  # always with one bad value, so that nothing long runs
         option = data.draw(st.sampled_from(["--duration", "--dt", "--vehicle", "--case"]))
         bad = path if option == "--vehicle" else value if option != "--case" else "sideways"
         if option in ("--duration", "--dt") and value in ("1e-300", "2", "1.5"):
             argv = ["simulate", "--duration", "0.5", "--dt", "10", "--out", str(folder / "o")]
+        elif option == "--duration":
+            argv = ["simulate", option, bad, "--out", str(folder / "o")]
         else:
             argv = ["simulate", option, bad, "--duration", "0.05", "--out", str(folder / "o")]
     elif command == "bench":
