@@ -840,7 +840,9 @@ def add_sweep_subcommand(subparsers) -> None:
         "--scheduler", metavar="ADDRESS", help="existing Dask scheduler, e.g. tcp://host:8786"
     )
     parser.add_argument(
-        "--workers", type=_worker_count, help="worker processes of the local cluster (all cores)"
+        "--workers",
+        type=_worker_count,
+        help="worker processes of the local cluster (all cores; at most 4 per core)",
     )
     parser.add_argument("--out", type=Path, help="output folder (results/sweeps/<spec name>/)")
     parser.add_argument("--no-plots", action="store_true", help="do not write figures/")
