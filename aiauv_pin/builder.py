@@ -244,14 +244,38 @@ def build_urdf(spec: VehicleSpec) -> str:
 def write_urdf(spec: VehicleSpec, path: str | os.PathLike[str]) -> Path:
     """Write the URDF of ``spec`` to ``path`` atomically (temporary file + ``os.replace``).
 
+    The written file is loaded back with :func:`aiauv_pin.load_vehicle` (the validation gate of
+    :mod:`aiauv_pin.validation`) before it replaces ``path``: a URDF that would not load is never
+    written.
+
     Args:
         spec: The vehicle.
-        path: Output file; its folder must exist.
+        path: Output file: a new path or an existing regular file (a FIFO, device, folder or
+            symbolic link is refused); its folder must exist.
 
     Returns:
         The output path.
+
+    Raises:
+        SpecError: ``path`` is not a regular file or a new path, or the URDF does not load back.
     """
+    import stat
+
+    from .errors import AiauvError
+    from .loading import load_vehicle
+
     path = Path(path)
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        mode = None
+    except OSError as exc:
+        raise SpecError(f"{path}: cannot use as output ({exc.strerror})") from None
+    if mode is not None and not stat.S_ISREG(mode):
+        raise SpecError(
+            f"{path}: exists and is not a regular file (folder, link, FIFO or device); "
+            "give a new path or a regular file"
+        )
     text = build_urdf(spec)
     handle, temporary = tempfile.mkstemp(
         prefix=f".{path.name}.", suffix=".tmp", dir=path.parent if str(path.parent) else "."
@@ -259,6 +283,11 @@ def write_urdf(spec: VehicleSpec, path: str | os.PathLike[str]) -> Path:
     try:
         with os.fdopen(handle, "w", encoding="utf-8", newline="\n") as stream:
             stream.write(text)
+        try:
+            load_vehicle(temporary, backend="pinocchio")
+        except AiauvError as exc:
+            message = str(exc).replace(str(temporary), "the URDF")
+            raise SpecError(f"{path}: the built URDF does not load back: {message}") from None
         os.chmod(temporary, 0o644)
         os.replace(temporary, path)
     except BaseException:

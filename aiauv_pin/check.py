@@ -1,7 +1,8 @@
 """``aiauv check``: validate a vehicle URDF and tabulate what the simulator will use.
 
-A vehicle is *usable* when :func:`aiauv_pin.load_vehicle` accepts it (safe XML, a valid URDF tree,
-physical inertias and hydrodynamic parameters, 1-DOF joints) and its generalised mass matrix
+A vehicle is *usable* when :func:`aiauv_pin.load_vehicle` accepts it (safe XML within the input
+limits, a valid URDF tree, safe names, the physical and plausible parameters of the one validation
+gate :mod:`aiauv_pin.validation`, 1-DOF joints) and its generalised mass matrix
 ``M(q) = M_RB(q) + M_A(q)`` is symmetric positive definite in the neutral configuration (otherwise
 forward dynamics is undefined: a link with neither mass nor added mass, for instance). Anything else
 that is unusual but simulable is a *warning*: the report lists it and the command still succeeds
@@ -10,7 +11,6 @@ that is unusual but simulable is a *warning*: the report lists it and the comman
 * the vehicle is not neutrally buoyant (net buoyancy ``(rho V - m) g`` beyond 1 % of its weight);
 * a link has mass but no hydrodynamic parameters (no buoyancy, added mass or damping); a further warning
   suggests ``aiauv annotate``, which estimates them;
-* an inertia breaks the triangle inequality ``I_a + I_b >= I_c`` (no real body has it);
 * the vehicle has no thrusters, or none along a link x-axis (the path-following controller needs
   them for surge), no ``end_effector`` frame, or joints other than equal numbers of y- and z-axis
   revolute joints (the path-following controller's layout).
@@ -25,11 +25,9 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from hydro.urdf_block import parse_robot
-
-from .errors import VehicleLoadError
 from .loading import load_vehicle
-from .urdf_validation import UrdfStructure, validate_urdf
+from .urdf_validation import UrdfStructure
+from .validation import validate_mass_matrix
 
 #: Relative net buoyancy (fraction of the weight) above which a vehicle is "not neutrally buoyant".
 BUOYANCY_TOLERANCE = 0.01
@@ -104,20 +102,13 @@ def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
         VehicleLoadError: The vehicle is not usable; the message is one line naming the reason.
     """
     path = Path(path)
-    vehicle = load_vehicle(path, **load_options)
-    structure = validate_urdf(parse_robot(vehicle.urdf_text))
+    vehicle = load_vehicle(path, **load_options)  # the validation gate of aiauv_pin.validation
+    structure = vehicle.urdf_structure
     hydro = vehicle.hydro
     rho, g = hydro.fluid_density, hydro.gravity
     model = vehicle.model
     q = vehicle.neutral_configuration()
-    mass_matrix = vehicle.mass_matrix(q)
-    eigenvalues = np.linalg.eigvalsh(0.5 * (mass_matrix + mass_matrix.T))
-    scale = max(float(np.max(np.abs(eigenvalues))), 1e-300)
-    if not np.all(np.isfinite(mass_matrix)) or eigenvalues[0] <= 1e-12 * scale:
-        raise VehicleLoadError(
-            f"{path}: mass matrix M(q) is singular at the neutral configuration (smallest "
-            f"eigenvalue {eigenvalues[0]:.3g}): some body has neither mass nor added mass"
-        )
+    smallest_eigenvalue = validate_mass_matrix(vehicle, str(path))
     data = model.createData()
     pin.framesForwardKinematics(model, data, q)
     by_link = {link.link: link for link in hydro.links}
@@ -140,10 +131,6 @@ def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
         rows.append(LinkRow(name, mass, volume, _margin(rho * volume, mass, g), cg, cb, diagonal))
         if link is None and mass > 0.0:
             warnings.append(f"link '{name}' has mass but no hydrodynamic parameters")
-        if inertial is not None:
-            moments = np.linalg.eigvalsh(inertial.inertia)
-            if moments[0] + moments[1] < moments[2] * (1.0 - 1e-6):
-                warnings.append(f"link '{name}': inertia breaks the triangle inequality")
     if any("no hydrodynamic parameters" in warning for warning in warnings):
         warnings.append(
             f"estimate the missing hydrodynamics with 'aiauv annotate {path} -o OUT.urdf'"
@@ -188,7 +175,7 @@ def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
         center_of_gravity=cg_total,
         center_of_buoyancy=cb_total,
         thrusters=thrusters,
-        smallest_mass_eigenvalue=float(eigenvalues[0]),
+        smallest_mass_eigenvalue=smallest_eigenvalue,
         warnings=tuple(warnings),
     )
 
@@ -224,8 +211,10 @@ def _limit(value: float | None) -> str:
 def format_report(report: CheckReport) -> str:
     """The report as a plain-text table (SI units)."""
     s = report.structure
+    shown = str(report.path)
+    shown = shown if shown.isprintable() else repr(shown)  # a path cannot print lines of its own
     lines = [
-        f"vehicle '{s.name}' from {report.path}",
+        f"vehicle '{s.name}' from {shown}",
         f"fluid density {report.fluid_density:g} kg/m^3, gravity {report.gravity:g} m/s^2, "
         f"root link '{s.root}'",
         "",

@@ -128,7 +128,9 @@ def _run_simulate(args) -> int:
     from . import loading
     from .errors import AiauvError, SimulationDiverged
     from .outputs import preload_plotting, write_results
+    from .result_folder import check_output_folder, staged_folder
     from .scenario import ScenarioResult, run_scenario
+    from .validation import explain_divergence
 
     scenario = scenario_for_args(args)
     steps = scenario.duration / scenario.dt
@@ -160,6 +162,7 @@ def _run_simulate(args) -> int:
     else:
         name = scenario.case
     out = args.out if args.out is not None else Path("results") / name
+    check_output_folder(out)  # refuse a file or a foreign folder before simulating
     on_log = None
     if args.view:
         from .viewer import live_view
@@ -175,7 +178,7 @@ def _run_simulate(args) -> int:
             after_first_chunk=preload_plotting,
         )
     except SimulationDiverged as exc:
-        cause = " ".join(str(exc).split())
+        cause = " ".join(explain_divergence(vehicle, scenario.dt, str(exc)).split())
         partial = exc.trajectory
         if partial is None or len(partial.t) == 0:
             raise AiauvError(f"simulation diverged: {cause}; nothing to write") from None
@@ -189,26 +192,28 @@ def _run_simulate(args) -> int:
             vehicle.joint_names,
             vehicle.thruster_names,
         )
-        write_results(
-            result, out, {"vehicle": str(path), **timing}, figure_format=args.figure_format
-        )
+        with staged_folder(out) as staging:  # nothing of an earlier run survives
+            write_results(
+                result, staging, {"vehicle": str(path), **timing}, figure_format=args.figure_format
+            )
         raise AiauvError(
             f"simulation diverged: {cause}; partial results up to t = {partial.t[-1]:.6g} s "
             f"({len(partial.t)} samples) written to {out}"
         ) from None
-    content = write_results(
-        result, out, {"vehicle": str(path), **timing}, figure_format=args.figure_format
-    )
-    if not args.no_html:
-        from .outputs import default_path_points
-        from .playback import write_playback
-
-        write_playback(
-            vehicle,
-            result.trajectory,
-            out / "playback.html",
-            path_points=default_path_points(result),
+    with staged_folder(out) as staging:  # in place only once every file is written
+        content = write_results(
+            result, staging, {"vehicle": str(path), **timing}, figure_format=args.figure_format
         )
+        if not args.no_html:
+            from .outputs import default_path_points
+            from .playback import write_playback
+
+            write_playback(
+                vehicle,
+                result.trajectory,
+                staging / "playback.html",
+                path_points=default_path_points(result),
+            )
     final = content["final"]
     errors = (
         f"final p_y = {final['p_y']:+.4f} m, p_z = {final['p_z']:+.4f} m"

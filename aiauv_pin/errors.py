@@ -23,3 +23,19 @@ class SimulationDiverged(AiauvError, RuntimeError):
         super().__init__(message)
         self.time = time
         self.trajectory = trajectory
+
+
+class ArgumentError(AiauvError, ValueError):
+    """A bad argument to an API call (wrong shape, type, non-finite value); one line naming it."""
+
+
+class InputLimitError(VehicleLoadError):
+    """An input file beyond the documented limits of :mod:`aiauv_pin.input_limits`."""
+
+
+class UnsafeNameError(VehicleLoadError):
+    """A link, joint, thruster or robot name outside the safe set of :mod:`aiauv_pin.safe_names`."""
+
+
+class PhysicalParameterError(VehicleLoadError):
+    """A non-physical or implausible vehicle parameter (:mod:`aiauv_pin.validation`)."""

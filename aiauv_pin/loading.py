@@ -30,7 +30,10 @@ from hydro.urdf_block import parse_robot_text, read_hydrodynamics
 from hydro.uuv_simulator import freeze_thruster_joints
 
 from .errors import VehicleLoadError
+from .input_limits import MAX_FILE_BYTES, check_xml_tree, read_text
+from .safe_names import check_name
 from .urdf_validation import UrdfStructure, validate_urdf
+from .validation import validate_mass_matrix, validate_parameters
 from .vehicle import Vehicle
 from .xacro_loading import read_description
 
@@ -38,8 +41,8 @@ from .xacro_loading import read_description
 BUNDLED_CASES = ("uniform", "stabilised")
 #: Joint types a vehicle may have (1-DOF joints and rigid attachments).
 SUPPORTED_JOINT_TYPES = ("revolute", "prismatic", "fixed")
-#: Largest URDF accepted [bytes] (a vehicle description is a few hundred kB at most).
-MAX_URDF_BYTES = 50_000_000
+#: Largest URDF accepted [bytes] (see :mod:`aiauv_pin.input_limits`).
+MAX_URDF_BYTES = MAX_FILE_BYTES
 
 
 def bundled_urdf(case: str = "uniform") -> Path:
@@ -57,19 +60,8 @@ def bundled_urdf(case: str = "uniform") -> Path:
 
 
 def _read_text(path: str | os.PathLike) -> str:
-    path = Path(path)
-    if not path.exists():
-        raise VehicleLoadError(f"{path}: no such file")
-    if path.is_dir():
-        raise VehicleLoadError(f"{path}: is a directory, not a URDF file")
-    try:
-        if path.stat().st_size > MAX_URDF_BYTES:
-            raise VehicleLoadError(f"{path}: larger than {MAX_URDF_BYTES} bytes, not a URDF")
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError:
-        raise VehicleLoadError(f"{path}: not a text file (not UTF-8), not a URDF") from None
-    except OSError as exc:
-        raise VehicleLoadError(f"{path}: cannot read ({exc.__class__.__name__})") from None
+    """A URDF's text, through the limits of :mod:`aiauv_pin.input_limits` (regular file, byte cap)."""
+    return read_text(path, "URDF")
 
 
 @contextlib.contextmanager
@@ -176,20 +168,39 @@ def load_vehicle(
         VehicleLoadError: One line naming the problem (missing file, not XML, not a URDF, unsafe
             XML, broken tree, unknown link, non-physical parameter, unsupported joint, ...).
     """
-    source = bundled_urdf("uniform") if path is None else Path(path)
-    text = read_description(source, xacro_args, package_path)  # None unless .xacro
-    if text is None:
-        text = _read_text(source).removeprefix("\ufeff")
+    if path is None:
+        source = bundled_urdf("uniform")
+        text = _read_text(source)
+    elif isinstance(path, (str, os.PathLike)):
+        source = Path(path)
+        text = read_description(source, xacro_args, package_path)  # None unless .xacro
+        if text is None:
+            # refuses URDF text passed as a path, FIFOs, devices, huge files
+            text = _read_text(path)
+    else:
+        raise VehicleLoadError(
+            f"path must be a file path (str or os.PathLike), not {type(path).__name__}"
+        )
+    text = text.removeprefix("\ufeff")
     try:
         root = parse_robot_text(text, str(source))
     except HydroError as exc:
         raise VehicleLoadError(str(exc)) from None
+    check_xml_tree(root, str(source))
     if freeze_thruster_joints(root):  # UUV Simulator propeller joints: rigid for the dynamics
         text = ElementTree.tostring(root, encoding="unicode")
     try:
         structure = validate_urdf(root)
     except VehicleLoadError as exc:
         raise VehicleLoadError(f"{source}: {exc}") from None
+    try:
+        check_name(structure.name, "robot")
+        for link in structure.links:
+            check_name(link, "link")
+        for joint in structure.joints:
+            check_name(joint.name, "joint")
+    except VehicleLoadError as exc:
+        raise type(exc)(f"{source}: {exc}") from None
     for joint in structure.joints:
         if joint.type not in SUPPORTED_JOINT_TYPES:
             raise VehicleLoadError(
@@ -200,6 +211,12 @@ def load_vehicle(
         hydro = read_hydrodynamics(root)
     except HydroError as exc:
         raise VehicleLoadError(f"{source}: {exc}") from None
+    try:
+        for thruster in hydro.thrusters:
+            check_name(thruster.name, "thruster")
+    except VehicleLoadError as exc:
+        raise type(exc)(f"{source}: {exc}") from None
+    validate_parameters(structure, hydro, root, str(source))
     model = _build_model(text, source)
     _cross_check(model, structure, source)
     for name in [link.link for link in hydro.links] + [t.link for t in hydro.thrusters]:
@@ -217,4 +234,6 @@ def load_vehicle(
     vehicle.urdf_path = source
     vehicle.urdf_text = text  # the expanded description (xacro files have no URDF on disk)
     vehicle.package_path = tuple(package_path)
+    vehicle.urdf_structure = structure
+    validate_mass_matrix(vehicle, str(source))
     return vehicle

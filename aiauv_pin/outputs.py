@@ -354,6 +354,25 @@ def _fork_context():
     return multiprocessing.get_context("fork")
 
 
+def _die_with_parent(parent: int) -> None:
+    """Initializer of the figure worker: it is killed when the process that forked it dies.
+
+    Linux ``prctl(PR_SET_PDEATHSIG, SIGKILL)``; if the parent is already gone, exit at once.
+    """
+    import ctypes
+    import ctypes.util
+    import os
+    import signal
+
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() != parent:
+        os._exit(1)
+
+
 def write_figures(
     result: ScenarioResult,
     folder: Path,
@@ -368,7 +387,8 @@ def write_figures(
     Error figures (cross-track, ``phi_tilde``, ``omega_tilde``) have a log-scale panel of the
     error's magnitude under the linear one, so that final errors of 1e-5 are visible; the 3-D path
     has equal axes. With ``parallel`` (on Linux, with more than one CPU) a forked process draws
-    half of them while this one draws the rest.
+    half of them while this one draws the rest; that process is killed if this one dies
+    (:func:`_die_with_parent`).
 
     Args:
         result: The run.
@@ -406,7 +426,12 @@ def write_figures(
     # the 3-D path and the 3-panel figure are the slowest: split the work about evenly
     mine = ("fig7_pointing.png", "fig2_cross_track.png", "fig4_phi_tilde.png")
     theirs = tuple(name for name in FIGURES if name not in mine)
-    with ProcessPoolExecutor(max_workers=1, mp_context=context) as pool:
+    with ProcessPoolExecutor(
+        max_workers=1,
+        mp_context=context,
+        initializer=_die_with_parent,
+        initargs=(os.getpid(),),
+    ) as pool:
         future = pool.submit(_render, result, folder, theirs, figure_format, **drawing)
         _render(result, folder, mine, figure_format, **drawing)
         future.result()

@@ -18,9 +18,10 @@ import numpy as np
 from control.laws import joint_pd_torque
 from hydro.currents import as_current
 
+from .arguments import check_timing, configuration, float_array, optional_current
 from .controllers import CompiledController
 from .disturbances import Disturbance
-from .errors import SimulationDiverged
+from .errors import ArgumentError, SimulationDiverged
 from .integrators import INTEGRATORS
 from .vehicle import Vehicle
 
@@ -143,24 +144,27 @@ def check_run_arguments(
     Raises:
         ValueError: A bad argument (one line).
     """
-    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
-        raise ValueError(f"duration must be a positive number of seconds, got {duration!r}")
-    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
-    if method not in INTEGRATORS:
-        raise ValueError(f"unknown method '{method}' (expected one of {', '.join(INTEGRATORS)})")
-    if int(log_every) < 1:
-        raise ValueError(f"log_every must be >= 1, got {log_every!r}")
+    n_steps = check_timing(duration, dt)  # consistent duration and dt, or ArgumentError
+    if not isinstance(method, str) or method not in INTEGRATORS:
+        raise ArgumentError(
+            f"unknown method {method!r:.40} (expected one of {', '.join(INTEGRATORS)})"
+        )
+    if isinstance(log_every, bool) or not isinstance(log_every, int) or log_every < 1:
+        raise ArgumentError(f"log_every must be a whole number >= 1, got {log_every!r:.40}")
     steps_per_control = 1
     if control_period is not None:
+        if isinstance(control_period, bool) or not isinstance(control_period, (int, float)):
+            raise ArgumentError(
+                f"control_period must be a number of seconds, got {control_period!r:.40}"
+            )
         ratio = control_period / dt if math.isfinite(control_period) else math.nan
         if not (control_period > 0 and abs(ratio - round(ratio)) < 1e-9 * max(1.0, ratio)):
-            raise ValueError(
+            raise ArgumentError(
                 f"control_period must be a positive whole multiple of dt = {dt:g} s, "
                 f"got {control_period!r}"
             )
         steps_per_control = max(1, round(ratio))
-    return max(1, round(duration / dt)), steps_per_control
+    return n_steps, steps_per_control
 
 
 def simulate(
@@ -229,6 +233,14 @@ def simulate(
     n_steps, steps_per_control = check_run_arguments(
         duration, dt, method, log_every, control_period
     )
+    model = vehicle.model
+    q0 = configuration(q0, model.nq, "q0").copy()
+    v0 = float_array(v0, "v0", (model.nv,)).copy()
+    current = optional_current(current)
+    if isinstance(servo, JointServo) and servo.references.shape != (model.nv - 6,):
+        raise ArgumentError(
+            f"servo must have one entry per joint ({model.nv - 6}), got {servo.references.size}"
+        )
     if isinstance(controller, CompiledController):
         return _simulate_compiled(
             vehicle,
@@ -249,17 +261,15 @@ def simulate(
             after_first_chunk=after_first_chunk,
         )
     step = INTEGRATORS[method]
-    model = vehicle.model
-    q = np.array(q0, dtype=float)
-    v = np.array(v0, dtype=float)
-    if q.shape != (model.nq,) or v.shape != (model.nv,):
-        raise ValueError(f"q0 must have {model.nq} and v0 {model.nv} entries")
+    q, v = q0, v0
     current = as_current(current)
     compiled_disturbance = disturbance if isinstance(disturbance, Disturbance) else None
     python_disturbance = None
     if disturbance is not None and compiled_disturbance is None:
         if not callable(disturbance):
-            raise ValueError("disturbance must be a Disturbance or a callable fn(t, q, v) -> (nv,)")
+            raise ArgumentError(
+                "disturbance must be a Disturbance or a callable fn(t, q, v) -> (nv,)"
+            )
         python_disturbance = disturbance
     log_every = int(log_every)
     n_logs = n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
@@ -344,6 +354,10 @@ def simulate(
             t = k * dt
             if k % steps_per_control == 0 and controller is not None:
                 tau, info = _split(controller(t, q, v))
+                if tau.shape != (model.nv,):  # never hand a short array to a kernel
+                    raise ArgumentError(
+                        f"controller must return tau of shape ({model.nv},), got {tau.shape}"
+                    )
             if k % log_every == 0 or k == n_steps:
                 log(logged, t, tau, info)
                 logged += 1

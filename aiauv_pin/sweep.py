@@ -16,8 +16,15 @@ an existing cluster given by its scheduler address. The output folder holds
 
 A run ends with one of :data:`STATUSES`: ``complete``; ``diverged`` (the state became non-finite;
 the message names the time); ``error`` (the simulation raised; the message is the exception); or
-``lost`` (the worker died or the task could not run). ``lost`` runs are run again by the next
-invocation; the other three are deterministic and kept.
+``lost`` (the task could not run, or its worker died in each of :data:`MAX_ATTEMPTS` attempts: a
+run whose worker dies is submitted again). ``lost`` runs are run again by the next invocation; the
+other three are deterministic and kept.
+
+Safety: a sweep holds an exclusive lock on its output folder (``.sweep.lock``; a second sweep on the
+same folder stops with one line); ``--workers`` is at most :data:`MAX_WORKERS_PER_CORE` per usable
+core; workers load each vehicle from a private per-user cache (:func:`vehicle_cache_folder`, mode
+0700, owner and mode checked) whose files are used only if their content has the expected SHA-256;
+``aiauv sweep`` exits non-zero when every run failed (none ``complete``) or runs were lost.
 """
 
 from __future__ import annotations
@@ -25,11 +32,13 @@ from __future__ import annotations
 import contextlib
 import csv
 import datetime
+import hashlib
 import io
 import json
 import math
 import os
 import socket
+import stat
 import sys
 import tempfile
 import time
@@ -55,6 +64,12 @@ from .sweep_spec import (
 STATUSES = ("complete", "diverged", "error", "lost")
 #: Statuses whose runs are executed again when the sweep is run again.
 RETRIED_STATUSES = ("lost",)
+#: At most this many local worker processes per usable core (``--workers``).
+MAX_WORKERS_PER_CORE = 4
+#: A run whose worker died is submitted again up to this many times in all before it is ``lost``.
+MAX_ATTEMPTS = 3
+#: Lock file in the output folder, held (``flock``) while a sweep runs on it.
+LOCK_FILE = ".sweep.lock"
 #: Metric columns of ``results.csv`` before the per-thruster and per-joint work.
 METRIC_COLUMNS = (
     "final.p_y",
@@ -100,17 +115,55 @@ def _now() -> str:
 _VEHICLES: dict[str, object] = {}
 
 
+def vehicle_cache_folder() -> Path:
+    """This user's private folder of sweep vehicles: ``$TMPDIR/aiauv-sweep-vehicles-<uid>``.
+
+    Created with mode 0700; an existing one must be a real folder (not a link) owned by this user
+    with no access for others, else :class:`SweepError` (another user could plant files there).
+    """
+    uid = os.getuid() if hasattr(os, "getuid") else None
+    suffix = f"-{uid}" if uid is not None else ""
+    folder = Path(tempfile.gettempdir()) / f"aiauv-sweep-vehicles{suffix}"
+    with contextlib.suppress(FileExistsError):
+        folder.mkdir(mode=0o700)
+    info = os.lstat(folder)
+    if (
+        not stat.S_ISDIR(info.st_mode)
+        or (uid is not None and info.st_uid != uid)
+        or (uid is not None and info.st_mode & 0o077)
+    ):
+        raise SweepError(
+            f"{folder}: the vehicle cache must be a folder owned by this user with mode 0700 "
+            f"(found owner {info.st_uid}, mode {stat.S_IMODE(info.st_mode):o}); remove it"
+        )
+    return folder
+
+
 def _vehicle_from_text(urdf_text: str, sha256: str):
-    """Load (once per worker process) the vehicle whose URDF text has this SHA-256."""
-    if sha256 not in _VEHICLES:
+    """Load (once per worker process) the vehicle of this URDF text.
+
+    The text goes through the private cache (:func:`vehicle_cache_folder`) under the name of its
+    own SHA-256; a cached file is used only if its content has that hash (else it is rewritten).
+    """
+    data = urdf_text.encode("utf-8")
+    digest = hashlib.sha256(data).hexdigest()
+    if digest not in _VEHICLES:
+        from .input_limits import read_bytes
         from .loading import load_vehicle
 
-        folder = Path(tempfile.gettempdir()) / "aiauv-sweep-vehicles"
-        path = folder / f"{sha256}.urdf"
-        if not path.exists():
-            write_text(path, urdf_text)
-        _VEHICLES[sha256] = load_vehicle(path)
-    return _VEHICLES[sha256]
+        path = vehicle_cache_folder() / f"{digest}.urdf"
+        try:
+            cached = hashlib.sha256(read_bytes(path, "URDF")).hexdigest()
+        except AiauvError:
+            cached = None
+        if cached != digest:
+            with atomic_path(path) as temporary:
+                temporary.write_bytes(data)
+        vehicle = load_vehicle(path)
+        if hashlib.sha256(read_bytes(path, "URDF")).hexdigest() != digest:
+            raise SweepError(f"{path}: cached vehicle changed while loaded")
+        _VEHICLES[digest] = vehicle
+    return _VEHICLES[digest]
 
 
 def flatten_summary(summary: dict) -> dict:
@@ -168,7 +221,12 @@ def execute_run(run_id: str, parameters: dict, urdf_text: str, urdf_sha256: str)
         try:
             result = run_paper_scenario(vehicle, scenario)
         except SimulationDiverged as exc:
-            status, message = "diverged", _one_line(exc)
+            from .validation import explain_divergence
+
+            status, message = (
+                "diverged",
+                _one_line(explain_divergence(vehicle, scenario.dt, str(exc))),
+            )
             metrics = {
                 "simulated_time": float(exc.time),
                 "wall_time": time.perf_counter() - simulation_start,
@@ -479,10 +537,15 @@ def dask_client(
     from dask.distributed import Client, LocalCluster
 
     if scheduler is None:
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-        count = workers if workers is not None else (cores or 1)
-        if not (isinstance(count, int) and count >= 1):
+        cores = usable_cores()
+        count = workers if workers is not None else cores
+        if isinstance(count, bool) or not (isinstance(count, int) and count >= 1):
             raise SweepError(f"workers must be a whole number >= 1, got {count!r}")
+        if count > MAX_WORKERS_PER_CORE * cores:
+            raise SweepError(
+                f"workers must be at most {MAX_WORKERS_PER_CORE * cores} "
+                f"({MAX_WORKERS_PER_CORE} per usable core), got {count}"
+            )
         cluster = LocalCluster(
             n_workers=count,
             threads_per_worker=1,
@@ -512,6 +575,39 @@ def dask_client(
         yield client
     finally:
         client.close()
+
+
+def usable_cores() -> int:
+    """CPU cores this process may run on (at least 1)."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return max(1, os.cpu_count() or 1)
+
+
+@contextlib.contextmanager
+def output_lock(out: Path):
+    """Hold an exclusive ``flock`` on ``out/.sweep.lock`` (released when the process dies).
+
+    Raises:
+        SweepError: Another sweep holds it.
+    """
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock
+        yield
+        return
+    handle = open(out / LOCK_FILE, "a+b")
+    try:
+        try:
+            fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise SweepError(
+                f"{out}: another sweep is running on this output folder; wait for it or use "
+                "another --out"
+            ) from None
+        yield
+    finally:
+        handle.close()
 
 
 def _lost_record(point: SweepPoint, reason: str) -> dict:
@@ -575,19 +671,42 @@ def run_sweep(
         VehicleLoadError: A vehicle that cannot be loaded.
         SweepError: No scheduler or no worker.
     """
-    from .loading import load_vehicle
 
     spec_text = None
     if not isinstance(spec, SweepSpec):
-        spec_text = Path(spec).read_text(encoding="utf-8")
-        spec = load_sweep_spec(spec)
+        from .input_limits import read_text
+
+        source = spec
+        spec = load_sweep_spec(source)
+        spec_text = read_text(source, "sweep spec")
     out = Path(out)
     points = spec.points()
+    out.mkdir(parents=True, exist_ok=True)
+    with output_lock(out):
+        return _run_locked(
+            spec,
+            spec_text,
+            points,
+            out,
+            scheduler,
+            workers,
+            progress,
+            plots,
+            on_record,
+            figure_format,
+        )
+
+
+def _run_locked(
+    spec, spec_text, points, out, scheduler, workers, progress, plots, on_record, figure_format
+):
+    from .input_limits import read_text
+    from .loading import load_vehicle
+
     existing = read_records(out)
     done = {key for key, record in existing.items() if record.get("status") not in RETRIED_STATUSES}
     todo = [p for p in points if p.run_id not in done]
     executed: list[str] = []
-    out.mkdir(parents=True, exist_ok=True)
     try:
         if todo:
             texts: dict[str, str] = {}
@@ -595,7 +714,7 @@ def run_sweep(
                 sha = point.parameters["vehicle_sha256"]
                 if sha not in texts:
                     load_vehicle(point.vehicle)  # one-line error here, not on every worker
-                    texts[sha] = point.vehicle.read_text(encoding="utf-8")
+                    texts[sha] = read_text(point.vehicle, "URDF")
             _run_points(
                 todo,
                 texts,
@@ -647,22 +766,31 @@ def _run_points(
 
     token = uuid.uuid4().hex[:8]  # fresh task keys: a cancelled earlier attempt cannot collide
     with dask_client(scheduler, workers) as client:
-        shared = {sha: client.scatter(text, broadcast=True) for sha, text in texts.items()}
+        # the URDF text travels with each task (a few kB, capped by input_limits): no scattered
+        # data that a dying worker could take with it
         by_key = {}
         futures = []
-        for point in todo:
+        attempts: dict[str, int] = {}
+
+        def submit(point: SweepPoint):
+            attempt = attempts.get(point.run_id, 0) + 1
+            attempts[point.run_id] = attempt
             sha = point.parameters["vehicle_sha256"]
             future = client.submit(
                 execute_run,
                 point.run_id,
                 point.parameters,
-                shared[sha],
+                texts[sha],
                 sha,
-                key=f"aiauv-run-{point.run_id}-{token}",
+                key=f"aiauv-run-{point.run_id}-{token}-{attempt}",
                 pure=False,
             )
             by_key[future.key] = point
             futures.append(future)
+            return future
+
+        for point in todo:
+            submit(point)
         bar = tqdm(
             total=total,
             initial=total - len(todo),
@@ -673,18 +801,27 @@ def _run_points(
         )
         last_table = time.monotonic()
         try:
-            for future in as_completed(futures):
+            completed = as_completed(list(futures))
+            for future in completed:
                 point = by_key[future.key]
+                record = None
                 if future.status == "finished":
                     try:
                         record = future.result()
                     except Exception as exc:
-                        record = _lost_record(point, f"{exc.__class__.__name__}: {exc}")
+                        reason = f"{exc.__class__.__name__}: {exc}"
                 elif future.status == "cancelled":
-                    record = _lost_record(point, "cancelled")
+                    reason = "cancelled"
                 else:
                     exc = future.exception()
-                    record = _lost_record(point, f"{exc.__class__.__name__}: {exc}")
+                    reason = f"{exc.__class__.__name__}: {exc}"
+                if record is None:
+                    if attempts[point.run_id] < MAX_ATTEMPTS:  # worker died: run it again
+                        completed.add(submit(point))
+                        continue
+                    record = _lost_record(
+                        point, f"{reason} (after {attempts[point.run_id]} attempts)"
+                    )
                 write_record(out, record)
                 executed.append(point.run_id)
                 bar.update(1)
@@ -710,6 +847,11 @@ def _worker_count(text: str) -> int:
         raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    bound = MAX_WORKERS_PER_CORE * usable_cores()
+    if value > bound:
+        raise argparse.ArgumentTypeError(
+            f"must be at most {bound} ({MAX_WORKERS_PER_CORE} per usable core), got {value}"
+        )
     return value
 
 
@@ -729,7 +871,9 @@ def add_sweep_subcommand(subparsers) -> None:
         "--scheduler", metavar="ADDRESS", help="existing Dask scheduler, e.g. tcp://host:8786"
     )
     parser.add_argument(
-        "--workers", type=_worker_count, help="worker processes of the local cluster (all cores)"
+        "--workers",
+        type=_worker_count,
+        help="worker processes of the local cluster (all cores; at most 4 per core)",
     )
     parser.add_argument("--out", type=Path, help="output folder (results/sweeps/<spec name>/)")
     parser.add_argument("--no-plots", action="store_true", help="do not write figures/")
@@ -772,4 +916,6 @@ def run_sweep_command(args) -> int:
             f"{lost} run(s) lost (worker died or task failed to run); run the same command again "
             "to retry them"
         )
+    if report.total and report.counts["complete"] == 0:
+        raise SweepError(f"every run failed ({counts}); the messages are in {report.table}")
     return 0

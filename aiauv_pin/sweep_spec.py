@@ -247,7 +247,9 @@ def _distribution(name: str, entry, where: str) -> Distribution:
 
 def file_sha256(path: str | Path) -> str:
     """SHA-256 (hex) of a file's bytes."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    from .input_limits import read_bytes
+
+    return hashlib.sha256(read_bytes(path, "URDF")).hexdigest()
 
 
 def run_id(resolved: Mapping[str, Any]) -> str:
@@ -337,6 +339,9 @@ def resolve_parameters(values: Mapping[str, Any], vehicle_sha256: str) -> dict[s
     resolved["vehicle_sha256"] = vehicle_sha256
     resolved = {name: resolved[name] for name in RESOLVED_NAMES}
     scenario = scenario_from_parameters(resolved)  # the scenario's own checks
+    from .arguments import check_timing
+
+    check_timing(scenario.duration, scenario.dt)  # the verdict simulate() gives (ArgumentError)
     steps = scenario.duration / scenario.dt
     if steps > MAX_STEPS_PER_RUN:
         raise ValueError(
@@ -442,6 +447,9 @@ class SweepSpec:
                     hashes[vehicle] = file_sha256(vehicle)
                 except OSError as exc:
                     reason = exc.strerror or exc.__class__.__name__
+                    raise SweepSpecError(f"vehicle {vehicle}: cannot read ({reason})") from None
+                except AiauvError as exc:  # missing, not a regular file, too large
+                    reason = str(exc).removeprefix(f"{vehicle}: ")
                     raise SweepSpecError(f"vehicle {vehicle}: cannot read ({reason})") from None
             given = {k: v for k, v in values.items() if k != "vehicle"}
             try:
@@ -557,12 +565,14 @@ def load_sweep_spec(path: str | Path) -> SweepSpec:
     Raises:
         SweepSpecError: One line starting with the file name.
     """
-    path = Path(path)
+    from .input_limits import read_text
+
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        reason = getattr(error, "strerror", None) or str(error)
+        text = read_text(path, "sweep spec")  # regular file, byte cap (aiauv_pin.input_limits)
+    except AiauvError as error:
+        reason = str(error).removeprefix(f"{path}: ")
         raise SweepSpecError(f"{path}: cannot read sweep spec: {reason}") from None
+    path = Path(path)
     try:
         return sweep_spec_from_toml(text, path.parent)
     except SweepSpecError as error:

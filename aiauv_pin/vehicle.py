@@ -41,6 +41,8 @@ from hydro.laws import CROSSFLOW_NODES, FluidModel, add_body_fluid_bias
 from hydro.spatial import motion_transform
 from hydro.spec import HydroSpec
 
+from .arguments import configuration, finite_time, float_array, optional_current
+from .errors import ArgumentError
 from .fast.records import Model, Thrusters, rigid_bodies, unsupported_reason
 
 _LOCAL = pin.ReferenceFrame.LOCAL
@@ -285,14 +287,16 @@ class Vehicle:
 
     @backend.setter
     def backend(self, value: str) -> None:
-        if value not in BACKENDS:
-            raise ValueError(f"unknown backend '{value}' (expected one of {', '.join(BACKENDS)})")
+        if not isinstance(value, str) or value not in BACKENDS:
+            raise ArgumentError(
+                f"unknown backend {value!r:.40} (expected one of {', '.join(BACKENDS)})"
+            )
         self._backend = value
         self._fast = None
         if value != "pinocchio":
             self._fast = self._build_fast()
             if self._fast is None and value == "numba":
-                raise ValueError(f"numba backend unavailable: {self._fast_reason}")
+                raise ArgumentError(f"numba backend unavailable: {self._fast_reason}")
 
     def _build_fast(self):
         from hydro.jit import NUMBA_AVAILABLE
@@ -377,6 +381,12 @@ class Vehicle:
         probe = position + np.einsum("nij,nj->ni", rotation, self._fluid_reference.current_probe)
         return np.array([current.velocity(t, point) for point in probe])
 
+    def _q(self, q) -> np.ndarray:
+        return configuration(q, self.model.nq)
+
+    def _v(self, v, name: str = "v") -> np.ndarray:
+        return float_array(v, name, (self.model.nv,))
+
     def _body_jacobians(self) -> np.ndarray:
         """Local Jacobians of every body (nb, 6, nv), after ``computeJointJacobians``."""
         return np.array(
@@ -452,20 +462,25 @@ class Vehicle:
         Returns:
             ``dv`` (nv,), the time derivative of ``v``'s coordinates (Fossen's ``nu_dot`` for the base).
         """
+        q, v, tau = self._q(q), self._v(v), self._v(tau, "tau")
+        current = optional_current(current)
+        t = finite_time(t)
         if self._fast is not None:
             return self._fast.acceleration(q, v, tau, current, t=t)
         mass, bias = self._hydro_terms(q, v, current, t)
-        return np.linalg.solve(mass, np.asarray(tau, dtype=float) - bias)
+        return np.linalg.solve(mass, tau - bias)
 
     def fluid_forces(
         self, q: np.ndarray, v: np.ndarray, current=None, *, t: float = 0.0
     ) -> FluidForces:
         """Mass matrix and bias of the equations of motion ``M dv + bias = tau``."""
+        q, v, current = self._q(q), self._v(v), optional_current(current)
         mass, bias = self._hydro_terms(q, v, current, t)
         return FluidForces(mass, bias)
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """``M(q) = M_RB(q) + sum_i J_i^T M_A,i J_i`` (nv x nv), symmetric positive definite."""
+        q = self._q(q)
         mass = pin.crba(self.model, self.data, q)
         mass = np.triu(mass) + np.triu(mass, 1).T  # CRBA fills the upper triangle
         if self.added_mass and self._fluid_reference.added_mass.any():
@@ -475,6 +490,7 @@ class Vehicle:
 
     def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """Kinetic energy of body and fluid, ``v^T M(q) v / 2`` [J] (water at rest)."""
+        v = self._v(v)
         return 0.5 * float(v @ self.mass_matrix(q) @ v)
 
     def restoring_forces(self, q: np.ndarray) -> np.ndarray:
@@ -484,6 +500,7 @@ class Vehicle:
         :func:`hydro.laws.hydrostatic_wrench`; the Pinocchio reference, Pinocchio's generalised
         gravity of the vehicle and of its displaced water.
         """
+        q = self._q(q)
         if self._fast is not None:
             return self._fast.restoring_forces(q)
         weight = pin.computeGeneralizedGravity(self.model, self.data, q)
@@ -493,6 +510,7 @@ class Vehicle:
 
     def thrust_matrix(self, q: np.ndarray) -> np.ndarray:
         """``B(q)`` (nv x m): generalised forces of unit thrusts (the paper's eq. (20))."""
+        q = self._q(q)
         if self._fast is not None:
             return self._fast.thrust_matrix(q)
         pin.computeJointJacobians(self.model, self.data, q)
@@ -513,6 +531,7 @@ class Vehicle:
         Returns:
             ``(linear [kg m/s], angular [kg m^2/s])``.
         """
+        q, v = self._q(q), self._v(v)
         pin.forwardKinematics(self.model, self.data, q, v)
         rotation, position, twist = self._body_states()
         return momentum_in_world(self._inertia_in_body, twist, rotation, position)
@@ -520,12 +539,13 @@ class Vehicle:
     # ------------------------------------------------------------------ kinematics
     def frame_id(self, name: str) -> int:
         """Pinocchio frame index of a link or frame, with a one-line error if unknown."""
-        if not self.model.existFrame(name):
-            raise ValueError(f"unknown link or frame '{name}'")
+        if not isinstance(name, str) or not self.model.existFrame(name):
+            raise ArgumentError(f"unknown link or frame {name!r:.80}")
         return self.model.getFrameId(name)
 
     def frame_placement(self, q: np.ndarray, name: str) -> pin.SE3:
         """Pose of a link or frame in the world."""
+        q = self._q(q)
         pin.framesForwardKinematics(self.model, self.data, q)
         return self.data.oMf[self.frame_id(name)].copy()
 
@@ -542,6 +562,14 @@ class Vehicle:
         Returns:
             ``(rotation to world (3x3), position in world [m], twist (v, omega) in the frame's axes)``.
         """
+        q, v = self._q(q), self._v(v)
+        if isinstance(frame_id, bool) or not isinstance(frame_id, (int, np.integer)):
+            raise ArgumentError(f"frame_id must be a frame index (int), got {frame_id!r:.40}")
+        if not 0 <= int(frame_id) < len(self.model.frames):
+            raise ArgumentError(
+                f"frame_id must be in [0, {len(self.model.frames)}), got {int(frame_id)}"
+            )
+        frame_id = int(frame_id)
         if self._fast is not None:
             return self._fast.frame_motion(q, v, frame_id)
         pin.forwardKinematics(self.model, self.data, q, v)
@@ -553,5 +581,6 @@ class Vehicle:
         """World poses of several links (default: every link with hydrodynamics)."""
         names = [link.link for link in self.hydro.links] if links is None else links
         ids = [self.frame_id(n) for n in names]
+        q = self._q(q)
         pin.framesForwardKinematics(self.model, self.data, q)
         return [self.data.oMf[i].copy() for i in ids]

@@ -271,6 +271,13 @@ class VehicleSpec:
         object.__setattr__(self, "modules", modules)
         if len(modules) < 2:
             raise SpecError(f"a vehicle needs at least 2 modules, got {len(modules)}")
+        from aiauv_pin.input_limits import MAX_LINKS
+
+        if len(modules) > MAX_LINKS - 1:  # plus the end-effector link
+            raise SpecError(
+                f"{len(modules)} modules, more than the {MAX_LINKS - 1} supported "
+                "(aiauv_pin.input_limits.MAX_LINKS)"
+            )
         for index, module in enumerate(modules):
             is_head = index == len(modules) - 1
             if is_head and module.joint is not None:
@@ -542,12 +549,14 @@ def load_spec(path: str | Path) -> VehicleSpec:
         SpecError: If the file cannot be read, is not valid TOML or is not a valid spec; the
             message is one line and starts with the file name.
     """
-    path = Path(path)
+    from aiauv_pin.input_limits import read_text
+
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        reason = getattr(error, "strerror", None) or str(error)
+        text = read_text(path, "vehicle spec")  # regular file, byte cap
+    except AiauvError as error:
+        reason = str(error).removeprefix(f"{path}: ")
         raise SpecError(f"{path}: cannot read vehicle spec: {reason}") from None
+    path = Path(path)
     try:
         return spec_from_toml(text)
     except SpecError as error:

@@ -65,7 +65,10 @@ def test_issue_keys_work_as_written():
         ({"duration": "long"}, "duration: expected a number"),
         ({"duration": -1.0}, "duration: must be > 0"),
         ({"method": "rk45"}, "method: expected one of rk4, euler"),
-        ({"path": {"type": "line", "point": [0, 0, 0], "direction": [0, 0, 0]}}, "path.line.direction: zero vector"),
+        (
+            {"path": {"type": "line", "point": [0, 0, 0], "direction": [0, 0, 0]}},
+            "path.line.direction: zero vector",
+        ),
         ({"path": {"type": "line", "direction": [1, 0, 0]}}, "path.line.point: missing"),
         (
             {

@@ -1,0 +1,225 @@
+"""Kill tests (issue 11): SIGKILL ``aiauv simulate`` and ``aiauv sweep`` at random moments.
+
+* ``simulate`` into a folder an earlier (shorter) run wrote: after each kill the folder is either the
+  earlier complete run or the new complete run, every file of it present and of that run (the
+  summary's duration matches the CSV's last time); no process of the killed run survives it (the
+  figure worker dies with its parent).
+* ``sweep``: killed while it runs, then run again: the table is complete and every run's metrics
+  equal those computed in this process (nothing lost, nothing counted twice, nothing stale).
+
+The kill moments come from a seeded generator, so CI tries the same ones each time. A few tens of
+seconds in all.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from aiauv_pin.outputs import FIGURES
+
+SEED = 20261122
+#: Kills of ``simulate`` (``AIAUV_KILLS`` for a longer campaign) and of the sweep.
+SIMULATE_KILLS = int(os.environ.get("AIAUV_KILLS", "3"))
+SWEEP_KILLS = int(os.environ.get("AIAUV_SWEEP_KILLS", "1"))
+
+
+def _aiauv(*args: str) -> list[str]:
+    return [sys.executable, "-c", "from aiauv_pin.cli import console_main; console_main()", *args]
+
+
+def _descendants(pid: int) -> set[int]:
+    """Every process whose chain of parents reaches ``pid`` (from /proc)."""
+    parents: dict[int, int] = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+                parents[int(entry.name)] = int(fields[1])
+            except (OSError, IndexError, ValueError):
+                continue
+    found: set[int] = set()
+    frontier = {pid}
+    while frontier:
+        children = {p for p, parent in parents.items() if parent in frontier} - found
+        found |= children
+        frontier = children
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False
+    return state not in ("Z", "X")
+
+
+def _wait_gone(pids: set[int], timeout: float) -> set[int]:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        pids = {pid for pid in pids if _alive(pid)}
+        if not pids:
+            return pids
+        time.sleep(0.1)
+    return {pid for pid in pids if _alive(pid)}
+
+
+def _assert_complete_run(out: Path) -> float:
+    """The folder holds every file of one complete run; return its simulated time."""
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "complete"
+    for name in FIGURES:
+        assert (out / "figures" / name).stat().st_size > 0, name
+    assert (out / "playback.html").stat().st_size > 0
+    with open(out / "timeseries.csv", newline="") as handle:
+        rows = list(csv.reader(handle))
+    assert all(len(row) == len(rows[0]) for row in rows)
+    last_time = float(rows[-1][0])
+    assert last_time == pytest.approx(summary["simulated_time"], abs=1e-9)
+    return last_time
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="uses /proc and SIGKILL")
+def test_killed_simulate_never_leaves_a_folder_claiming_what_it_lacks(tmp_path):
+    out = tmp_path / "run"
+    start = time.monotonic()
+    subprocess.run(
+        _aiauv("simulate", "--duration", "0.5", "--out", str(out), "--quiet"),
+        check=True,
+        capture_output=True,
+    )
+    full = time.monotonic() - start
+    assert _assert_complete_run(out) == pytest.approx(0.5)
+    rng = np.random.default_rng(SEED)
+    outcomes = []
+    for _ in range(SIMULATE_KILLS):
+        delay = float(rng.uniform(0.4, 1.0)) * full
+        process = subprocess.Popen(
+            _aiauv("simulate", "--duration", "1", "--out", str(out), "--quiet"),
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        time.sleep(delay)
+        family = _descendants(process.pid)
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+        assert not _wait_gone(family, 5.0), "a child of the killed simulate survived it"
+        if out.exists():
+            outcomes.append(_assert_complete_run(out))
+        else:
+            outcomes.append(None)
+    assert set(outcomes) <= {0.5, 1.0}, outcomes
+    # a later run cleans up what the killed ones left and replaces the folder whole
+    subprocess.run(
+        _aiauv("simulate", "--duration", "0.5", "--out", str(out), "--quiet", "--no-html"),
+        check=True,
+        capture_output=True,
+    )
+    assert not (out / "playback.html").exists()  # nothing stale of an earlier run
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]
+
+
+SWEEP = """duration = 0.5
+dt = 0.01
+[grid]
+k_e = [0.05, 0.08, 0.1]
+"""
+_IDENTITY = ("worker", "started_at", "finished_at", "task_time")
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="uses /proc and SIGKILL")
+def test_killed_sweep_resumes_to_exactly_the_full_table(tmp_path):
+    pytest.importorskip("distributed")
+    from aiauv_pin.sweep import execute_run, read_records, read_table
+    from aiauv_pin.sweep_spec import load_sweep_spec
+
+    spec = tmp_path / "s.toml"
+    spec.write_text(SWEEP)
+    out = tmp_path / "out"
+    command = _aiauv(
+        "sweep", str(spec), "--out", str(out), "--workers", "1", "--quiet", "--no-plots"
+    )
+    rng = np.random.default_rng(SEED)
+    partial: dict = {}
+    for _ in range(SWEEP_KILLS):
+        process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(float(rng.uniform(3.0, 8.0)))
+        family = _descendants(process.pid)
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+        survivors = _wait_gone(family, 10.0)
+        for pid in survivors:  # reported by the assertion below; not left running
+            os.kill(pid, signal.SIGKILL)
+        assert not survivors, "a worker of the killed sweep survived it"
+        records = read_records(out)
+        for run_id, record in partial.items():  # a finished run is never run again
+            assert records[run_id] == record
+        partial = records
+        if (out / "results.csv").exists():
+            for row in read_table(out / "results.csv"):
+                assert row["run_id"] in partial and row["status"] == "complete"
+    done = subprocess.run(command, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    records = read_records(out)
+    points = load_sweep_spec(spec).points()
+    assert sorted(records) == sorted(p.run_id for p in points)
+    rows = read_table(out / "results.csv")
+    assert [row["run_id"] for row in rows] == [p.run_id for p in points]
+    text = spec.read_text()
+    vehicle = points[0].vehicle.read_text()
+    for point in points:
+        expected = execute_run(
+            point.run_id, point.parameters, vehicle, point.parameters["vehicle_sha256"]
+        )
+        record = records[point.run_id]
+        assert record["status"] == expected["status"] == "complete"
+        for key, value in expected["metrics"].items():
+            if key not in ("wall_time", "real_time_factor"):
+                assert record["metrics"][key] == value, key
+        if point.run_id in partial:  # a run finished before the kill was not run again
+            assert partial[point.run_id] == record
+    assert text == (out / "spec.toml").read_text()
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="uses /proc and SIGKILL")
+def test_runs_of_a_killed_worker_are_run_again_not_lost(tmp_path):
+    pytest.importorskip("distributed")
+    from aiauv_pin.sweep import read_records
+
+    spec = tmp_path / "s.toml"
+    spec.write_text("duration = 5.0\ndt = 0.01\n[grid]\nk_e = [0.05, 0.06, 0.07, 0.08, 0.09]\n")
+    out = tmp_path / "out"
+    command = _aiauv(
+        "sweep", str(spec), "--out", str(out), "--workers", "1", "--quiet", "--no-plots"
+    )
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    runs = out / "runs"
+    deadline = time.monotonic() + 120
+    while not (runs.is_dir() and any(runs.glob("*.json"))) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    killed = 0
+    for pid in _descendants(process.pid):
+        try:
+            command_line = Path(f"/proc/{pid}/cmdline").read_bytes()
+        except OSError:
+            continue
+        if b"spawn_main" in command_line:  # the worker process (not the resource tracker)
+            os.kill(pid, signal.SIGKILL)
+            killed += 1
+    assert killed == 1
+    _, err = process.communicate(timeout=300)
+    assert process.returncode == 0, err
+    records = read_records(out)
+    assert len(records) == 5
+    assert {record["status"] for record in records.values()} == {"complete"}
+    assert len({record["worker"] for record in records.values()}) == 2  # a new worker took over
