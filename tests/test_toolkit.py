@@ -273,7 +273,7 @@ def test_free_body_under_a_sinusoidal_wrench_follows_the_closed_form(backend, fo
     quaternion = trajectory.q[:, 3:7]
     yaw_got = 2.0 * np.arctan2(quaternion[:, 2], quaternion[:, 3])
     np.testing.assert_allclose(trajectory.q[:, 0], x, atol=1e-9)
-    np.testing.assert_allclose(trajectory.q[:, 1:3], 0.0, atol=1e-12)
+    np.testing.assert_allclose(trajectory.q[:, 1:3], 0.0, atol=1e-9)  # RK4 error, as for x
     np.testing.assert_allclose(yaw_got, yaw, atol=1e-9)
 
 
