@@ -69,6 +69,14 @@ class CompiledController:
         return cls(passive)
 
     @property
+    def loop_function(self):
+        """What the compiled loop is given: ``None`` for a built-in controller (chosen there by its
+        parameters, so that the cached loop's signature holds no function), else the function."""
+        from .fast.controllers import paper_path_following
+
+        return None if self.function in (passive, paper_path_following) else self.function
+
+    @property
     def info_width(self) -> int:
         """Number of floats in one info row."""
         return sum(int(np.prod(shape, dtype=int)) for shape in self.info_shapes.values())

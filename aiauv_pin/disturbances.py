@@ -26,10 +26,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hydro.jit import compiled
+from hydro.jit import compiled, user_or_builtin
 
 from .errors import AiauvError
-from .fast.kernels import quaternion_rotation
+from .fast.rotations import quaternion_rotation
 
 
 @compiled
@@ -57,6 +57,22 @@ def base_wrench_in_world(t, q, v, parameters, tau):
         tau[3 * k] += r00 * a0 + r10 * a1 + r20 * a2
         tau[3 * k + 1] += r01 * a0 + r11 * a1 + r21 * a2
         tau[3 * k + 2] += r02 * a0 + r12 * a1 + r22 * a2
+
+
+#: ``kind`` numbers of the built-in disturbances (a user's own function has none: ``-1``).
+NONE, BASE_WRENCH = 0, 1
+
+
+@compiled
+def builtin_disturbance(kind, t, q, v, parameters, tau):
+    """The built-in disturbance number ``kind`` (:data:`NONE`, :data:`BASE_WRENCH`)."""
+    if kind == BASE_WRENCH:
+        base_wrench_in_world(t, q, v, parameters, tau)
+
+
+#: ``apply_disturbance(user, kind, t, q, v, parameters, tau)``: a user's function (``user``) or the
+#: built-in ``kind`` (``user = None``); see :func:`hydro.jit.user_or_builtin`.
+apply_disturbance = user_or_builtin(builtin_disturbance)
 
 
 @dataclass(frozen=True)
@@ -94,6 +110,16 @@ class Disturbance:
             (np.asarray(force, dtype=float).reshape(3), np.asarray(moment, dtype=float).reshape(3))
         )
         return cls(base_wrench_in_world, np.concatenate((values, [float(omega), float(phase)])))
+
+    @property
+    def kind_code(self) -> int:
+        """``kind`` of :func:`builtin_disturbance` (-1 for a user's function)."""
+        return {no_disturbance: NONE, base_wrench_in_world: BASE_WRENCH}.get(self.function, -1)
+
+    @property
+    def user_function(self):
+        """The function to pass to compiled code: ``None`` for a built-in disturbance."""
+        return None if self.kind_code >= 0 else self.function
 
     def generalized_force(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The disturbance's generalised force (nv,) at ``(t, q, v)``."""

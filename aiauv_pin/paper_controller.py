@@ -207,7 +207,8 @@ class VehiclePathFollowing:
         body, rotation, translation = self.vehicle.fast.frame(self.frame)
         parameters = PaperParameters(
             gains=controller.gain_record,
-            path_function=controller.path.function,
+            path_function=controller.path.user_function,
+            path_kind=controller.path.kind_code,
             path_parameters=controller.path.params,
             axis_index=np.ascontiguousarray(controller.axis_index, dtype=np.int64),
             reference_scale=np.ascontiguousarray(controller.reference_scale, dtype=float),

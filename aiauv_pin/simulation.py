@@ -434,7 +434,7 @@ def _simulate_compiled(
     tau = np.zeros(nv)
     info = np.full(width, np.nan)
     workspace = fast.workspace
-    run_chunk = loop_for(environment, controller.function, controller.parameters)
+    run_chunk = loop_for(environment, controller.loop_function, controller.parameters)
     if chunk_seconds is None:
         chunk_seconds = 1.0 if on_log is not None else 10.0
     chunk = max(1, round(chunk_seconds / dt))
@@ -454,7 +454,7 @@ def _simulate_compiled(
                 fast.model,
                 environment,
                 servo_record,
-                controller.function,
+                controller.loop_function,
                 controller.parameters,
                 controller.state,
                 q,

@@ -26,6 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from control.paths import path_point_of
 from hydro.jit import compiled
 
 #: ``|x_ref^b x e1|`` (with ``e1 . x_ref^b < 0``) at or below which ``phi_tilde = pi`` [-].
@@ -405,6 +406,7 @@ _IDENTITY = np.eye(3)
 def path_following_command(
     gains,
     path_function,
+    path_kind,
     path_parameters,
     axis_index,
     reference_scale,
@@ -431,7 +433,8 @@ def path_following_command(
 
     Args:
         gains: :class:`PaperGains`.
-        path_function, path_parameters: The path (:mod:`control.paths`).
+        path_function, path_kind, path_parameters: The path (:mod:`control.paths`): a user's
+            compiled function, or ``None`` and the built-in path's ``kind_code``.
         axis_index: Base angle (0: y, 1: z) driving each joint (n,).
         reference_scale: ``exp(-alpha (j - 1))`` per joint (n,).
         surge_mask: 1 for the surge thrusters (m,).
@@ -445,7 +448,7 @@ def path_following_command(
         joint_positions, joint_velocities, joint_hydrostatic_forces: (n,) [rad], [rad/s], [N m].
         out: :class:`CommandBuffers`.
     """
-    point = path_function(position, path_parameters)
+    point = path_point_of(path_function, path_kind, position, path_parameters)
     x_ref, x_dot, x_ddot = los_guidance(  # eq. (21)
         point, position, velocity, acceleration, gains.u_d, gains.k_y, gains.k_z
     )

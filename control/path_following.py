@@ -372,7 +372,8 @@ class PathFollowingController:
         R_e = check_rotation(measurement.rotation_to_world, "rotation_to_world")
         laws.path_following_command(  # eqs. (21)-(25): control.laws.path_following_command
             self.gain_record,
-            self.path.function,
+            self.path.user_function,
+            self.path.kind_code,
             self.path.params,
             self._axis_index,
             self._reference_scale,

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hydro.jit import compiled
+from hydro.jit import compiled, user_or_builtin
 from hydro.spec import HydroError
 
 
@@ -57,6 +57,25 @@ def shear_current(t, x, y, z, parameters):
         parameters[1] + parameters[4] * dz,
         parameters[2] + parameters[5] * dz,
     )
+
+
+#: ``kind`` numbers of the built-in currents (a user's own function has none: ``-1``).
+CONSTANT, TIDAL, SHEAR = 0, 1, 2
+
+
+@compiled
+def builtin_current(kind, t, x, y, z, parameters):
+    """The built-in current number ``kind`` (:data:`CONSTANT`, :data:`TIDAL`, :data:`SHEAR`)."""
+    if kind == TIDAL:
+        return tidal_current(t, x, y, z, parameters)
+    if kind == SHEAR:
+        return shear_current(t, x, y, z, parameters)
+    return constant_current(t, x, y, z, parameters)
+
+
+#: ``current_velocity(user, kind, t, x, y, z, parameters) -> (V_x, V_y, V_z)``: a user's function
+#: (``user``) or the built-in ``kind`` (``user = None``); see :func:`hydro.jit.user_or_builtin`.
+current_velocity = user_or_builtin(builtin_current)
 
 
 def _vector3(value, name: str) -> np.ndarray:
@@ -136,6 +155,16 @@ class Current:
             "reference_z": reference_z,
         }
         return cls(shear_current, parameters, "shear", description)
+
+    @property
+    def kind_code(self) -> int:
+        """``kind`` of :func:`builtin_current` (-1 for a user's function)."""
+        return {"constant": CONSTANT, "tidal": TIDAL, "shear": SHEAR}.get(self.kind, -1)
+
+    @property
+    def user_function(self):
+        """The function to pass to compiled code: ``None`` for a built-in current."""
+        return None if self.kind_code >= 0 else self.function
 
     @property
     def is_zero(self) -> bool:

@@ -137,3 +137,44 @@ def compiled(function: F | None = None, *, fastmath: bool = False) -> F:
 def interpreted(function: Callable) -> Callable:
     """The plain Python function behind a :func:`compiled` law (itself if it was not compiled)."""
     return getattr(function, "py_func", function)
+
+
+def user_or_builtin(builtin: Callable) -> Callable:
+    """A function ``select(user, kind, *args)`` that calls ``user(*args)`` when ``user`` is a
+    function and ``builtin(kind, *args)`` when it is ``None``, resolved at compile time.
+
+    numba's on-disk cache keys a compiled function on its argument types, and the type of a
+    function passed as an argument carries that function's address, which differs in every process
+    (numba issue 6251): a cached loop that took its path, current or controller as a function
+    would be compiled again in every process (and numba's cache index eventually fails to save).
+    Built-in laws are therefore chosen by a number (``kind``) inside ``builtin`` and passed as
+    ``user = None``; only a user's own function is passed as an argument (and runs in an uncached
+    copy of the loop, see :func:`aiauv_pin.fast.loop.loop_for`). Interpreted, the choice is made at
+    run time.
+    """
+
+    def select(user, kind, *args):
+        if user is None:
+            return builtin(kind, *args)
+        return user(*args)
+
+    if NUMBA_AVAILABLE:
+        from numba import types
+        from numba.extending import overload
+
+        @overload(select)
+        def _select(user, kind, *args):
+            if isinstance(user, (types.NoneType, types.Omitted)):
+
+                def call_builtin(user, kind, *args):
+                    return builtin(kind, *args)
+
+                return call_builtin
+
+            def call_user(user, kind, *args):
+                return user(*args)
+
+            return call_user
+
+    select.__name__ = f"user_or_{getattr(builtin, '__name__', 'builtin')}"
+    return select

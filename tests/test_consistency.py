@@ -22,6 +22,18 @@ from aiauv_pin.vehicle import Vehicle
 
 DATA = Path(__file__).parent / "data"
 
+#: ``D_Q`` with a positive-definite symmetric part and an energy-injecting antisymmetric coupling.
+QUADRATIC_INJECTING = (
+    "<quadratic_damping>"
+    "6.0 400.0 0.0 0.0 0.0 0.0 "
+    "-400.0 60.0 0.0 0.0 0.0 0.0 "
+    "0.0 0.0 60.0 0.0 0.0 0.0 "
+    "0.0 0.0 0.0 0.2 0.0 0.0 "
+    "0.0 0.0 0.0 0.0 8.0 0.0 "
+    "0.0 0.0 0.0 0.0 0.0 8.0 "
+    "</quadratic_damping>"
+)
+
 
 def test_every_check_is_in_the_pytest_suite():
     from aiauv_pin.testing import suite
@@ -221,11 +233,16 @@ def test_trim_of_a_heavy_tilted_vehicle(tmp_path):
 
 # ---------------------------------------------------------------- aiauv check --physics
 def negative_damping_urdf(tmp_path) -> Path:
-    """The two-link test vehicle with a hull whose linear damping injects energy."""
+    """The two-link test vehicle with a hull whose quadratic damping injects energy.
+
+    Its ``D_Q`` has a positive-definite symmetric part (so the validation gate, which checks that,
+    accepts it) but a large antisymmetric surge-sway coupling: ``nu . D_Q (|nu| nu)`` is then
+    negative for some velocities (e.g. ``u = 1, v = 0.5``), which only the dynamics checks see.
+    """
     text = (DATA / "two_link_hydro.urdf").read_text()
     bad = text.replace(
-        "<linear_damping>4 20 20 0.5 3 3</linear_damping>",
-        "<linear_damping>-4 -20 -20 -0.5 -3 -3</linear_damping>",
+        "<quadratic_damping>6 60 60 0.2 8 8</quadratic_damping>",
+        QUADRATIC_INJECTING,
     )
     assert bad != text
     path = tmp_path / "negative_damping.urdf"

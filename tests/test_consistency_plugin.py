@@ -23,6 +23,18 @@ pytest_plugins = ["pytester"]
 DATA = Path(__file__).parent / "data"
 N_CHECKS = len(consistency.CHECKS)
 
+#: ``D_Q`` with a positive-definite symmetric part and an energy-injecting antisymmetric coupling.
+QUADRATIC_INJECTING = (
+    "<quadratic_damping>"
+    "6.0 400.0 0.0 0.0 0.0 0.0 "
+    "-400.0 60.0 0.0 0.0 0.0 0.0 "
+    "0.0 0.0 60.0 0.0 0.0 0.0 "
+    "0.0 0.0 0.0 0.2 0.0 0.0 "
+    "0.0 0.0 0.0 0.0 8.0 0.0 "
+    "0.0 0.0 0.0 0.0 0.0 8.0 "
+    "</quadratic_damping>"
+)
+
 
 def copy_in(pytester, source: Path, name: str | None = None) -> Path:
     """A copy of a URDF in the nested session's folder (pytest picks its rootdir from the paths on
@@ -118,27 +130,26 @@ def test_own_tests_run_beside_the_suite_and_use_the_fixture(pytester):
 
 
 def test_inconsistent_vehicle_fails_with_figure_and_tolerance(pytester):
-    """Negative linear damping on the hull: energy is injected at low speed."""
+    """Quadratic damping whose surge-sway coupling injects energy (the gate cannot see it)."""
     text = (DATA / "two_link_hydro.urdf").read_text()
     bad = pytester.path / "leaky.urdf"
     bad.write_text(
         text.replace(
-            "<linear_damping>4 20 20 0.5 3 3</linear_damping>",
-            "<linear_damping>-4 -20 -20 -0.5 -3 -3</linear_damping>",
+            "<quadratic_damping>6 60 60 0.2 8 8</quadratic_damping>",
+            QUADRATIC_INJECTING,
         ).replace('<robot name="two_link">', '<robot name="leaky">')
     )
     result = pytester.runpytest_subprocess("--aiauv-vehicle", str(bad), "-rf")
-    result.assert_outcomes(passed=N_CHECKS - 2, failed=2, warnings=1)
+    # the 5 s undriven run of energy_decays need not meet the injecting velocities; the
+    # dissipation check, which samples velocities, does
+    result.assert_outcomes(passed=N_CHECKS - 1, failed=1, warnings=1)
     result.stdout.fnmatch_lines(
         [
             f"collected {N_CHECKS} items",
             "_* test_damping_dissipates[[]leaky[]] _*",
             "damping_dissipates: FAIL: * >= tolerance 0 (largest damping power v_r . tau_D [[]W[]]*"
             "it must be negative)",
-            "_* test_energy_decays[[]leaky[]] _*",
-            "energy_decays: FAIL: * > tolerance 1e-09 (largest increase of T + U*",
             "FAILED aiauv_pin/testing/suite.py::test_damping_dissipates[[]leaky[]] - *",
-            "FAILED aiauv_pin/testing/suite.py::test_energy_decays[[]leaky[]] - *",
         ]
     )
 

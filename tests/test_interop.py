@@ -68,8 +68,10 @@ def coupled_urdf(tmp_path_factory) -> Path:
     added_mass = root @ root.T + 5.0 * np.eye(6)  # symmetric positive definite, fully coupled
     text = FULL_LINK_URDF.format(
         added_mass=_numbers(added_mass),
-        linear=_numbers(rng.uniform(-3.0, 10.0, size=(6, 6))),
-        quadratic=_numbers(rng.uniform(-3.0, 30.0, size=(6, 6))),
+        # coupled everywhere, not symmetric, with a positive-definite symmetric part (Gershgorin):
+        # the validation gate refuses damping that would feed energy in
+        linear=_numbers(10.0 * np.eye(6) + rng.uniform(-1.0, 1.0, size=(6, 6))),
+        quadratic=_numbers(30.0 * np.eye(6) + rng.uniform(-3.0, 3.0, size=(6, 6))),
     )
     path = tmp_path_factory.mktemp("coupled") / "coupled.urdf"
     path.write_text(text)

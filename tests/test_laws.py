@@ -159,7 +159,8 @@ def test_path_following_command_compiled_equals_interpreted(exact, path, rng):
                 strict=True,
             ):
                 function(
-                    gains, path.function, path.params, axis_index, scale, mask, state, t,
+                    gains, path.user_function, path.kind_code, path.params, axis_index, scale,
+                    mask, state, t,
                     *measurement, out,
                 )  # fmt: skip
             for name, got, expected in zip(outs[0]._fields, outs[0], outs[1], strict=True):

@@ -274,7 +274,8 @@ def test_added_mass_matrix_needs_no_bodies_by_nv_by_nv_temporary(paper_vehicle, 
 
     pin.computeJointJacobians(vehicle.model, vehicle.data, q)
     jac = vehicle._body_jacobians()
-    stacked = np.sum(jac.transpose(0, 2, 1) @ (vehicle._added_mass_in_body @ jac), axis=0)
+    added = vehicle.fluid_model().added_mass
+    stacked = np.sum(jac.transpose(0, 2, 1) @ (added @ jac), axis=0)  # the old (n, nv, nv) form
     np.testing.assert_allclose(vehicle._added_mass_matrix(jac), stacked, rtol=0, atol=1e-12)
 
 

@@ -7,6 +7,7 @@ Simulator's layout, with RexROV's and the Oberon7 arm's published parameters (se
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -309,16 +310,26 @@ def test_lauv_thruster_with_swapped_clamps_and_coupled_damping():
     assert link.linear_damping[1, 1] == pytest.approx(23.0)
 
 
-def test_eca_a9_loads_and_says_what_it_cannot_apply():
-    """As shipped, ECA A9's only damping is forward-speed damping and its thruster has no limit."""
+def test_eca_a9_is_read_but_refused_for_its_inertia():
+    """As published, ECA A9's inertia breaks the triangle inequality (0.6 + 30 < 35 kg m^2), so the
+    validation gate refuses it in one line; its hydrodynamic block is still read, and says what it
+    cannot apply (forward-speed damping, a thruster with no limit)."""
+    from aiauv_pin.errors import PhysicalParameterError
+    from hydro.urdf_block import read_hydrodynamics
+
     eca = Path(__file__).parent / "data" / "eca_a9_uuv_simulator.urdf"
+    with pytest.raises(PhysicalParameterError, match="triangle inequality") as error:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            aiauv_pin.load_vehicle(eca)
+    assert "\n" not in str(error.value)
     with pytest.warns(UserWarning) as record:
-        vehicle = aiauv_pin.load_vehicle(eca)
+        hydro = read_hydrodynamics(eca)
     messages = " ".join(str(item.message) for item in record)
     assert "linear_damping_forward_speed" in messages and "not applied" in messages
     assert "no finite positive thrust limit" in messages
-    assert vehicle.hydro.thrusters == ()
-    (link,) = vehicle.hydro.links
+    assert hydro.thrusters == ()
+    (link,) = hydro.links
     np.testing.assert_allclose(np.diag(link.added_mass), [4, 95, 75, 0.4, 27, 32])
     assert not np.any(link.linear_damping) and not np.any(link.quadratic_damping)
 

@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from control.laws import CommandBuffers, PaperGains, SurgeState, path_following_command
-from hydro.jit import compiled
+from hydro.jit import NUMBA_AVAILABLE, compiled
 
 from .kernels import frame_of_body, kinematics, restoring_into, thrust_into
 
@@ -36,7 +36,8 @@ class PaperParameters(NamedTuple):
     """What :func:`paper_path_following` needs besides the state (built in Python once)."""
 
     gains: PaperGains
-    path_function: object
+    path_function: object  # None for a built-in path (then path_kind chooses it)
+    path_kind: int
     path_parameters: np.ndarray
     axis_index: np.ndarray  # (n,) base angle of each joint (0: y, 1: z)
     reference_scale: np.ndarray  # (n,) exp(-alpha (j - 1))
@@ -113,6 +114,7 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
     path_following_command(
         P.gains,
         P.path_function,
+        P.path_kind,
         P.path_parameters,
         P.axis_index,
         P.reference_scale,
@@ -175,3 +177,46 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
     info[o] = out.cross_track[0]
     info[o + 1] = out.cross_track[1]
     info[o + 2] = out.scalars[1]
+
+
+def _run_controller_python(user, t, q, v, model, workspace, parameters, state, tau, info):
+    if user is not None:
+        return user(t, q, v, model, workspace, parameters, state, tau, info)
+    if isinstance(parameters, PaperParameters):
+        return paper_path_following(t, q, v, model, workspace, parameters, state, tau, info)
+    return passive(t, q, v, model, workspace, parameters, state, tau, info)
+
+
+#: ``run_controller(user, t, q, v, model, workspace, parameters, state, tau, info)``: a user's
+#: compiled controller (``user``), or with ``user = None`` the built-in one its ``parameters``
+#: select (:class:`PaperParameters`: the paper's, anything else: passive). Chosen at compile time,
+#: so the cached loop's signature holds no function (see :func:`hydro.jit.user_or_builtin`).
+run_controller = _run_controller_python
+
+if NUMBA_AVAILABLE:
+    from numba import types
+    from numba.extending import overload
+
+    @overload(_run_controller_python)
+    def _run_controller(user, t, q, v, model, workspace, parameters, state, tau, info):
+        if not isinstance(user, (types.NoneType, types.Omitted)):
+
+            def call_user(user, t, q, v, model, workspace, parameters, state, tau, info):
+                user(t, q, v, model, workspace, parameters, state, tau, info)
+
+            return call_user
+        paper = (
+            isinstance(parameters, types.BaseNamedTuple)
+            and parameters.instance_class is PaperParameters
+        )
+        if paper:
+
+            def call_paper(user, t, q, v, model, workspace, parameters, state, tau, info):
+                paper_path_following(t, q, v, model, workspace, parameters, state, tau, info)
+
+            return call_paper
+
+        def call_passive(user, t, q, v, model, workspace, parameters, state, tau, info):
+            passive(t, q, v, model, workspace, parameters, state, tau, info)
+
+        return call_passive

@@ -32,26 +32,19 @@ import math
 import numpy as np
 
 from control.laws import joint_pd_torque
+from hydro.currents import current_velocity
 from hydro.jit import compiled
 from hydro.laws import add_body_fluid_bias, coriolis_wrench, hydrostatic_wrench
 
+from ..disturbances import apply_disturbance
 from .records import FREE_FLYER, REVOLUTE, Workspace
+from .rotations import quaternion_rotation
 
 #: Integration methods understood by :func:`step` and :func:`run_steps`.
 RK4, EULER = 0, 1
 
 
 # ---------------------------------------------------------------------- small linear algebra
-@compiled(fastmath=True)
-def quaternion_rotation(x, y, z, w):
-    """Rotation matrix of a unit quaternion ``(x, y, z, w)`` (Pinocchio's order), as three rows."""
-    return (
-        (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)),
-        (2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)),
-        (2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)),
-    )
-
-
 @compiled(fastmath=True)
 def _quat_to_rot(x, y, z, w, out):
     """Rotation matrix of a unit quaternion ``(x, y, z, w)`` into ``out``."""
@@ -371,7 +364,9 @@ def sample_current(model, env, t, W):
             + rot[2, 1] * probe[b, 1]
             + rot[2, 2] * probe[b, 2]
         )
-        c = env.current(t, x, y, z, env.current_parameters)
+        c = current_velocity(
+            env.current_function, env.current_kind, t, x, y, z, env.current_parameters
+        )
         W.current[b, 0] = c[0]
         W.current[b, 1] = c[1]
         W.current[b, 2] = c[2]
@@ -568,7 +563,9 @@ def acceleration_into(model, env, servo, t, q, v, tau, W, out):
     tau_all = W.tau_total
     for i in range(tau.shape[0]):
         tau_all[i] = tau[i]
-    env.disturbance(t, q, v, env.disturbance_parameters, tau_all)
+    apply_disturbance(
+        env.disturbance_function, env.disturbance_kind, t, q, v, env.disturbance_parameters, tau_all
+    )
     n_joint = servo.references.shape[0]
     if servo.enabled and n_joint > 0:
         # joint servo, paper eq. (24): -k_p (q - q*) - k_d qd + g_q(q)

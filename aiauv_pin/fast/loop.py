@@ -13,6 +13,7 @@ from functools import lru_cache
 
 from hydro.jit import NUMBA_AVAILABLE, PROJECT_PACKAGES, compiled
 
+from .controllers import run_controller
 from .kernels import is_finite_state, step_into
 
 
@@ -41,6 +42,9 @@ def run_chunk(
 ):
     """Steps ``k_start .. k_stop - 1`` (controller, logging, integration), plus the final sample.
 
+    ``controller`` is a user's compiled controller, or ``None`` for the built-in one that
+    ``parameters`` select (:func:`aiauv_pin.fast.controllers.run_controller`).
+
     ``log`` rows are ``(t, q, v, tau, info)``; ``tau`` and ``info`` hold the last controller output
     between calls (zero-order hold).
 
@@ -57,7 +61,7 @@ def run_chunk(
             return log_index, k - k_start
         t = k * dt
         if k % steps_per_control == 0:
-            controller(t, q, v, model, W, parameters, state, tau, info)
+            run_controller(controller, t, q, v, model, W, parameters, state, tau, info)
         if k % log_every == 0 or k == n_total:
             row = log[log_index]
             row[0] = t

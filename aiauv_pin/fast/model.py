@@ -31,7 +31,14 @@ def environment(current=None, disturbance: Disturbance | None = None) -> Environ
     compiled disturbance (``None``: none)."""
     water: Current = as_current(current)
     push = Disturbance.none() if disturbance is None else disturbance
-    return Environment(water.function, water.parameters, push.function, push.parameters)
+    return Environment(
+        water.user_function,
+        water.kind_code,
+        water.parameters,
+        push.user_function,
+        push.kind_code,
+        push.parameters,
+    )
 
 
 class FastModel:

@@ -79,11 +79,17 @@ class Servo(NamedTuple):
 
 
 class Environment(NamedTuple):
-    """Water current and external disturbance, as compiled functions (see the module docstring)."""
+    """Water current and external disturbance (see the module docstring of the kernels).
 
-    current: object
+    A built-in current or disturbance is chosen by its ``kind`` with ``*_function = None``; a user's
+    own compiled function is passed in ``*_function`` (:func:`hydro.jit.user_or_builtin`).
+    """
+
+    current_function: object
+    current_kind: int
     current_parameters: np.ndarray
-    disturbance: object
+    disturbance_function: object
+    disturbance_kind: int
     disturbance_parameters: np.ndarray
 
 

@@ -49,14 +49,34 @@ from control.paths.base import (
 from control.paths.helix import HelixPath, helix_point
 from control.paths.line import LinePath, line_frame, line_point
 from control.paths.waypoints import WaypointPath, waypoints_point
+from hydro.jit import compiled, user_or_builtin
 
 #: Path types of scenario files: ``type`` -> class. A new path type is a new module defining its
-#: class (and compiled function) and one line here.
+#: class (and compiled function), one line here and one branch in :func:`builtin_path_point`.
 PATH_TYPES: dict[str, type[Path]] = {
     "line": LinePath,
     "helix": HelixPath,
     "waypoints": WaypointPath,
 }
+
+
+#: ``kind_code`` of each built-in path (numba freezes these module constants when compiling).
+LINE, HELIX, WAYPOINTS = LinePath.kind_code, HelixPath.kind_code, WaypointPath.kind_code
+
+
+@compiled
+def builtin_path_point(kind, position, params) -> PathPoint:
+    """The closest point on the built-in path number ``kind`` (its class's ``kind_code``)."""
+    if kind == HELIX:
+        return helix_point(position, params)
+    if kind == WAYPOINTS:
+        return waypoints_point(position, params)
+    return line_point(position, params)
+
+
+#: ``path_point_of(user, kind, position, params) -> PathPoint``: a user's path function (``user``)
+#: or the built-in path ``kind`` (``user = None``), see :func:`hydro.jit.user_or_builtin`.
+path_point_of = user_or_builtin(builtin_path_point)
 
 __all__ = [
     "PATH_TYPES",
@@ -69,10 +89,12 @@ __all__ = [
     "UserPath",
     "Vector3",
     "WaypointPath",
+    "builtin_path_point",
     "from_mapping",
     "helix_point",
     "line_frame",
     "line_point",
+    "path_point_of",
     "waypoints_point",
 ]
 
@@ -125,9 +147,11 @@ __all__ = [
     "PathPoint",
     "UserPath",
     "WaypointPath",
+    "builtin_path_point",
     "from_mapping",
     "helix_point",
     "line_frame",
     "line_point",
+    "path_point_of",
     "waypoints_point",
 ]

@@ -156,6 +156,7 @@ class HelixPath(Path):
     params: np.ndarray = field(init=False, repr=False, compare=False)
 
     type_name: ClassVar[str] = "helix"
+    kind_code: ClassVar[int] = 1
     function: ClassVar[Callable] = staticmethod(helix_point)
 
     def __post_init__(self):

@@ -88,6 +88,7 @@ class LinePath(Path):
     params: np.ndarray = field(init=False, repr=False, compare=False)
 
     type_name: ClassVar[str] = "line"
+    kind_code: ClassVar[int] = 0
     function: ClassVar[Callable] = staticmethod(line_point)
 
     def __post_init__(self):

@@ -166,6 +166,7 @@ class WaypointPath(Path):
     breakpoints: tuple[float, ...] = field(init=False, repr=False, compare=False)
 
     type_name: ClassVar[str] = "waypoints"
+    kind_code: ClassVar[int] = 2
     function: ClassVar[Callable] = staticmethod(waypoints_point)
 
     def __post_init__(self):
