@@ -97,6 +97,21 @@ def _per_unit(function, units: int, rounds: int = 7) -> float:
     return best * 1e6
 
 
+def _interleaved(functions: dict, rounds: int = 9) -> dict:
+    """Best-of-rounds CPU microseconds per unit of each ``function()`` (name -> (function, units)),
+    the functions taking turns within every round, so that a change of load on a shared machine
+    hits them alike and their ratio holds."""
+    for function, _ in functions.values():
+        function()
+    best = {name: float("inf") for name in functions}
+    for _ in range(rounds):
+        for name, (function, units) in functions.items():
+            start = _clock()
+            function()
+            best[name] = min(best[name], (_clock() - start) / units)
+    return {name: value * 1e6 for name, value in best.items()}
+
+
 def _random_state(model, rng):
     import pinocchio as pin
 
@@ -199,6 +214,71 @@ def mujoco_timings(case: str, quick: bool = False) -> dict:
 
         results[f"mj_step_{integrator.lower()}_us"] = _per_unit(step, n)
     return results
+
+
+def head_to_head(vehicle, case: str, quick: bool = False) -> dict:
+    """The compiled dynamics and RK4 step against MuJoCo's ``mj_forward`` and RK4 ``mj_step``,
+    timed interleaved (:func:`_interleaved`) in one process; the ratios are the comparison.
+
+    Returns an empty dict without mujoco or the compiled backend.
+    """
+    try:
+        import mujoco
+    except ImportError:
+        return {}
+    fast = vehicle.fast
+    if fast is None:
+        return {}
+    from .fast import kernels
+    from .fast.model import METHOD_CODES
+
+    n = 200 if quick else 2000
+    rng = np.random.default_rng(5)
+    q, v = _random_state(vehicle.model, rng)
+    tau = rng.normal(size=vehicle.nv)
+    model, env, servo, W = fast.model, fast.still_water, fast.no_servo, fast.workspace
+    out = np.empty(vehicle.nv)
+    m = 2 * n  # about as long a round as MuJoCo's n calls
+
+    def ours_forward():
+        kernels.time_accelerations(model, env, servo, q, v, tau, m, W, out)
+
+    def ours_rk4():
+        qq, vv = q.copy(), v.copy()
+        kernels.run_steps(model, env, servo, 0.0, qq, vv, tau, 0.001, n, METHOD_CODES["rk4"], W)
+
+    forward_model, rk4_model = mujoco_model(case, "Euler"), mujoco_model(case, "RK4")
+    forward_data, rk4_data = mujoco.MjData(forward_model), mujoco.MjData(rk4_model)
+    for data in (forward_data, rk4_data):
+        data.qvel[:] = 0.3 * rng.normal(size=forward_model.nv)
+        data.qpos[7:] = rng.uniform(-0.5, 0.5, forward_model.nq - 7)
+    qpos, qvel = rk4_data.qpos.copy(), rk4_data.qvel.copy()
+
+    def theirs_forward():
+        for _ in range(n):
+            mujoco.mj_forward(forward_model, forward_data)
+
+    def theirs_rk4():
+        rk4_data.qpos[:] = qpos
+        rk4_data.qvel[:] = qvel
+        for _ in range(n):
+            mujoco.mj_step(rk4_model, rk4_data)
+
+    us = _interleaved(
+        {
+            "numba_acceleration_in_kernel_us": (ours_forward, m),
+            "mj_forward_us": (theirs_forward, n),
+            "numba_rk4_step_us": (ours_rk4, n),
+            "mj_step_rk4_us": (theirs_rk4, n),
+        },
+        rounds=5 if quick else 11,
+    )
+    return {
+        **us,
+        "ratio_numba_in_kernel_to_mj_forward": us["numba_acceleration_in_kernel_us"]
+        / us["mj_forward_us"],
+        "ratio_numba_rk4_step_to_mj_step_rk4": us["numba_rk4_step_us"] / us["mj_step_rk4_us"],
+    }
 
 
 # ---------------------------------------------------------------------- scenario
@@ -431,6 +511,7 @@ def run_bench(quick: bool = False, case: str = "uniform", duration: float | None
         "vehicle": {"case": case, "nq": vehicle.nq, "nv": vehicle.nv},
         "dynamics": dynamics_timings(vehicle, quick),
         "mujoco": mujoco_timings(case, quick),
+        "head_to_head": head_to_head(vehicle, case, quick),
     }
     with tempfile.TemporaryDirectory() as folder:
         results["scenario"] = scenario_timing(case, scenario_duration, Path(folder))
@@ -450,9 +531,10 @@ def run_bench(quick: bool = False, case: str = "uniform", duration: float | None
         results["ratio_numba_python_call_to_mj_forward"] = (
             dyn["numba_acceleration_python_call_us"] / mj["mj_forward_us"]
         )
-        results["ratio_numba_in_kernel_to_mj_forward"] = (
-            dyn["numba_acceleration_in_kernel_us"] / mj["mj_forward_us"]
-        )
+    h2h = results["head_to_head"]
+    if h2h:
+        results["ratio_numba_in_kernel_to_mj_forward"] = h2h["ratio_numba_in_kernel_to_mj_forward"]
+        results["ratio_numba_rk4_step_to_mj_step_rk4"] = h2h["ratio_numba_rk4_step_to_mj_step_rk4"]
     return results
 
 
@@ -483,9 +565,23 @@ def format_table(results: dict) -> str:
             results.get("ratio_numba_python_call_to_mj_forward"),
             "",
         )
+        h2h = results.get("head_to_head") or {}
+        if h2h:
+            row(
+                "interleaved: numba (in kernel) acceleration",
+                h2h["numba_acceleration_in_kernel_us"],
+            )
+            row("interleaved: MuJoCo mj_forward", h2h["mj_forward_us"])
+            row("interleaved: numba RK4 step", h2h["numba_rk4_step_us"])
+            row("interleaved: MuJoCo mj_step RK4", h2h["mj_step_rk4_us"])
         row(
-            "ratio numba (in kernel) / mj_forward",
+            "ratio numba (in kernel) / mj_forward (interleaved)",
             results.get("ratio_numba_in_kernel_to_mj_forward"),
+            "",
+        )
+        row(
+            "ratio numba RK4 step / mj_step RK4 (interleaved)",
+            results.get("ratio_numba_rk4_step_to_mj_step_rk4"),
             "",
         )
     row(
