@@ -11,8 +11,11 @@ Measures, in one run on the paper vehicle:
   loading the compiled kernels from the cache included);
 * an accuracy table: the largest end-effector distance, over the whole path and the whole scenario
   duration (10 s with ``--quick``), between a run at ``dt`` and one at ``dt / 4``;
-* MuJoCo's ``mj_forward`` and ``mj_step`` (Euler, RK4) on the equivalent 9-body model generated
-  from the URDF (:func:`mjcf_from_vehicle`), when the optional ``mujoco`` package is installed.
+* a user's compiled controller (``benchmarks/user_controller.py``, plain ``numba.njit`` outside the
+  project's packages) against the built-in one on the same paper scenario, compiled loop, warm,
+  interleaved repeats (source checkout only: the file is not installed);
+* MuJoCo's ``mj_forward`` and ``mj_step`` (Euler, RK4) on the 9-body model that ``aiauv export``
+  writes from the URDF (:func:`mujoco_model`), when the optional ``mujoco`` package is installed.
 
 The results are printed as a table and written atomically to JSON.
 """
@@ -37,92 +40,31 @@ DEFAULT_OUTPUT = Path("benchmarks") / "results.json"
 
 
 # ---------------------------------------------------------------------- MuJoCo model
-def _numbers(values) -> str:
-    return " ".join(f"{float(x):.9g}" for x in np.ravel(values))
+def mujoco_model(case: str, integrator: str, timestep: float = 0.01):
+    """MuJoCo model of the bundled vehicle, as ``aiauv export`` writes it (:mod:`aiauv_pin.interop.mjcf`).
 
-
-def mjcf_from_vehicle(vehicle, *, timestep: float = 0.01, integrator: str = "RK4") -> str:
-    """MJCF of a vehicle's rigid bodies with MuJoCo's ellipsoid fluid model, for benchmarking.
-
-    Same kinematic tree, masses and inertias as the Pinocchio model (free joint at the root, hinge
-    or slide joints), one cylinder geom per link with crossflow data (its length and radius;
-    otherwise a small sphere), no contacts, fluid density 1000 kg/m^3 and
-    ``fluidshape="ellipsoid"``. MuJoCo's fluid model is not ours (no Fossen matrices), so only the
-    cost is comparable, not the motion.
+    Same kinematic tree, masses and inertias as the Pinocchio model, MuJoCo's ellipsoid fluid model
+    on the links' collision cylinders, buoyancy as gravity compensation, the thrusters as
+    actuators (idle here). MuJoCo's fluid model is not ours (no Fossen matrices), so only the cost
+    is comparable, not the motion.
 
     Args:
-        vehicle: The vehicle (free-flyer root, 1-DOF joints).
-        timestep: ``<option timestep>`` [s].
-        integrator: ``"Euler"`` or ``"RK4"``.
+        case: ``"uniform"`` or ``"stabilised"``.
+        integrator: ``"Euler"`` or ``"RK4"`` (replaces the exporter's ``implicitfast``).
+        timestep: ``opt.timestep`` [s].
     """
-    import pinocchio as pin
+    import mujoco
 
-    model = vehicle.model
-    children: dict[int, list[int]] = {}
-    for j in range(2, model.njoints):
-        children.setdefault(model.parents[j], []).append(j)
-    geoms: dict[int, list[str]] = {}
-    for k, link in enumerate(vehicle.hydro.links):
-        joint, placement = vehicle._link_placement(link.link)
-        if link.crossflow is not None:
-            c = link.crossflow
-            start = placement.act(c.translation)
-            end = start + placement.rotation @ c.rotation @ np.array([c.length, 0.0, 0.0])
-            geom = (
-                f'<geom name="g{k}" type="cylinder" fromto="{_numbers(start)} {_numbers(end)}" '
-                f'size="{c.radius:.9g}"'
-            )
-        else:
-            centre = _numbers(placement.translation)
-            geom = f'<geom name="g{k}" type="sphere" pos="{centre}" size="0.1"'
-        geoms.setdefault(joint, []).append(
-            geom + ' density="0" contype="0" conaffinity="0" fluidshape="ellipsoid"/>'
-        )
+    from . import loading
+    from .interop.common import load_export_source
+    from .interop.mjcf import mjcf_text
 
-    def body(j: int, indent: str) -> list[str]:
-        placement = model.jointPlacements[j]
-        quat = pin.Quaternion(placement.rotation)
-        inertia = model.inertias[j]
-        mass = max(float(inertia.mass), 1e-6)
-        i3 = inertia.inertia
-        lines = [
-            f'{indent}<body name="b{j}" pos="{_numbers(placement.translation)}" '
-            f'quat="{quat.w:.12g} {quat.x:.12g} {quat.y:.12g} {quat.z:.12g}">'
-        ]
-        if j == 1:
-            lines.append(f'{indent}  <freejoint name="root"/>')
-        else:
-            kind = model.joints[j].shortname().removeprefix("JointModel")
-            axis = {"X": "1 0 0", "Y": "0 1 0", "Z": "0 0 1"}.get(kind[-1:], "1 0 0")
-            if kind.endswith("Unaligned"):
-                axis = _numbers(model.joints[j].extract().axis)
-            joint_type = "slide" if kind.startswith("P") else "hinge"
-            lines.append(
-                f'{indent}  <joint name="{model.names[j]}" type="{joint_type}" axis="{axis}"/>'
-            )
-        fullinertia = (i3[0, 0], i3[1, 1], i3[2, 2], i3[0, 1], i3[0, 2], i3[1, 2])
-        lines.append(
-            f'{indent}  <inertial pos="{_numbers(inertia.lever)}" mass="{mass:.9g}" '
-            f'fullinertia="{_numbers(fullinertia)}"/>'
-        )
-        lines += [f"{indent}  {g}" for g in geoms.get(j, [])]
-        for child in children.get(j, []):
-            lines += body(child, indent + "  ")
-        lines.append(f"{indent}</body>")
-        return lines
-
-    gravity = vehicle.hydro.gravity if vehicle.restoring else 0.0
-    return "\n".join(
-        [
-            f'<mujoco model="{vehicle.name}">',
-            f'  <option timestep="{timestep:g}" integrator="{integrator}" density="1000" '
-            f'viscosity="0" gravity="0 0 {-gravity:g}"/>',
-            "  <worldbody>",
-            *body(1, "    "),
-            "  </worldbody>",
-            "</mujoco>",
-        ]
+    model = mujoco.MjModel.from_xml_string(
+        mjcf_text(load_export_source(loading.bundled_urdf(case)))
     )
+    model.opt.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{integrator.upper()}")
+    model.opt.timestep = timestep
+    return model
 
 
 # ---------------------------------------------------------------------- timing helpers
@@ -153,6 +95,21 @@ def _per_unit(function, units: int, rounds: int = 7) -> float:
         function()
         best = min(best, (_clock() - start) / units)
     return best * 1e6
+
+
+def _interleaved(functions: dict, rounds: int = 9) -> dict:
+    """Best-of-rounds CPU microseconds per unit of each ``function()`` (name -> (function, units)),
+    the functions taking turns within every round, so that a change of load on a shared machine
+    hits them alike and their ratio holds."""
+    for function, _ in functions.values():
+        function()
+    best = {name: float("inf") for name in functions}
+    for _ in range(rounds):
+        for name, (function, units) in functions.items():
+            start = _clock()
+            function()
+            best[name] = min(best[name], (_clock() - start) / units)
+    return {name: value * 1e6 for name, value in best.items()}
 
 
 def _random_state(model, rng):
@@ -194,24 +151,30 @@ def dynamics_timings(vehicle, quick: bool = False) -> dict:
         vehicle.backend = "auto"
         fast = vehicle.fast
         if fast is None:
-            results["numba_note"] = f"numba backend unavailable: {vehicle._fast_reason}"
+            results["numba_note"] = f"numba backend unavailable: {vehicle.fallback_reason}"
             return results
         from .fast import kernels
+        from .fast.model import METHOD_CODES
 
         results["numba_acceleration_python_call_us"] = _per_call(
             lambda: fast.acceleration(q, v, tau), n
         )
-        zero, servo = fast.zero_current, fast.no_servo
+        model, env, servo, W = fast.model, fast.still_water, fast.no_servo, fast.workspace
+        out = np.empty(vehicle.nv)
         m = 20 * n
         results["numba_acceleration_in_kernel_us"] = _per_unit(
-            lambda: kernels.time_accelerations(fast.arrays, q, v, tau, zero, servo, m), m
+            lambda: kernels.time_accelerations(model, env, servo, q, v, tau, m, W, out), m
         )
         for method in ("rk4", "euler"):
             steps = 5 * n
 
             def run(method=method, steps=steps):
                 qq, vv = q.copy(), v.copy()
-                fast.run(qq, vv, tau, 0.001, steps, method=method)
+                done = kernels.run_steps(
+                    model, env, servo, 0.0, qq, vv, tau, 0.001, steps, METHOD_CODES[method], W
+                )
+                if done != steps:
+                    raise RuntimeError(f"bench: the {method} run diverged after {done} steps")
 
             results[f"numba_{method}_step_us"] = _per_unit(run, steps)
     finally:
@@ -219,8 +182,9 @@ def dynamics_timings(vehicle, quick: bool = False) -> dict:
     return results
 
 
-def mujoco_timings(vehicle, quick: bool = False) -> dict:
-    """MuJoCo's ``mj_forward`` and ``mj_step`` on the equivalent model (``note`` if unavailable)."""
+def mujoco_timings(case: str, quick: bool = False) -> dict:
+    """MuJoCo's ``mj_forward`` and ``mj_step`` on the exported model of the bundled vehicle
+    (:func:`mujoco_model`; ``note`` if mujoco is not installed)."""
     try:
         import mujoco
     except ImportError:
@@ -228,7 +192,7 @@ def mujoco_timings(vehicle, quick: bool = False) -> dict:
     n = 200 if quick else 2000
     results: dict = {"version": mujoco.__version__}
     for integrator in ("Euler", "RK4"):
-        model = mujoco.MjModel.from_xml_string(mjcf_from_vehicle(vehicle, integrator=integrator))
+        model = mujoco_model(case, integrator)
         data = mujoco.MjData(model)
         rng = np.random.default_rng(5)
         data.qvel[:] = 0.3 * rng.normal(size=model.nv)
@@ -252,17 +216,82 @@ def mujoco_timings(vehicle, quick: bool = False) -> dict:
     return results
 
 
+def head_to_head(vehicle, case: str, quick: bool = False) -> dict:
+    """The compiled dynamics and RK4 step against MuJoCo's ``mj_forward`` and RK4 ``mj_step``,
+    timed interleaved (:func:`_interleaved`) in one process; the ratios are the comparison.
+
+    Returns an empty dict without mujoco or the compiled backend.
+    """
+    try:
+        import mujoco
+    except ImportError:
+        return {}
+    fast = vehicle.fast
+    if fast is None:
+        return {}
+    from .fast import kernels
+    from .fast.model import METHOD_CODES
+
+    n = 200 if quick else 2000
+    rng = np.random.default_rng(5)
+    q, v = _random_state(vehicle.model, rng)
+    tau = rng.normal(size=vehicle.nv)
+    model, env, servo, W = fast.model, fast.still_water, fast.no_servo, fast.workspace
+    out = np.empty(vehicle.nv)
+    m = 2 * n  # about as long a round as MuJoCo's n calls
+
+    def ours_forward():
+        kernels.time_accelerations(model, env, servo, q, v, tau, m, W, out)
+
+    def ours_rk4():
+        qq, vv = q.copy(), v.copy()
+        kernels.run_steps(model, env, servo, 0.0, qq, vv, tau, 0.001, n, METHOD_CODES["rk4"], W)
+
+    forward_model, rk4_model = mujoco_model(case, "Euler"), mujoco_model(case, "RK4")
+    forward_data, rk4_data = mujoco.MjData(forward_model), mujoco.MjData(rk4_model)
+    for data in (forward_data, rk4_data):
+        data.qvel[:] = 0.3 * rng.normal(size=forward_model.nv)
+        data.qpos[7:] = rng.uniform(-0.5, 0.5, forward_model.nq - 7)
+    qpos, qvel = rk4_data.qpos.copy(), rk4_data.qvel.copy()
+
+    def theirs_forward():
+        for _ in range(n):
+            mujoco.mj_forward(forward_model, forward_data)
+
+    def theirs_rk4():
+        rk4_data.qpos[:] = qpos
+        rk4_data.qvel[:] = qvel
+        for _ in range(n):
+            mujoco.mj_step(rk4_model, rk4_data)
+
+    us = _interleaved(
+        {
+            "numba_acceleration_in_kernel_us": (ours_forward, m),
+            "mj_forward_us": (theirs_forward, n),
+            "numba_rk4_step_us": (ours_rk4, n),
+            "mj_step_rk4_us": (theirs_rk4, n),
+        },
+        rounds=5 if quick else 11,
+    )
+    return {
+        **us,
+        "ratio_numba_in_kernel_to_mj_forward": us["numba_acceleration_in_kernel_us"]
+        / us["mj_forward_us"],
+        "ratio_numba_rk4_step_to_mj_step_rk4": us["numba_rk4_step_us"] / us["mj_step_rk4_us"],
+    }
+
+
 # ---------------------------------------------------------------------- scenario
 def scenario_timing(case: str, duration: float, out_dir: Path) -> dict:
     """Wall time and real-time factor of the paper scenario including its result files (no HTML)."""
     from . import loading
     from .outputs import write_results
-    from .scenario import PaperScenario, run_paper_scenario
+    from .scenario import Scenario, run_scenario
 
     vehicle = loading.load_vehicle(loading.bundled_urdf(case))
-    run_paper_scenario(vehicle, PaperScenario(case=case, duration=1.0))  # warm-up (compilation)
+    run_scenario(vehicle, Scenario(case=case, duration=1.0))  # warm-up (compilation)
     start = time.perf_counter()
-    result = run_paper_scenario(vehicle, PaperScenario(case=case, duration=duration))
+    result = run_scenario(vehicle, Scenario(case=case, duration=duration))
     simulated = time.perf_counter()
     write_results(result, out_dir)
     end = time.perf_counter()
@@ -277,6 +306,126 @@ def scenario_timing(case: str, duration: float, out_dir: Path) -> dict:
         "outputs_wall_s": end - simulated,
         "real_time_factor": float(result.trajectory.t[-1]) / (end - start),
     }
+
+
+#: The user's compiled controller timed by :func:`controller_comparison` (a source checkout's
+#: ``benchmarks/user_controller.py``; not installed with the package).
+USER_CONTROLLER_FILE = Path(__file__).resolve().parent.parent / "benchmarks" / "user_controller.py"
+
+
+def load_user_controller(path: Path = USER_CONTROLLER_FILE):
+    """The module ``benchmarks/user_controller.py``, imported from its file (once per process).
+
+    It is loaded under a name outside the project's packages, as a user's own module would be, so
+    the compiled loop runs its controller in the uncached copy (:func:`aiauv_pin.fast.loop.loop_for`).
+    """
+    import importlib.util
+
+    name = "aiauv_bench_user_controller"
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        del sys.modules[name]
+        raise
+    return module
+
+
+def controller_comparison(case: str, duration: float, repeats: int) -> dict:
+    """A user's compiled controller against the built-in one on the same paper scenario.
+
+    Both run the paper's path following (the user's from the public laws,
+    ``benchmarks/user_controller.py``; the built-in :func:`aiauv_pin.fast.controllers.paper_path_following`)
+    with the same parameters, start state and servo, through :func:`aiauv_pin.simulate`'s compiled
+    loop. Each is run once for 1 s first, which compiles it (the user's function in the uncached
+    copy of the loop, :func:`aiauv_pin.fast.loop.loop_for`), so compilation is excluded; then
+    ``repeats`` runs of each, interleaved, timed in process CPU time and wall time. The ratio is
+    the user's best time over the built-in's best time (and the same with the medians). The
+    largest difference between the two trajectories' configurations is reported too: they run the
+    same law and must agree.
+    """
+    from . import loading
+    from .paper_controller import VehiclePathFollowing
+    from .scenario import Scenario, initial_state
+    from .simulation import simulate
+
+    if not USER_CONTROLLER_FILE.is_file():
+        return {"note": f"{USER_CONTROLLER_FILE} not found (source checkout only); skipped"}
+    vehicle = loading.load_vehicle(loading.bundled_urdf(case))
+    if vehicle.fast is None:
+        return {"note": f"numba backend unavailable: {vehicle.fallback_reason}; skipped"}
+    from .fast.loop import loop_for, run_chunk
+
+    user_module = load_user_controller()
+    scenario = Scenario(case=case, duration=duration)
+    q0, v0 = initial_state(vehicle, scenario)
+    adapter = VehiclePathFollowing(
+        vehicle,
+        scenario.controller_gains,
+        continuous_joints=scenario.continuous_joints,
+        path=scenario.path_to_follow,
+    )
+    built_in = adapter.compiled()
+    controllers = {"built_in": built_in, "user": user_module.user_controller(built_in)}
+
+    def run(controller, seconds: float):
+        return simulate(
+            vehicle,
+            q0,
+            v0,
+            seconds,
+            scenario.dt,
+            controller,
+            method=scenario.method,
+            current=scenario.water,
+            control_period=scenario.control_period,
+            log_every=scenario.steps_per_control,
+        )
+
+    for controller in controllers.values():
+        run(controller, 1.0)  # warm-up: compiles the loop for this controller
+    cpu: dict[str, list[float]] = {key: [] for key in controllers}
+    wall: dict[str, list[float]] = {key: [] for key in controllers}
+    configurations = {}
+    for _ in range(repeats):
+        for key, controller in controllers.items():
+            start_cpu, start_wall = _clock(), time.perf_counter()
+            trajectory = run(controller, duration)
+            cpu[key].append(_clock() - start_cpu)
+            wall[key].append(time.perf_counter() - start_wall)
+            if trajectory.status != "complete":
+                raise RuntimeError(f"bench: the {key} controller's run {trajectory.status}")
+            configurations[key] = trajectory.q
+    steps = round(duration / scenario.dt)
+    results: dict = {
+        "case": case,
+        "duration_s": duration,
+        "steps": steps,
+        "repeats": repeats,
+        "user_controller": f"benchmarks/{USER_CONTROLLER_FILE.name}::user_path_following",
+        "user_runs_in_uncached_loop": loop_for(controllers["user"].function) is not run_chunk,
+        "compilation_excluded": True,
+    }
+    for key in controllers:
+        results[key] = {
+            "cpu_s_best": min(cpu[key]),
+            "cpu_s_median": float(np.median(cpu[key])),
+            "cpu_s_all": cpu[key],
+            "wall_s_all": wall[key],
+            "us_per_step_best": 1e6 * min(cpu[key]) / steps,
+        }
+    results["ratio_user_to_built_in_best"] = min(cpu["user"]) / min(cpu["built_in"])
+    results["ratio_user_to_built_in_median"] = float(np.median(cpu["user"])) / float(
+        np.median(cpu["built_in"])
+    )
+    results["max_configuration_difference"] = float(
+        np.max(np.abs(configurations["user"] - configurations["built_in"]))
+    )
+    return results
 
 
 def command_line_timing(case: str, duration: float, out_dir: Path, repeats: int = 3) -> dict:
@@ -322,17 +471,17 @@ def accuracy_table(case: str, duration: float, dts: tuple[float, ...]) -> list[d
     """Largest end-effector distance over the path between runs at ``dt`` and ``dt / 4``."""
     from . import loading
     from .errors import SimulationDiverged
-    from .scenario import PaperScenario, run_paper_scenario
+    from .scenario import Scenario, run_scenario
 
     vehicle = loading.load_vehicle(loading.bundled_urdf(case))
     rows = []
     for dt in dts:
         try:
-            coarse = run_paper_scenario(vehicle, PaperScenario(case=case, duration=duration, dt=dt))
+            coarse = run_scenario(vehicle, Scenario(case=case, duration=duration, dt=dt))
         except SimulationDiverged:
             rows.append({"dt": dt, "reference_dt": dt / 4, "max_end_effector_error_m": None})
             continue
-        fine = run_paper_scenario(vehicle, PaperScenario(case=case, duration=duration, dt=dt / 4))
+        fine = run_scenario(vehicle, Scenario(case=case, duration=duration, dt=dt / 4))
         p_coarse = coarse.trajectory.info["p"]
         p_fine = fine.trajectory.info["p"][::4]
         n = min(len(p_coarse), len(p_fine))
@@ -361,10 +510,14 @@ def run_bench(quick: bool = False, case: str = "uniform", duration: float | None
         "quick": quick,
         "vehicle": {"case": case, "nq": vehicle.nq, "nv": vehicle.nv},
         "dynamics": dynamics_timings(vehicle, quick),
-        "mujoco": mujoco_timings(vehicle, quick),
+        "mujoco": mujoco_timings(case, quick),
+        "head_to_head": head_to_head(vehicle, case, quick),
     }
     with tempfile.TemporaryDirectory() as folder:
         results["scenario"] = scenario_timing(case, scenario_duration, Path(folder))
+        results["controllers"] = controller_comparison(
+            case, scenario_duration, repeats=3 if quick else 7
+        )
         results["command_line"] = command_line_timing(
             case, scenario_duration, Path(folder) / "cli", repeats=1 if quick else 3
         )
@@ -378,9 +531,10 @@ def run_bench(quick: bool = False, case: str = "uniform", duration: float | None
         results["ratio_numba_python_call_to_mj_forward"] = (
             dyn["numba_acceleration_python_call_us"] / mj["mj_forward_us"]
         )
-        results["ratio_numba_in_kernel_to_mj_forward"] = (
-            dyn["numba_acceleration_in_kernel_us"] / mj["mj_forward_us"]
-        )
+    h2h = results["head_to_head"]
+    if h2h:
+        results["ratio_numba_in_kernel_to_mj_forward"] = h2h["ratio_numba_in_kernel_to_mj_forward"]
+        results["ratio_numba_rk4_step_to_mj_step_rk4"] = h2h["ratio_numba_rk4_step_to_mj_step_rk4"]
     return results
 
 
@@ -411,9 +565,23 @@ def format_table(results: dict) -> str:
             results.get("ratio_numba_python_call_to_mj_forward"),
             "",
         )
+        h2h = results.get("head_to_head") or {}
+        if h2h:
+            row(
+                "interleaved: numba (in kernel) acceleration",
+                h2h["numba_acceleration_in_kernel_us"],
+            )
+            row("interleaved: MuJoCo mj_forward", h2h["mj_forward_us"])
+            row("interleaved: numba RK4 step", h2h["numba_rk4_step_us"])
+            row("interleaved: MuJoCo mj_step RK4", h2h["mj_step_rk4_us"])
         row(
-            "ratio numba (in kernel) / mj_forward",
+            "ratio numba (in kernel) / mj_forward (interleaved)",
             results.get("ratio_numba_in_kernel_to_mj_forward"),
+            "",
+        )
+        row(
+            "ratio numba RK4 step / mj_step RK4 (interleaved)",
+            results.get("ratio_numba_rk4_step_to_mj_step_rk4"),
             "",
         )
     row(
@@ -425,6 +593,23 @@ def format_table(results: dict) -> str:
         sc["real_time_factor"],
         "x",
     )
+    cc = results.get("controllers")
+    if cc is not None and "note" in cc:
+        lines.append(f"user's compiled controller: {cc['note']}")
+    elif cc is not None:
+        label = f"scenario {cc['case']} {cc['duration_s']:.0f} s, compiled loop, warm, CPU"
+        row(f"{label}: built-in controller", cc["built_in"]["cpu_s_best"], "s")
+        row("  user's compiled controller (benchmarks/)", cc["user"]["cpu_s_best"], "s")
+        row(
+            f"  ratio user / built-in (best of {cc['repeats']} each)",
+            cc["ratio_user_to_built_in_best"],
+            "x",
+        )
+        row("  ratio user / built-in (medians)", cc["ratio_user_to_built_in_median"], "x")
+        lines.append(
+            f"  largest configuration difference user vs built-in: "
+            f"{cc['max_configuration_difference']:.3g}"
+        )
     cl = results.get("command_line")
     if cl is not None:
         row(f"'{cl['command']}' wall time", cl["wall_s"], "s")

@@ -1,0 +1,98 @@
+"""A user's compiled controller, written outside the project's packages, for ``aiauv bench``.
+
+It is the paper's path following (Section 3 of Wrzos-Kaminska, Pettersen and Gravdahl, IFAC CAMS
+2019) put together the way a user would: a plain ``numba.njit`` function (no on-disk cache, so the
+compiled loop runs it in its uncached copy, :func:`aiauv_pin.fast.loop.loop_for`) that measures the
+end-effector with the public kernels (:func:`aiauv_pin.fast.kernels.kinematics`,
+:func:`~aiauv_pin.fast.kernels.frame_of_body`, :func:`~aiauv_pin.fast.kernels.restoring_into`),
+calls the public law :func:`control.laws.path_following_command` (eqs. 21-25) and acts with
+:func:`~aiauv_pin.fast.kernels.thrust_into` (eq. 20). Its parameters and state are the built-in
+controller's records (:meth:`aiauv_pin.paper_controller.VehiclePathFollowing.compiled`), so both
+run the same scenario with the same gains; it logs fewer diagnostics (end-effector position, surge
+speed, cross-track errors, path parameter).
+
+``aiauv bench`` times it against the built-in :func:`aiauv_pin.fast.controllers.paper_path_following`
+on the 300 s paper scenario (issue 12: a user's compiled controller within 1.5x of the built-in's
+speed); tests/test_bench.py checks that both give the same trajectory.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from aiauv_pin.controllers import CompiledController
+from aiauv_pin.fast.kernels import frame_of_body, kinematics, restoring_into, thrust_into
+from control.laws import path_following_command
+
+#: The diagnostics :func:`user_path_following` logs, in the order of its info row.
+USER_INFO_SHAPES = {"p": (3,), "u": (), "cross_track": (2,), "path_s": ()}
+
+
+@numba.njit
+def user_path_following(t, q, v, model, workspace, parameters, state, tau, info):
+    """Paper path following from the public laws (see the module docstring).
+
+    ``parameters`` is :class:`aiauv_pin.fast.controllers.PaperParameters`, ``state``
+    :class:`~aiauv_pin.fast.controllers.PaperState`.
+    """
+    kinematics(model.bodies, q, v, workspace)
+    R, p, twist = frame_of_body(
+        workspace, parameters.frame_body, parameters.frame_rotation, parameters.frame_translation
+    )
+    velocity = np.empty(3)  # end-effector velocity, world [m/s]
+    for i in range(3):
+        velocity[i] = R[i, 0] * twist[0] + R[i, 1] * twist[1] + R[i, 2] * twist[2]
+    omega = twist[3:].copy()  # angular velocity, end-effector axes [rad/s]
+    # acceleration: finite difference of the velocity since the previous sample (zero at the first)
+    history = state.velocity_history  # has previous, time [s], previous velocity (3) [m/s]
+    acceleration = np.zeros(3)
+    if history[0] != 0.0 and t > history[1]:
+        acceleration[:] = (velocity - history[2:]) / (t - history[1])
+    history[0] = 1.0
+    history[1] = t
+    history[2:] = velocity
+    restoring_into(model, workspace, workspace.restoring)  # g(q), left-hand side
+    out = state.command
+    path_following_command(  # eqs. (21)-(25)
+        parameters.gains,
+        parameters.path_function,
+        parameters.path_parameters,
+        parameters.axis_index,
+        parameters.reference_scale,
+        parameters.surge_mask,
+        state.surge,
+        t,
+        R,
+        p,
+        velocity,
+        acceleration,
+        omega,
+        twist[0],
+        q[7:],
+        v[6:],
+        workspace.restoring[6:],
+        out,
+    )
+    thrust_into(model, workspace, out.thrusts, tau)  # tau = B(q) thrusts, eq. (20)
+    if parameters.continuous_joints:  # eq. (24) runs as the servo at every stage
+        parameters.servo_references[:] = out.joint_references
+    else:  # eq. (24) sampled with the rest
+        tau[6:] += out.joint_torques
+    info[:3] = p
+    info[3] = twist[0]
+    info[4:6] = out.cross_track
+    info[6] = out.scalars[1]
+
+
+def user_controller(built_in: CompiledController) -> CompiledController:
+    """:func:`user_path_following` with the parameters, state, servo and reset of ``built_in``
+    (the paper's controller for the same scenario, :meth:`VehiclePathFollowing.compiled`)."""
+    return CompiledController(
+        user_path_following,
+        built_in.parameters,
+        built_in.state,
+        USER_INFO_SHAPES,
+        built_in.servo,
+        built_in.reset,
+    )

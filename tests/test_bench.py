@@ -1,0 +1,75 @@
+"""``aiauv bench``: what it compares is what it claims to compare (no timing is asserted here)."""
+
+from __future__ import annotations
+
+import pytest
+
+from aiauv_pin import bench, loading
+from aiauv_pin.cli import main
+from aiauv_pin.fast.loop import loop_for, run_chunk
+
+
+def test_user_controller_runs_the_built_in_law_in_the_uncached_loop():
+    """The user's compiled controller (benchmarks/) follows the same trajectory as the built-in one
+    (same law through the public API), and runs in the uncached copy of the loop as a user's would."""
+    if not loading.load_vehicle().fast:
+        pytest.skip("numba backend unavailable")
+    results = bench.controller_comparison("uniform", 2.0, repeats=1)
+    assert results["steps"] == 200
+    assert results["user_runs_in_uncached_loop"]
+    assert results["compilation_excluded"]
+    assert results["max_configuration_difference"] <= 1e-12
+    assert results["ratio_user_to_built_in_best"] > 0.0
+    module = bench.load_user_controller()
+    assert loop_for(module.user_path_following) is not run_chunk
+
+
+def test_mujoco_model_is_the_exported_one_with_the_benchmarked_integrator():
+    mujoco = pytest.importorskip("mujoco")
+    vehicle = loading.load_vehicle()
+    for integrator, code in (
+        ("Euler", mujoco.mjtIntegrator.mjINT_EULER),
+        ("RK4", mujoco.mjtIntegrator.mjINT_RK4),
+    ):
+        model = bench.mujoco_model("uniform", integrator, timestep=0.01)
+        assert model.opt.integrator == code
+        assert model.opt.timestep == 0.01
+        assert model.nv == vehicle.nv
+        assert model.body_mass.sum() == pytest.approx(
+            sum(inertia.mass for inertia in vehicle.model.inertias), rel=1e-14
+        )
+
+
+def test_format_table_prints_the_controller_ratio():
+    results = {
+        "dynamics": {"numba_acceleration_in_kernel_us": 4.0},
+        "mujoco": {"note": "mujoco not installed"},
+        "scenario": {
+            "case": "uniform",
+            "backend": "numba",
+            "simulated_time_s": 300.0,
+            "simulation_us_per_step": 30.0,
+            "real_time_factor": 150.0,
+        },
+        "controllers": {
+            "case": "uniform",
+            "duration_s": 300.0,
+            "repeats": 7,
+            "built_in": {"cpu_s_best": 1.0},
+            "user": {"cpu_s_best": 1.1},
+            "ratio_user_to_built_in_best": 1.1,
+            "ratio_user_to_built_in_median": 1.05,
+            "max_configuration_difference": 0.0,
+        },
+        "accuracy": {"duration_s": 10.0, "rows": []},
+    }
+    table = bench.format_table(results)
+    assert "ratio user / built-in (best of 7 each)" in table
+    assert "1.10 x" in table
+
+
+def test_bench_rejects_a_bad_duration(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["bench", "--duration", "-1"])
+    assert exit_info.value.code != 0
+    assert "--duration" in capsys.readouterr().err
