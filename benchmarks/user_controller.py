@@ -57,6 +57,7 @@ def user_path_following(t, q, v, model, workspace, parameters, state, tau, info)
     path_following_command(  # eqs. (21)-(25)
         parameters.gains,
         parameters.path_function,
+        parameters.path_kind,
         parameters.path_parameters,
         parameters.axis_index,
         parameters.reference_scale,
