@@ -60,6 +60,7 @@ class FastModel:
         self.still_water = environment()
         self.no_servo = no_servo()
         self._frames: dict[int, tuple[int, np.ndarray, np.ndarray]] = {}
+        self._acceleration_entry = None
         self._pin_model = vehicle.model
 
     def environment(self, current=None, disturbance=None) -> Environment:
