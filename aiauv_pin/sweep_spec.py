@@ -364,6 +364,8 @@ RESOLVED_NAMES: tuple[str, ...] = (*scenario_parameters(Scenario()), "vehicle_sh
 
 def is_parameter_column(name: str) -> bool:
     """Whether a column of ``results.csv`` is a resolved parameter (not a metric)."""
+    if name == "vehicle":  # the resolved parameters hold the vehicle's hash, not its file
+        return False
     section = name.split(".", 1)[0]
     return (
         name == "vehicle_sha256"
