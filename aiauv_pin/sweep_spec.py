@@ -124,10 +124,9 @@ _GAIN_NAMES = tuple(f.name for f in fields(PathFollowingGains))
 _GRID_FORMS = ("linspace", "geomspace")
 _RANDOM_FORMS = ("uniform", "loguniform", "normal", "choice")
 #: Dotted names that are the beginning of a parameter name (for specs written as nested tables).
+_NAMES = frozenset([*PARAMETERS, *VECTORS, *SCHEMA])
 _PREFIXES = frozenset(
-    name.rsplit(".", k)[0]
-    for name in [*PARAMETERS, *VECTORS]
-    for k in range(1, name.count(".") + 1)
+    name.rsplit(".", k)[0] for name in _NAMES for k in range(1, name.count(".") + 1)
 )
 
 
@@ -636,12 +635,7 @@ def _flatten(table: Mapping, prefix: str = "") -> dict:
         if (
             isinstance(value, Mapping)
             and value
-            and all(
-                f"{name}.{k}" in _PREFIXES
-                or f"{name}.{k}" in PARAMETERS
-                or f"{name}.{k}" in VECTORS
-                for k in value
-            )
+            and all(f"{name}.{k}" in _PREFIXES or f"{name}.{k}" in _NAMES for k in value)
         ):
             inner = _flatten(value, f"{name}.")
         else:
