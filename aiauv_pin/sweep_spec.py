@@ -436,7 +436,8 @@ def apply_parameters(base: Mapping[str, Any] | None, values: Mapping[str, Any]) 
             continue
         vector = target.get(key)
         if vector is None:
-            if parameter.name == "start.heading":
+            whole = all(component in values for component in parameter.components)
+            if parameter.name == "start.heading" and not whole:
                 raise ValueError(
                     f"{name}: the base scenario gives no start.heading (the vehicle starts along "
                     "the path); give the whole vector start.heading"

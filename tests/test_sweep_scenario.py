@@ -166,6 +166,16 @@ def test_spec_parameters_override_the_base_under_either_name(tmp_path):
     assert [current.parameters[f"current.velocity.{a}"] for a in "xyz"] == [0.1, 0.0, 0.0]
     assert current.parameters["controller.k_d"] == 12.0
     assert current.vehicle == bundled_urdf("stabilised")
+    heading = sweep_spec_from_toml(
+        'base = "base.toml"\n"start.heading" = [0.0, 2.0, 0.0]', tmp_path
+    ).points()[0]
+    assert [heading.parameters[f"start.heading.{a}"] for a in "xyz"] == [0.0, 2.0, 0.0]
+    assert points_heading_default(tmp_path) == [None, None, None]
+
+
+def points_heading_default(folder: Path) -> list:
+    point = sweep_spec_from_toml('base = "base.toml"', folder).points()[0]
+    return [point.parameters[f"start.heading.{a}"] for a in "xyz"]
 
 
 def test_a_helix_base_with_a_grid_over_its_radius(tmp_path):
