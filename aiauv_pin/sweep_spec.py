@@ -294,7 +294,7 @@ def run_id(resolved: Mapping[str, Any]) -> str:
 
     Args:
         resolved: The run's parameters as returned by :func:`resolve_parameters` (the names of
-            :data:`RESOLVED_NAMES`).
+            :data:`RESOLVED_NAMES` for a line path in a constant current).
     """
     canonical = json.dumps(
         {"key": RUN_KEY_VERSION, **resolved}, sort_keys=True, separators=(",", ":"), allow_nan=False
@@ -501,7 +501,7 @@ class SweepPoint:
 
     Attributes:
         run_id: Key of the run (:func:`run_id`).
-        parameters: Resolved parameters (:data:`RESOLVED_NAMES`).
+        parameters: Resolved parameters (:func:`resolve_parameters`).
         vehicle: Vehicle URDF file.
         index: Position in the sweep (grid point major, random sample minor).
         sample: Random sample number, or ``None`` without a ``[random]`` table.
