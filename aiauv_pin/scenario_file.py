@@ -36,7 +36,6 @@ A bad file (unknown key, wrong type, degenerate path) gets one line naming the k
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Mapping
 from pathlib import Path
@@ -50,6 +49,7 @@ from hydro.spec import HydroError
 
 from .errors import AiauvError
 from .scenario import CONTROLLERS, Scenario
+from .scenario_schema import METHODS, TABLES, TOP_LEVEL
 
 try:
     import tomllib
@@ -61,16 +61,8 @@ class ScenarioFileError(AiauvError, ValueError):
     """A scenario file that cannot be used (one line naming the key)."""
 
 
-#: Keys of the top level, and the tables with their keys (gains: those of PathFollowingGains).
-TOP_LEVEL = ("case", "vehicle", "duration", "dt", "method", "control_period", "continuous_joints")
-TABLES = {
-    "start": ("position", "heading", "surge"),
-    "path": None,  # checked by control.paths.from_mapping
-    "current": None,  # checked by hydro.currents.current_from_mapping
-    "controller": ("type", *(f.name for f in dataclasses.fields(PathFollowingGains))),
-    "output": ("csv_period",),
-}
-METHODS = ("rk4", "euler")
+# Keys of the top level, and the tables with their keys: one schema for scenario files and sweep
+# specs (path and current tables are checked by control.paths and hydro.currents).
 
 #: Largest scenario file read [bytes] (a scenario is a few hundred bytes).
 MAX_FILE_BYTES = 1_000_000

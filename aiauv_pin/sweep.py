@@ -54,11 +54,12 @@ from .errors import AiauvError, SimulationDiverged
 from .sweep_spec import (
     PARAMETERS,
     RESOLVED_NAMES,
-    VECTORS,
     SweepPoint,
     SweepSpec,
+    is_parameter_column,
     load_sweep_spec,
 )
+from .sweep_spec import components as parameter_components
 
 #: Every status a run record can have.
 STATUSES = ("complete", "diverged", "error", "lost")
@@ -169,12 +170,12 @@ def _vehicle_from_text(urdf_text: str, sha256: str):
 def flatten_summary(summary: dict) -> dict:
     """The metrics of :func:`aiauv_pin.scenario.summary` as flat ``a.b`` keys (no parameters).
 
-    Adds ``final.cross_track_error`` (``hypot(p_y, p_z)`` [m]) and
-    ``settling_time.cross_track_5cm`` (the later of the ``p_y`` and ``p_z`` settling times [s],
-    ``None`` if either never settles).
+    ``final.cross_track_error`` [m] and ``settling_time.cross_track_5cm`` [s] are there for every
+    path, ``final.p_y``, ``final.p_z`` and their settling times on the paper's x-axis only, the
+    surge, pointing error and work when the paper's controller ran.
     """
     flat: dict = {}
-    skip = {"parameters", "case", "status", "message", "dt", "method"}
+    skip = {"parameters", "case", "status", "message", "dt", "method", "path", "controller"}
 
     def walk(prefix: str, value) -> None:
         if isinstance(value, dict):
@@ -189,9 +190,6 @@ def flatten_summary(summary: dict) -> dict:
     for key, value in summary.items():
         if key not in skip:
             walk(key, value)
-    flat["final.cross_track_error"] = math.hypot(flat["final.p_y"], flat["final.p_z"])
-    settle = (flat["settling_time.p_y_5cm"], flat["settling_time.p_z_5cm"])
-    flat["settling_time.cross_track_5cm"] = None if None in settle else max(settle)
     return flat
 
 
@@ -209,7 +207,7 @@ def execute_run(run_id: str, parameters: dict, urdf_text: str, urdf_sha256: str)
         ``worker`` (``host:pid``), ``started_at``, ``finished_at`` (ISO 8601, UTC), ``task_time``
         [s].
     """
-    from .scenario import run_paper_scenario, summary
+    from .scenario import run_scenario, summary
     from .sweep_spec import scenario_from_parameters
 
     started_at, start = _now(), time.perf_counter()
@@ -219,7 +217,7 @@ def execute_run(run_id: str, parameters: dict, urdf_text: str, urdf_sha256: str)
         scenario = scenario_from_parameters(parameters)
         simulation_start = time.perf_counter()
         try:
-            result = run_paper_scenario(vehicle, scenario)
+            result = run_scenario(vehicle, scenario)
         except SimulationDiverged as exc:
             from .validation import explain_divergence
 
@@ -312,10 +310,15 @@ def table_rows(points: Sequence[SweepPoint], records: dict[str, dict]) -> list[d
 
 
 def write_table(rows: Sequence[dict], path: str | os.PathLike) -> Path:
-    """Write rows as CSV atomically: fixed columns first, then per-thruster and per-joint work."""
-    columns = [*_LEADING_COLUMNS, *RESOLVED_NAMES, *METRIC_COLUMNS]
-    extra = dict.fromkeys(key for row in rows for key in row if key not in columns)
-    extra = [key for key in extra if key not in _TRAILING_COLUMNS]
+    """Write rows as CSV atomically: the run, its resolved parameters, the metrics present in some
+    row (``final.p_y`` only on the x-axis path, ``final.u`` only with the paper's controller), then
+    per-thruster and per-joint work."""
+    keys = dict.fromkeys(key for row in rows for key in row)
+    parameters = [name for name in RESOLVED_NAMES if name in keys or not rows]
+    parameters += [k for k in keys if is_parameter_column(k) and k not in parameters]
+    metrics = [name for name in METRIC_COLUMNS if name in keys]
+    columns = [*_LEADING_COLUMNS, *parameters, *metrics]
+    extra = [key for key in keys if key not in columns and key not in _TRAILING_COLUMNS]
     columns += [*extra, *_TRAILING_COLUMNS]
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
@@ -358,13 +361,13 @@ def _plot_axes(spec: SweepSpec, rows: Sequence[dict]) -> list[tuple[str, str, bo
     sections = [(name, True) for name in spec.grid_names]
     sections += [(name, False) for name in spec.random_names]
     for name, in_grid in sections:
-        components = VECTORS.get(name, (name,))
+        components = parameter_components(name)
         if PARAMETERS.get(components[0], ("",))[0] != "number":
             continue
         if len(components) > 1 and all(len({row.get(c) for c in components}) == 1 for row in rows):
             candidates = [(components[0], name)]
         else:
-            candidates = [(c, c) for c in components]
+            candidates = [(c, c if len(components) > 1 else name) for c in components]
         for column, label in candidates:
             if len({row.get(column) for row in rows}) > 1 and column not in (f[0] for f in found):
                 found.append((column, label, in_grid))

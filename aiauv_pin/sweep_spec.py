@@ -1,22 +1,34 @@
 """Sweep specifications: TOML files naming a grid and/or a random sample of scenario parameters.
 
-A spec is a TOML table with fixed parameters, a ``[grid]`` and a ``[random]`` sample; the format
-is documented in ``docs/source/sweep.md`` ("Sweep spec" on the documentation site). The runs are
-the cartesian product of the grid with the random samples (the same draws for every grid point);
-draws come from ``numpy.random.default_rng(seed)`` sample by sample, in the sorted order of the
-random parameter names, so raising ``samples`` keeps the earlier draws.
+A spec is a TOML table with an optional ``base`` scenario file, fixed parameters, a ``[grid]`` and a
+``[random]`` sample; the format is documented in ``docs/source/sweep.md`` ("Sweep spec" on the
+documentation site). The runs are the cartesian product of the grid with the random samples (the
+same draws for every grid point); draws come from ``numpy.random.default_rng(seed)`` sample by
+sample, in the sorted order of the random parameter names, so raising ``samples`` keeps the earlier
+draws.
 
-Parameter names (:data:`PARAMETERS`) are the fields of :class:`aiauv_pin.scenario.PaperScenario` and
-of :class:`control.path_following.PathFollowingGains`, with components of vectors addressable on
-their own (``initial_offset.y``, ``current.z``, ``k_e.y``), plus ``vehicle``. Every run is keyed
-by :func:`run_id`: the SHA-256 of the canonical JSON of its fully resolved parameters (defaults
-filled in, ``k_d`` of the case, ``k_e = u_d / 10``, every number a float) and of the vehicle file's
-SHA-256, so the key is the same in every process, and a point spelled differently but meaning the
-same run (``k_d = 19`` for the uniform case, ``duration = 60`` or ``60.0``) has the same key.
+``base = "scenario.toml"`` (relative to the spec) names a scenario file
+(:mod:`aiauv_pin.scenario_file`) that supplies everything the spec does not set: vehicle, path,
+start, current, controller type and gains, run settings. Parameter names (:data:`PARAMETERS`) are
+those of scenario files (:data:`aiauv_pin.scenario_schema.SCHEMA`), one schema for both: top-level
+keys as they are (``duration``), keys of a table with its name (``start.surge``, ``path.radius``,
+``controller.k_d``), and vectors whole or by component (``start.position = [x, y, z]`` or
+``start.position.y``). The older names (``initial_offset.y``, ``initial_surge``, ``current.x``,
+``k_e.y``, ``k_d``, ...: :data:`aiauv_pin.scenario_schema.ALIASES`) stay valid; one spec may not give
+two names of the same quantity.
+
+Every run is keyed by :func:`run_id`: the SHA-256 of the canonical JSON of its fully resolved
+parameters (:func:`scenario_parameters`: the whole scenario after the base and the spec are
+applied, defaults filled in, ``k_d`` of the case, ``k_e = u_d / 10``, path and current as their
+readers normalise them, every number a float) and of the vehicle file's SHA-256. The key is the
+same in every process; a point spelled differently but meaning the same run (``k_d = 19`` for the
+uniform case, ``duration = 60`` or ``60.0``, an old or a new name) has the same key; and a change of
+the base file that changes the scenario changes the keys of its runs.
 """
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import itertools
 import json
@@ -30,10 +42,19 @@ from typing import Any
 import numpy as np
 
 from control.path_following import PathFollowingGains
+from control.reduced_attitude import FEEDFORWARD_OPTIONS
 
 from .errors import AiauvError
 from .loading import BUNDLED_CASES, bundled_urdf
-from .scenario import CASES, PaperScenario
+from .scenario import PaperScenario, Scenario
+from .scenario_file import (
+    ScenarioFileError,
+    parse_scenario_text,
+    read_scenario_text,
+    scenario_from_mapping,
+)
+from .scenario_schema import ALIASES, SCHEMA, XYZ, Parameter, scalar_parameters
+from .scenario_schema import METHODS as METHODS
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -46,61 +67,74 @@ class SweepSpecError(AiauvError, ValueError):
 
 
 #: Format tag hashed into every run id (bump it when the meaning of a parameter changes).
-RUN_KEY_VERSION = "aiauv-sweep-run/1"
+RUN_KEY_VERSION = "aiauv-sweep-run/2"
 #: Largest number of runs a spec may expand to.
 MAX_RUNS = 100_000
 #: Largest number of integration steps of one run (``duration / dt``).
 MAX_STEPS_PER_RUN = 5_000_000
-#: Integrators of :func:`aiauv_pin.simulate`.
-METHODS = ("rk4", "euler")
 #: Feedforward options of :class:`control.path_following.PathFollowingGains`.
-FEEDFORWARD = ("exact", "paper")
+FEEDFORWARD = FEEDFORWARD_OPTIONS
+#: Keys of a spec that are not parameters.
+RESERVED = ("base", "grid", "random")
+
+#: Every scalar of the schema a spec may set: its key and component.
+_SCALARS: dict[str, tuple[Parameter, str | None]] = scalar_parameters()
+
+
+def _sweep_kind(parameter: Parameter):
+    kind = parameter.kind
+    if isinstance(kind, tuple) and kind[0] == "vector":
+        return "number"
+    return {"file": "path"}.get(kind, kind) if isinstance(kind, str) else kind
+
+
+def _meaning(parameter: Parameter) -> str:
+    unit = f" [{parameter.unit}]" if parameter.unit != "-" else ""
+    applies = f" ({', '.join(parameter.applies_to)} only)" if parameter.applies_to else ""
+    return f"{parameter.meaning}{unit}{applies}"
+
 
 # kinds: "number", "bool", ("choice", options), "path"
-#: Every parameter a spec may set, with its kind and meaning (units in brackets).
+#: Every parameter a spec may set, with its kind and meaning (units in brackets): the scalars of
+#: the scenario schema, then the older names (aliases).
 PARAMETERS: dict[str, tuple[Any, str]] = {
-    "vehicle": ("path", "URDF file of the vehicle (default: the bundled URDF of `case`)"),
-    "case": (("choice", CASES), "paper case: selects k_d and the default bundled vehicle"),
-    "duration": ("number", "simulated time [s]"),
-    "dt": ("number", "integration step [s]"),
-    "method": (("choice", METHODS), "integrator"),
-    "initial_offset.y": ("number", "end-effector start p_y [m]"),
-    "initial_offset.z": ("number", "end-effector start p_z [m]"),
-    "initial_surge": ("number", "initial forward speed [m/s]"),
-    "current.x": ("number", "water velocity, world x [m/s]"),
-    "current.y": ("number", "water velocity, world y [m/s]"),
-    "current.z": ("number", "water velocity, world z [m/s]"),
-    "continuous_joints": ("bool", "joint PD as a continuous servo (true) or sampled (false)"),
-    "control_period": ("number", "sampling period of the outer loops [s] (absent: every step)"),
-    "u_d": ("number", "desired surge speed [m/s] (eq. 21, 25)"),
-    "k_e.y": ("number", "cross-track gain, y [1/s] (eq. 21); default u_d / 10"),
-    "k_e.z": ("number", "cross-track gain, z [1/s] (eq. 21); default u_d / 10"),
-    "alpha": ("number", "joint-reference shape parameter [-] (eq. 22)"),
-    "k_p": ("number", "pointing-error gain [-] (eq. 23)"),
-    "k_d": ("number", "angular-velocity-error gain [s] (eq. 23); default 19 or 12 by case"),
-    "k_qp": ("number", "joint proportional gain [N m/rad] (eq. 24)"),
-    "k_qd": ("number", "joint derivative gain [N m s/rad] (eq. 24)"),
-    "k_1p": ("number", "surge proportional gain [N s/m] (eq. 25)"),
-    "k_1i": ("number", "surge integral gain [N/m] (eq. 25)"),
-    "q_max": ("number", "saturation of the base angles [rad] (eq. 22)"),
-    "feedforward": (("choice", FEEDFORWARD), "feedforward of eq. (23)"),
+    name: (_sweep_kind(parameter), _meaning(parameter))
+    for name, (parameter, _component) in _SCALARS.items()
 }
-#: Whole vectors a spec may give at once, and the components they stand for.
+PARAMETERS.update(
+    {
+        alias: (PARAMETERS[target][0], f"older name of `{target}`")
+        for alias, target in ALIASES.items()
+        if isinstance(target, str)
+    }
+)
+#: Canonical (scenario) name of every scalar parameter name.
+CANONICAL: dict[str, str] = {
+    **{name: name for name in _SCALARS},
+    **{alias: target for alias, target in ALIASES.items() if isinstance(target, str)},
+}
+#: Whole vectors a spec may give at once, and the (canonical) components they stand for.
 VECTORS: dict[str, tuple[str, ...]] = {
-    "initial_offset": ("initial_offset.y", "initial_offset.z"),
-    "current": ("current.x", "current.y", "current.z"),
-    "k_e": ("k_e.y", "k_e.z"),
+    **{p.name: p.components for p in SCHEMA.values() if p.sweepable and p.components},
+    **{alias: target for alias, target in ALIASES.items() if isinstance(target, tuple)},
 }
 #: Vectors a scalar may stand for (the same value in every component).
-_SCALAR_VECTORS = ("k_e",)
-#: Names of the resolved parameters of a run, in table order (``vehicle`` is replaced by its hash).
-RESOLVED_NAMES: tuple[str, ...] = (
-    *(name for name in PARAMETERS if name != "vehicle"),
-    "vehicle_sha256",
-)
+_SCALAR_VECTORS = ("k_e", "controller.k_e")
 _GAIN_NAMES = tuple(f.name for f in fields(PathFollowingGains))
 _GRID_FORMS = ("linspace", "geomspace")
 _RANDOM_FORMS = ("uniform", "loguniform", "normal", "choice")
+#: Dotted names that are the beginning of a parameter name (for specs written as nested tables).
+_NAMES = frozenset([*PARAMETERS, *VECTORS, *SCHEMA])
+_PREFIXES = frozenset(
+    name.rsplit(".", k)[0] for name in _NAMES for k in range(1, name.count(".") + 1)
+)
+
+
+def components(name: str) -> tuple[str, ...]:
+    """The canonical scalar names a parameter name (scalar, vector or older name) stands for."""
+    if name in VECTORS:
+        return VECTORS[name]
+    return (CANONICAL.get(name, name),)
 
 
 def _is_number(value) -> bool:
@@ -128,32 +162,37 @@ def _check_value(name: str, value, where: str):
             out.update(_check_value(component, item, where))
         return out
     kind = PARAMETERS[name][0]
+    key = CANONICAL[name]
     if kind == "number":
         if not _is_number(value) or not math.isfinite(value):
             raise SweepSpecError(f"{where}: expected a finite number, got {_shown(value)}")
-        return {name: float(value)}
+        return {key: float(value)}
     if kind == "bool":
         if not isinstance(value, bool):
             raise SweepSpecError(f"{where}: expected true or false, got {_shown(value)}")
-        return {name: value}
+        return {key: value}
     if kind == "path":
         if not isinstance(value, str) or not value:
             raise SweepSpecError(f"{where}: expected a file name, got {_shown(value)}")
-        return {name: value}
+        return {key: value}
     options = kind[1]
     if value not in options:
         raise SweepSpecError(f"{where}: expected one of {', '.join(options)}, got {_shown(value)}")
-    return {name: value}
+    return {key: value}
 
 
 def _check_name(name, section: str) -> None:
+    if isinstance(name, str) and name in SCHEMA and not SCHEMA[name].sweepable:
+        raise SweepSpecError(
+            f"{section}: '{name}' is set in the base scenario file (base = \"scenario.toml\"), "
+            "not in a sweep spec"
+        )
     if not isinstance(name, str) or (name not in PARAMETERS and name not in VECTORS):
         known = ", ".join([*PARAMETERS, *VECTORS])
         raise SweepSpecError(f"{section}: unknown parameter '{name}' (known: {known})")
 
 
-def _components(name: str) -> tuple[str, ...]:
-    return VECTORS.get(name, (name,))
+_components = components
 
 
 def _grid_values(name: str, entry, where: str) -> list[dict]:
@@ -257,7 +296,7 @@ def run_id(resolved: Mapping[str, Any]) -> str:
 
     Args:
         resolved: The run's parameters as returned by :func:`resolve_parameters` (the names of
-            :data:`RESOLVED_NAMES`).
+            :data:`RESOLVED_NAMES` for a line path in a constant current).
     """
     canonical = json.dumps(
         {"key": RUN_KEY_VERSION, **resolved}, sort_keys=True, separators=(",", ":"), allow_nan=False
@@ -265,80 +304,190 @@ def run_id(resolved: Mapping[str, Any]) -> str:
     return hashlib.sha256(canonical.encode("utf-8")).hexdigest()[:20]
 
 
-def scenario_from_parameters(resolved: Mapping[str, Any]) -> PaperScenario:
-    """The scenario (with its gains) of a run's resolved parameters.
+def scenario_parameters(scenario: Scenario) -> dict[str, Any]:
+    """A scenario's resolved parameters, flat, under their scenario-file names (without vehicle).
+
+    Vectors by component (``start.position.x``), ``start.heading.*`` ``None`` when the vehicle
+    starts along the path, the path and the current as their readers describe them (directions
+    normalised; ``path.points`` a list of points), every gain (``k_d`` of the case,
+    ``k_e = u_d / 10``, ``controller.k_e.y/z``), numbers as floats, ``control_period`` ``None``
+    when the outer loops run every step. :func:`scenario_from_parameters` rebuilds the scenario.
+    """
+    period = scenario.control_period
+    out: dict[str, Any] = {
+        "case": scenario.case,
+        "duration": float(scenario.duration),
+        "dt": float(scenario.dt),
+        "method": scenario.method,
+        "control_period": None if period is None else float(period),
+        "continuous_joints": bool(scenario.continuous_joints),
+    }
+    heading = scenario.heading
+    for k, axis in enumerate(XYZ):
+        out[f"start.position.{axis}"] = float(scenario.start[k])
+    for k, axis in enumerate(XYZ):
+        out[f"start.heading.{axis}"] = None if heading is None else float(heading[k])
+    out["start.surge"] = float(scenario.initial_surge)
+    for section, table in (
+        ("path", scenario.path_to_follow.describe()),
+        ("current", scenario.water.describe()),
+    ):
+        for key, value in table.items():
+            name = f"{section}.{key}"
+            parameter = SCHEMA.get(name)
+            if parameter is not None and parameter.components:
+                for component, item in zip(parameter.components, value, strict=True):
+                    out[component] = float(item)
+            elif isinstance(value, (int, float)) and not isinstance(value, bool):
+                out[name] = float(value)
+            elif isinstance(value, (list, tuple)):
+                out[name] = [[float(x) for x in item] for item in value]
+            else:
+                out[name] = value
+    out["controller.type"] = scenario.controller
+    gains = scenario.controller_gains
+    for name in _GAIN_NAMES:
+        value = getattr(gains, name)
+        if name == "k_e":
+            pair = (value, value) if _is_number(value) else tuple(value)[-2:]
+            out["controller.k_e.y"], out["controller.k_e.z"] = (float(x) for x in pair)
+        elif name == "feedforward":
+            out[f"controller.{name}"] = value
+        else:
+            out[f"controller.{name}"] = float(value)
+    return out
+
+
+#: Names of the resolved parameters of a run on a line path in a constant current, in table order
+#: (other path and current types have their own keys; ``vehicle`` is replaced by its hash).
+RESOLVED_NAMES: tuple[str, ...] = (*scenario_parameters(Scenario()), "vehicle_sha256")
+
+
+def is_parameter_column(name: str) -> bool:
+    """Whether a column of ``results.csv`` is a resolved parameter (not a metric)."""
+    if name == "vehicle":  # the resolved parameters hold the vehicle's hash, not its file
+        return False
+    section = name.split(".", 1)[0]
+    return (
+        name == "vehicle_sha256"
+        or name in SCHEMA
+        or section in ("start", "path", "current", "controller")
+    )
+
+
+def _place(table: dict, name: str, value) -> None:
+    """Put a key's value (``name`` of :data:`SCHEMA`) into a nested scenario table."""
+    section, _, key = name.rpartition(".")
+    target = table.setdefault(section, {}) if section else table
+    target[key] = value
+
+
+def scenario_from_parameters(resolved: Mapping[str, Any]) -> Scenario:
+    """The scenario of a run's resolved parameters (:func:`scenario_parameters`).
 
     Raises:
-        ValueError: A value the scenario or the gains reject (one line).
+        ValueError: A value the scenario file reader rejects (one line).
     """
-    gains = PathFollowingGains.for_case(
-        resolved["case"],
-        **{name: resolved[name] for name in _GAIN_NAMES if name != "k_e" and name in resolved},
-        k_e=(resolved["k_e.y"], resolved["k_e.z"]),
-    )
-    period = resolved.get("control_period")
-    return PaperScenario(
-        case=resolved["case"],
-        duration=resolved["duration"],
-        dt=resolved["dt"],
-        initial_offset=(resolved["initial_offset.y"], resolved["initial_offset.z"]),
-        initial_surge=resolved["initial_surge"],
-        method=resolved["method"],
-        current=(resolved["current.x"], resolved["current.y"], resolved["current.z"]),
-        gains=gains,
-        continuous_joints=resolved["continuous_joints"],
-        control_period=period,
-    )
+    table: dict = {}
+    vectors: dict[str, list] = {}
+    for name, value in resolved.items():
+        if name == "vehicle_sha256" or value is None:
+            continue
+        if name in SCHEMA:
+            _place(table, name, value)
+            continue
+        parameter, component = _SCALARS[name]
+        vector = vectors.setdefault(parameter.name, [0.0] * len(parameter.kind[1]))
+        vector[parameter.kind[1].index(component)] = value
+    for name, vector in vectors.items():
+        _place(table, name, vector)
+    return scenario_from_mapping(table)
 
 
-def resolve_parameters(values: Mapping[str, Any], vehicle_sha256: str) -> dict[str, Any]:
-    """Fill in every default of a point given by (component) parameter values.
+#: The default scenario's path and current tables, for a spec that sets one of their keys.
+_DEFAULT_TABLES = {
+    "path": Scenario().path_to_follow.describe(),
+    "current": Scenario().water.describe(),
+}
+
+
+def apply_parameters(base: Mapping[str, Any] | None, values: Mapping[str, Any]) -> dict:
+    """A scenario table: the base scenario's with the given parameters set.
 
     Args:
-        values: Values keyed by the names of :data:`PARAMETERS` (without ``vehicle``).
+        base: A scenario file's tables (without ``vehicle``), or ``None`` for the paper's scenario.
+        values: Values by canonical scalar name (:data:`CANONICAL`), components of vectors included.
+
+    Raises:
+        ValueError: A component of a vector the base does not give and that has no default
+            (``start.heading``), or gains the controller rejects (one line).
+    """
+    table = copy.deepcopy(dict(base or {}))
+    k_e: dict[str, float] = {}
+    for name, value in values.items():
+        parameter, component = _SCALARS[name]
+        if parameter.name == "controller.k_e":
+            k_e[component] = value
+            continue
+        section, _, key = parameter.name.rpartition(".")
+        if section in _DEFAULT_TABLES and section not in table:
+            table[section] = copy.deepcopy(_DEFAULT_TABLES[section])
+        target = table.setdefault(section, {}) if section else table
+        if component is None:
+            target[key] = value
+            continue
+        vector = target.get(key)
+        if vector is None:
+            whole = all(component in values for component in parameter.components)
+            if parameter.name == "start.heading" and not whole:
+                raise ValueError(
+                    f"{name}: the base scenario gives no start.heading (the vehicle starts along "
+                    "the path); give the whole vector start.heading"
+                )
+            vector = list(Scenario().start) if parameter.name == "start.position" else [0.0] * 3
+        vector = list(vector)
+        vector[parameter.kind[1].index(component)] = value
+        target[key] = vector
+    if k_e:
+        controller = table.setdefault("controller", {})
+        given = controller.get("k_e")
+        if given is None:
+            others = {k: v for k, v in controller.items() if k not in ("type", "k_e")}
+            given = PathFollowingGains.for_case(table.get("case", "uniform"), **others).k_e
+        pair = [given, given] if _is_number(given) else list(given)[-2:]
+        for component, value in k_e.items():
+            pair[("y", "z").index(component)] = value
+        controller["k_e"] = pair
+    return table
+
+
+def resolve_parameters(
+    values: Mapping[str, Any], vehicle_sha256: str, base: Mapping[str, Any] | None = None
+) -> dict[str, Any]:
+    """The fully resolved parameters of a point: the base scenario with the point's values set.
+
+    Args:
+        values: Values keyed by the names of :data:`PARAMETERS` (without ``vehicle``); older names
+            are taken as their canonical ones.
         vehicle_sha256: SHA-256 of the vehicle file.
+        base: The base scenario file's tables (without ``vehicle``), or ``None``.
 
     Returns:
-        Every name of :data:`RESOLVED_NAMES`; numbers as floats, ``control_period`` ``None`` when
-        the outer loops run every step.
+        :func:`scenario_parameters` of the scenario, and ``vehicle_sha256``.
 
     Raises:
         ValueError: A value the scenario or the gains reject (one line).
     """
-    default = PaperScenario()
-    case = values.get("case", default.case)
-    gain_values = {k: values[k] for k in _GAIN_NAMES if k in values}
-    gains = PathFollowingGains.for_case(case, **gain_values)
-    k_e = gains.k_e if isinstance(gains.k_e, tuple) else (gains.k_e, gains.k_e)
-    k_e = (values.get("k_e.y", k_e[0]), values.get("k_e.z", k_e[1]))
-    gains = gains.with_changes(k_e=k_e)
-    resolved: dict[str, Any] = {
-        "case": case,
-        "duration": float(values.get("duration", default.duration)),
-        "dt": float(values.get("dt", default.dt)),
-        "method": values.get("method", default.method),
-        "initial_offset.y": float(values.get("initial_offset.y", default.initial_offset[0])),
-        "initial_offset.z": float(values.get("initial_offset.z", default.initial_offset[1])),
-        "initial_surge": float(values.get("initial_surge", default.initial_surge)),
-        "current.x": float(values.get("current.x", default.current[0])),
-        "current.y": float(values.get("current.y", default.current[1])),
-        "current.z": float(values.get("current.z", default.current[2])),
-        "continuous_joints": bool(values.get("continuous_joints", default.continuous_joints)),
-        "control_period": values.get("control_period", default.control_period),
-    }
-    for name in _GAIN_NAMES:
-        if name == "k_e":
-            k_e = gains.k_e if isinstance(gains.k_e, tuple) else (gains.k_e, gains.k_e)
-            resolved["k_e.y"], resolved["k_e.z"] = float(k_e[0]), float(k_e[1])
-        elif name == "feedforward":
-            resolved[name] = gains.feedforward
+    canonical: dict[str, Any] = {}
+    for name, value in values.items():
+        if name in VECTORS:
+            canonical.update(_check_value(name, value, name))
         else:
-            resolved[name] = float(getattr(gains, name))
-    if resolved["control_period"] is not None:
-        resolved["control_period"] = float(resolved["control_period"])
-    resolved["vehicle_sha256"] = vehicle_sha256
-    resolved = {name: resolved[name] for name in RESOLVED_NAMES}
-    scenario = scenario_from_parameters(resolved)  # the scenario's own checks
+            canonical[CANONICAL.get(name, name)] = value
+    unknown = [name for name in canonical if name not in _SCALARS]
+    if unknown:
+        raise ValueError(f"unknown parameter '{unknown[0]}'")
+    scenario = scenario_from_mapping(apply_parameters(base, canonical))
     from .arguments import check_timing
 
     check_timing(scenario.duration, scenario.dt)  # the verdict simulate() gives (ArgumentError)
@@ -348,7 +497,7 @@ def resolve_parameters(values: Mapping[str, Any], vehicle_sha256: str) -> dict[s
             f"duration / dt = {steps:.3g} steps exceeds {MAX_STEPS_PER_RUN} per run; "
             "use a larger dt or a shorter duration"
         )
-    return resolved
+    return {**scenario_parameters(scenario), "vehicle_sha256": vehicle_sha256}
 
 
 @dataclass(frozen=True)
@@ -357,7 +506,7 @@ class SweepPoint:
 
     Attributes:
         run_id: Key of the run (:func:`run_id`).
-        parameters: Resolved parameters (:data:`RESOLVED_NAMES`).
+        parameters: Resolved parameters (:func:`resolve_parameters`).
         vehicle: Vehicle URDF file.
         index: Position in the sweep (grid point major, random sample minor).
         sample: Random sample number, or ``None`` without a ``[random]`` table.
@@ -381,6 +530,9 @@ class SweepSpec:
         samples: Number of random samples (``0`` without random parameters).
         seed: Seed of the random draws.
         base_dir: Folder relative vehicle paths are resolved against.
+        base: The base scenario file's tables (without ``vehicle``), or ``None``.
+        base_file: The base scenario file, or ``None``.
+        base_vehicle: The vehicle the base scenario names (relative to its folder), or ``None``.
     """
 
     fixed: dict
@@ -389,6 +541,9 @@ class SweepSpec:
     samples: int = 0
     seed: int = 0
     base_dir: Path = Path(".")
+    base: dict | None = None
+    base_file: Path | None = None
+    base_vehicle: Path | None = None
 
     @property
     def grid_names(self) -> tuple[str, ...]:
@@ -411,7 +566,9 @@ class SweepSpec:
         if "vehicle" in values:
             path = Path(values["vehicle"]).expanduser()
             return path if path.is_absolute() else self.base_dir / path
-        case = values.get("case", PaperScenario().case)
+        if self.base_vehicle is not None:
+            return self.base_vehicle
+        case = values.get("case", (self.base or {}).get("case", PaperScenario().case))
         return bundled_urdf(case if case in BUNDLED_CASES else "uniform")
 
     def points(self) -> list[SweepPoint]:
@@ -432,6 +589,10 @@ class SweepSpec:
             draws.append(sample)
         if not draws:
             draws = [None]
+        display = {}  # how a swept component is named in messages: as written for a scalar
+        for name in (*self.grid, *(d.name for d in self.random)):
+            parts = _components(name)
+            display.update({c: name if len(parts) == 1 else c for c in parts})
         hashes: dict[Path, str] = {}
         points: list[SweepPoint] = []
         seen: set[str] = set()
@@ -453,9 +614,11 @@ class SweepSpec:
                     raise SweepSpecError(f"vehicle {vehicle}: cannot read ({reason})") from None
             given = {k: v for k, v in values.items() if k != "vehicle"}
             try:
-                resolved = resolve_parameters(given, hashes[vehicle])
+                resolved = resolve_parameters(given, hashes[vehicle], self.base)
             except ValueError as exc:
-                shown = ", ".join(f"{k}={_shown(v)}" for k, v in given.items() if k in self.varying)
+                shown = ", ".join(
+                    f"{display[k]}={_shown(v)}" for k, v in given.items() if k in display
+                )
                 where = f"run {len(points) + 1} ({shown})" if shown else "fixed parameters"
                 raise SweepSpecError(f"{where}: {' '.join(str(exc).split())}") from None
             key = run_id(resolved)
@@ -472,42 +635,94 @@ class SweepSpec:
         return frozenset(self.swept_components)
 
 
+def _flatten(table: Mapping, prefix: str = "") -> dict:
+    """A spec table with nested tables (``[path]``, ``start.position.y = ...`` unquoted) written as
+    dotted names; a table whose keys do not continue a parameter name is a value."""
+    out: dict = {}
+    for key, value in table.items():
+        name = f"{prefix}{key}"
+        if (
+            isinstance(value, Mapping)
+            and value
+            and all(f"{name}.{k}" in _PREFIXES or f"{name}.{k}" in _NAMES for k in value)
+        ):
+            inner = _flatten(value, f"{name}.")
+        else:
+            inner = {name: value}
+        for inner_name, inner_value in inner.items():
+            if inner_name in out:
+                raise SweepSpecError(f"'{inner_name}' is given twice")
+            out[inner_name] = inner_value
+    return out
+
+
 def _split(table: Mapping, section: str) -> dict:
-    """Check the names of a table and refuse a vector given with one of its own components."""
+    """Check the names of a table and refuse two names of the same quantity."""
+    owners: dict[str, str] = {}
     for name in table:
         _check_name(name, section)
-    for vector, components in VECTORS.items():
-        both = [c for c in components if c in table]
-        if vector in table and both:
-            raise SweepSpecError(f"{section}: both '{vector}' and '{both[0]}' are given")
+        for component in _components(name):
+            if component in owners:
+                raise SweepSpecError(
+                    f"{section}: both '{owners[component]}' and '{name}' are given "
+                    f"(both set {component}; use one name)"
+                )
+            owners[component] = name
     return dict(table)
+
+
+def _load_base(base, base_dir: Path) -> tuple[dict, Path, Path | None]:
+    """The base scenario's tables (checked, without ``vehicle``), its file and its vehicle."""
+    if not isinstance(base, str) or not base:
+        raise SweepSpecError(f"base: expected a scenario file name, got {_shown(base)}")
+    path = Path(base).expanduser()
+    path = path if path.is_absolute() else base_dir / path
+    try:
+        text = read_scenario_text(path)
+    except ScenarioFileError as exc:
+        raise SweepSpecError(f"base: {exc}") from None
+    try:
+        table = parse_scenario_text(text, f"base {base}")
+        scenario_from_mapping(table, path.parent)
+    except ScenarioFileError as exc:
+        message = str(exc)
+        prefix = "" if message.startswith(f"base {base}:") else f"base {base}: "
+        raise SweepSpecError(prefix + message) from None
+    vehicle = table.pop("vehicle", None)
+    table.pop("output", None)
+    return table, path, (path.parent / vehicle if vehicle is not None else None)
 
 
 def sweep_spec_from_dict(table: Mapping, base_dir: str | Path = ".") -> SweepSpec:
     """Validate a spec given as a (TOML-like) table.
 
     Args:
-        table: Top-level fixed parameters, optional ``grid`` and ``random`` tables.
-        base_dir: Folder that relative ``vehicle`` paths refer to.
+        table: Optional ``base`` scenario file, top-level fixed parameters, optional ``grid`` and
+            ``random`` tables.
+        base_dir: Folder that relative ``vehicle`` and ``base`` paths refer to.
 
     Raises:
         SweepSpecError: One line naming the entry.
     """
     table = dict(table)
+    base_dir = Path(base_dir)
+    base, base_file, base_vehicle = None, None, None
+    if "base" in table:
+        base, base_file, base_vehicle = _load_base(table.pop("base"), base_dir)
     grid_table = table.pop("grid", {})
     random_table = table.pop("random", {})
     for name, section in ((grid_table, "grid"), (random_table, "random")):
         if not isinstance(name, dict):
             raise SweepSpecError(f"[{section}] must be a table, got {_shown(name)}")
-    fixed_names = _split(table, "fixed parameters")
+    fixed_names = _split(_flatten(table), "fixed parameters")
     fixed: dict = {}
     for name, value in fixed_names.items():
         fixed.update(_check_value(name, value, name))
-    grid_entries = _split(grid_table, "[grid]")
+    grid_entries = _split(_flatten(grid_table), "[grid]")
     random_table = dict(random_table)
     samples = random_table.pop("samples", None)
     seed = random_table.pop("seed", 0)
-    random_entries = _split(random_table, "[random]")
+    random_entries = _split(_flatten(random_table), "[random]")
     if random_entries and samples is None:
         raise SweepSpecError("[random]: 'samples' (number of draws) is missing")
     if samples is not None and not (
@@ -520,7 +735,7 @@ def sweep_spec_from_dict(table: Mapping, base_dir: str | Path = ".") -> SweepSpe
         raise SweepSpecError("[random]: 'samples' given without any random parameter")
     if not (isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0):
         raise SweepSpecError(f"[random]: seed must be a whole number >= 0, got {_shown(seed)}")
-    owners: dict[str, str] = {}
+    owners: dict[str, tuple[str, str]] = {}
     for section, names in (
         ("fixed parameters", fixed_names),
         ("[grid]", grid_entries),
@@ -529,8 +744,12 @@ def sweep_spec_from_dict(table: Mapping, base_dir: str | Path = ".") -> SweepSpe
         for name in names:
             for component in _components(name):
                 if component in owners:
-                    raise SweepSpecError(f"{section}: '{name}' is also set in {owners[component]}")
-                owners[component] = section
+                    other_section, other = owners[component]
+                    also = f" (as '{other}')" if other != name else ""
+                    raise SweepSpecError(
+                        f"{section}: '{name}' is also set in {other_section}{also}"
+                    )
+                owners[component] = (section, name)
     grid = {name: _grid_values(name, entry, f"grid.{name}") for name, entry in grid_entries.items()}
     random = tuple(
         _distribution(name, random_entries[name], f"random.{name}")
@@ -542,7 +761,10 @@ def sweep_spec_from_dict(table: Mapping, base_dir: str | Path = ".") -> SweepSpe
         random=random,
         samples=samples or 0,
         seed=seed,
-        base_dir=Path(base_dir),
+        base_dir=base_dir,
+        base=base,
+        base_file=base_file,
+        base_vehicle=base_vehicle,
     )
 
 

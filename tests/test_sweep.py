@@ -67,11 +67,11 @@ def test_grid_times_random_uses_the_same_draws_on_every_grid_point():
         """
     points = sweep_spec_from_toml(spec_text).points()
     assert len(points) == 2 * 3 * 4
-    assert {p.parameters["initial_offset.y"] for p in points} == {1.0, 2.0, 3.0}
-    assert all(p.parameters["k_d"] == 12.0 for p in points)  # the stabilised case's k_D
+    assert {p.parameters["start.position.y"] for p in points} == {1.0, 2.0, 3.0}
+    assert all(p.parameters["controller.k_d"] == 12.0 for p in points)  # the stabilised case's k_D
     draws = {}
     for p in points:
-        draw = (p.parameters["current.y"], p.parameters["feedforward"])
+        draw = (p.parameters["current.velocity.y"], p.parameters["controller.feedforward"])
         assert -0.2 <= draw[0] <= 0.2
         draws.setdefault(p.sample, set()).add(draw)
     assert sorted(draws) == [0, 1, 2, 3]
@@ -118,7 +118,10 @@ def test_run_id_depends_on_the_resolved_run_only(tmp_path):
         ("[random]\nk_p = { normal = [1.0, 0.1] }", "'samples' (number of draws) is missing"),
         ("k_p = 1.0\n[grid]\nk_p = [1.0, 2.0]", "'k_p' is also set in fixed parameters"),
         ("current = [0.1, 0.2]", "current: expected a list of 3 numbers"),
-        ("[grid]\nk_p = [1.0, -1.0]", "run 2 (k_p=-1.0): gain k_p must be finite and > 0"),
+        (
+            "[grid]\nk_p = [1.0, -1.0]",
+            "run 2 (k_p=-1.0): controller: gain k_p must be finite and > 0",
+        ),
         ('vehicle = "missing.urdf"', "cannot read"),
         ("duration = 1e6\ndt = 0.01", "exceeds"),
         ("[grid\nk_p = 1", "invalid TOML"),
@@ -163,7 +166,7 @@ def serial_metrics():
     for point in spec.points():
         if point.parameters["dt"] == 0.01:
             result = run_paper_scenario(vehicle, scenario_from_parameters(point.parameters))
-            metrics[point.parameters["k_e.y"]] = flatten_summary(summary(result))
+            metrics[point.parameters["controller.k_e.y"]] = flatten_summary(summary(result))
     return metrics
 
 
@@ -240,7 +243,7 @@ def _check_sweep(out: Path, report, serial: dict) -> dict[str, dict]:
     assert [row["run_id"] for row in rows] == [p.run_id for p in points]
     for row, point in zip(rows, points, strict=True):
         record = records[point.run_id]
-        assert float(row["k_e.y"]) == point.parameters["k_e.y"]
+        assert float(row["controller.k_e.y"]) == point.parameters["controller.k_e.y"]
         assert float(row["dt"]) == point.parameters["dt"]
         assert record["worker"].split(":")[-1] != str(os.getpid())
         if point.parameters["dt"] == 2.0:
@@ -252,7 +255,7 @@ def _check_sweep(out: Path, report, serial: dict) -> dict[str, dict]:
         else:
             # a worker process computes exactly what this process computes
             assert row["status"] == "complete"
-            expected = serial[point.parameters["k_e.y"]]
+            expected = serial[point.parameters["controller.k_e.y"]]
             for key in ("final.p_y", "final.p_z", "final.u", "total_thruster_work"):
                 assert math.isclose(float(row[key]), expected[key], rel_tol=1e-12)
             assert int(row["steps"]) == 400

@@ -53,5 +53,18 @@ def _write_sweep_parameters(app) -> None:
         target.write_text(text)
 
 
+def _write_scenario_keys(app) -> None:
+    """The table of scenario-file keys, generated from the schema so that it cannot drift."""
+    from aiauv_pin.scenario_schema import markdown_table
+
+    folder = Path(app.srcdir) / "_generated"
+    folder.mkdir(exist_ok=True)
+    target = folder / "scenario_keys.md"
+    text = markdown_table()
+    if not target.exists() or target.read_text() != text:
+        target.write_text(text)
+
+
 def setup(app) -> None:
     app.connect("builder-inited", _write_sweep_parameters)
+    app.connect("builder-inited", _write_scenario_keys)
