@@ -40,8 +40,8 @@ from .vehicle import Vehicle
 #: Default pointing gains of the baseline: stiffness [N m/rad] and damping [N m s/rad]. With the
 #: paper vehicle's pitch/yaw inertia about its centre (about 150 kg m^2 with added mass) they give
 #: a natural frequency near 0.6 rad/s, about the bandwidth of the paper's body-curving loop.
-DEFAULT_POINTING_STIFFNESS = 60.0
-DEFAULT_POINTING_DAMPING = 150.0
+DEFAULT_POINTING_STIFFNESS = 300.0
+DEFAULT_POINTING_DAMPING = 400.0
 
 
 def straight_vehicle_geometry(vehicle: Vehicle):
@@ -82,6 +82,8 @@ class VehicleThrusterTurning:
             ``k_qd``, ``feedforward``) shared with the paper's controller.
         k_p, k_d: Pointing stiffness [N m/rad] and damping [N m s/rad] of eq. (9).
         path: The path (default: the world x-axis).
+        sideslip_compensation: Steer the end-effector's velocity direction along the LOS
+            direction (see :mod:`control.thruster_turning`); ``False`` steers its pointing.
     """
 
     continuous_joints = True
@@ -95,6 +97,7 @@ class VehicleThrusterTurning:
         k_d: float = DEFAULT_POINTING_DAMPING,
         path: Path | None = None,
         end_effector: str = END_EFFECTOR,
+        sideslip_compensation: bool = True,
     ) -> None:
         if vehicle.fast is None:
             raise ValueError(
@@ -128,6 +131,7 @@ class VehicleThrusterTurning:
             k_1i=self.gains.k_1i,
             max_thrust=float(np.min(vehicle.max_thrust)),
             exact=self.gains.feedforward == "exact",
+            sideslip_compensation=bool(sideslip_compensation),
         )
         n = vehicle.nv - 6
         self.joint_servo = JointServo.uniform(n, self.gains.k_qp, self.gains.k_qd)

@@ -15,11 +15,19 @@ forces and moments. This module is that baseline on the paper's guidance:
   minimum-norm allocation with zero net side force (Fossen 2021, Sec. 11.2.2, generalised inverse
   ``f = T^T (T T^T)^{-1} tau``, one 2 x n problem per plane), scaled down together to the thrust limit
   when one thruster would exceed it (keeping the direction of the demanded moment);
-* surge by the longitudinal (X) thrusters with the same surge PI (eq. 25, :func:`control.laws.surge_pi`).
+* surge by the longitudinal (X) thrusters with the same surge PI (eq. 25, :func:`control.laws.surge_pi`);
+* optionally (default in :class:`aiauv_pin.thruster_turning.VehicleThrusterTurning`) sideslip
+  compensation, as for any AUV steered by LOS (Fossen 2021, Sec. 12.4: ``psi_d = chi_d - beta``): the
+  LOS direction is taken as the desired direction of the end-effector's *velocity* (its course), and
+  the pointing reference is it turned by the measured rotation from the velocity direction to the
+  pointing direction (:func:`sideslip_compensated`). Without it the straight vehicle turning on a
+  helix points its head along the LOS direction while the head, 1.6 m ahead of the centre of
+  rotation, slips sideways by about 9 degrees, and LOS settles about 1.6 m off the path.
 """
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -45,6 +53,7 @@ class TurningGains(NamedTuple):
     k_1i: float  # surge PI [N/m]
     max_thrust: float  # per thruster [N]
     exact: bool  # the exact feedforward (finding 2) or the paper's
+    sideslip_compensation: bool  # steer the velocity direction (course), not the pointing
 
 
 class TurningBuffers(NamedTuple):
@@ -114,6 +123,42 @@ def tunnel_allocation(moment_y, moment_z, plane, force_coeff, moment_coeff, max_
 
 
 @compiled
+def _rodrigues(k0, k1, k2, c, f, y):
+    """``c y + k x y + (k . y) k f`` for a 3-sequence ``y`` (see :func:`sideslip_compensated`)."""
+    ky = k0 * y[0] + k1 * y[1] + k2 * y[2]
+    return (
+        c * y[0] + (k1 * y[2] - k2 * y[1]) + ky * k0 * f,
+        c * y[1] + (k2 * y[0] - k0 * y[2]) + ky * k1 * f,
+        c * y[2] + (k0 * y[1] - k1 * y[0]) + ky * k2 * f,
+    )
+
+
+@compiled
+def sideslip_compensated(velocity, rotation, x_ref, x_dot, x_ddot):
+    """``x_ref`` and its derivatives turned by the rotation taking the velocity direction ``w`` to the
+    pointing direction ``b`` (the x-axis of ``rotation``), held constant over the sample.
+
+    Rodrigues' formula with ``k = w x b``, ``c = w . b``: ``Q y = c y + k x y + (k . y) k / (1 + c)``.
+    Returned unchanged below 1 cm/s or when ``c <= 0`` (moving backwards or sideways).
+    """
+    speed = math.sqrt(velocity[0] ** 2 + velocity[1] ** 2 + velocity[2] ** 2)
+    b0, b1, b2 = rotation[0, 0], rotation[1, 0], rotation[2, 0]
+    if speed < 0.01:
+        return x_ref, x_dot, x_ddot
+    w0, w1, w2 = velocity[0] / speed, velocity[1] / speed, velocity[2] / speed
+    c = w0 * b0 + w1 * b1 + w2 * b2
+    if c <= 0.0:
+        return x_ref, x_dot, x_ddot
+    k0, k1, k2 = w1 * b2 - w2 * b1, w2 * b0 - w0 * b2, w0 * b1 - w1 * b0
+    f = 1.0 / (1.0 + c)
+    return (
+        _rodrigues(k0, k1, k2, c, f, x_ref),
+        _rodrigues(k0, k1, k2, c, f, x_dot),
+        _rodrigues(k0, k1, k2, c, f, x_ddot),
+    )
+
+
+@compiled
 def thruster_turning_command(
     gains,
     inertia,
@@ -160,6 +205,8 @@ def thruster_turning_command(
     x_ref, x_dot, x_ddot = los_guidance(  # eq. (21)
         point, position, velocity, acceleration, gains.u_d, gains.k_y, gains.k_z
     )
+    if gains.sideslip_compensation:
+        x_ref, x_dot, x_ddot = sideslip_compensated(velocity, rotation, x_ref, x_dot, x_ddot)
     command = reduced_attitude_law(  # eq. (9): torques on the rigid straight vehicle
         rotation,
         omega,
