@@ -152,7 +152,9 @@ def energy_summary(result, parameters: EnergyParameters = EnergyParameters()) ->
     info = tr.info
     if "thrust" not in info or "joint_torque" not in info or "path_s" not in info:
         return None
-    energy = run_energy(tr.t, info["thrust"], info["joint_torque"], tr.v[:, 6:], info["path_s"], parameters)
+    energy = run_energy(
+        tr.t, info["thrust"], info["joint_torque"], tr.v[:, 6:], info["path_s"], parameters
+    )
     return {
         "thrusters": energy.thrusters,
         "joints": energy.joints,

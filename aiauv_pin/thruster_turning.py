@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from control.laws import new_surge_state
 from control.guidance import X_AXIS, cross_track_gains
+from control.laws import new_surge_state
 from control.path_following import PathFollowingGains
 from control.paths import Path
 from control.thruster_turning import (
@@ -49,7 +49,9 @@ def straight_vehicle_geometry(vehicle: Vehicle):
     plane codes, side force per newton [-] and moment about the centre per newton [m], all for the
     straight vehicle (neutral configuration)."""
     q = vehicle.neutral_configuration()
-    centre = pin.centerOfMass(vehicle.model, vehicle.data, q).copy()  # base at the origin, unrotated
+    centre = pin.centerOfMass(
+        vehicle.model, vehicle.data, q
+    ).copy()  # base at the origin, unrotated
     mass = vehicle.mass_matrix(q)[:6, :6]  # locked joints: (v, omega) at the base origin
     shift = np.eye(6)
     shift[:3, 3:] = pin.skew(centre)  # v_o = v_c + c x omega

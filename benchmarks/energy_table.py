@@ -54,8 +54,7 @@ def run_one(vehicle, case: str, path: str, controller: str, duration: float) -> 
         "max_abs_u_error_last_30s": s["final"].get("max_abs_u_error_last_30s"),
         "max_phi_tilde_last_30s": s["final"].get("max_phi_tilde_last_30s"),
         "max_abs_thrust": {
-            name: float(np.abs(thrust[:, k]).max())
-            for k, name in enumerate(result.thruster_names)
+            name: float(np.abs(thrust[:, k]).max()) for k, name in enumerate(result.thruster_names)
         },
         "wall_time": result.wall_time,
     }

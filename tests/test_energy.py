@@ -24,7 +24,9 @@ def test_default_thruster_matches_its_source():
 
 
 def test_joint_power_closed_form():
-    p = EnergyParameters(joint_torque_constant=0.05, joint_gear_ratio=50.0, joint_winding_resistance=2.0)
+    p = EnergyParameters(
+        joint_torque_constant=0.05, joint_gear_ratio=50.0, joint_winding_resistance=2.0
+    )
     # driving: tau q_dot > 0 counts, plus R i^2 with i = 10 / (0.05 * 50) = 4 A
     assert joint_power(10.0, 0.3, p) == pytest.approx(3.0 + 2.0 * 16.0, rel=1e-14)
     # driven by the water (tau q_dot < 0): copper losses only
