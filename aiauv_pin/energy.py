@@ -155,8 +155,13 @@ def energy_summary(result, parameters: EnergyParameters = EnergyParameters()) ->
     energy = run_energy(
         tr.t, info["thrust"], info["joint_torque"], tr.v[:, 6:], info["path_s"], parameters
     )
+    step = np.diff(tr.t)
+    each = thruster_power(np.asarray(info["thrust"])[:-1], parameters)
     return {
         "thrusters": energy.thrusters,
+        "thruster_each": {
+            name: float(np.sum(each[:, k] * step)) for k, name in enumerate(result.thruster_names)
+        },
         "joints": energy.joints,
         "total": energy.total,
         "distance_along_path": energy.distance,

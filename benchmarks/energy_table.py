@@ -62,16 +62,19 @@ def run_one(vehicle, case: str, path: str, controller: str, duration: float) -> 
 
 def table(rows: list[dict]) -> str:
     lines = [
-        "| case | path | controller | thrusters [kJ] | joints [J] | total [kJ] | per metre [J/m]"
+        "| case | path | controller | thrusters [kJ] | of which tunnel [kJ] | joints [J] | total [kJ] | per metre [J/m]"
         " | final error [m] | max error, last 60 s [m] | within 5 cm after [s] |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         e = r["energy"]
         settle = r["settling_time_cross_track_5cm"]
+        tunnel = sum(
+            v for k, v in e["thruster_each"].items() if not k.split("_")[1].startswith("x")
+        )
         lines.append(
             f"| {r['case']} | {r['path']} | {CONTROLLERS[r['controller']]} "
-            f"| {e['thrusters'] / 1e3:.1f} | {e['joints']:.1f} | {e['total'] / 1e3:.1f} "
+            f"| {e['thrusters'] / 1e3:.2f} | {tunnel / 1e3:.2f} | {e['joints']:.1f} | {e['total'] / 1e3:.2f} "
             f"| {e['per_metre']:.0f} | {r['final_cross_track_error']:.2g} "
             f"| {r['max_cross_track_error_last_60s']:.2g} "
             f"| {'never' if settle is None else f'{settle:.0f}'} |"
