@@ -62,7 +62,8 @@ def run_one(vehicle, case: str, path: str, controller: str, duration: float) -> 
 
 def table(rows: list[dict]) -> str:
     lines = [
-        "| case | path | controller | thrusters [kJ] | of which tunnel [kJ] | joints [J] | total [kJ] | per metre [J/m]"
+        "| case | path | controller | thrusters [kJ] | of which tunnel [kJ] | joints [J]"
+        " | total [kJ] | per metre [J/m]"
         " | final error [m] | max error, last 60 s [m] | within 5 cm after [s] |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
