@@ -117,8 +117,8 @@ def tunnel_allocation(moment_y, moment_z, plane, force_coeff, moment_coeff, max_
     if largest > max_thrust:
         scale = max_thrust / largest
         for k in range(plane.shape[0]):
-            if plane[k] != NOT_TUNNEL:
-                thrusts[k] *= scale
+            if plane[k] != NOT_TUNNEL:  # clipped too: the product may round past the limit
+                thrusts[k] = min(max(thrusts[k] * scale, -max_thrust), max_thrust)
     return scale
 
 
