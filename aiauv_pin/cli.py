@@ -72,9 +72,10 @@ def _add_simulate(subparsers) -> None:
     )
     parser.add_argument(
         "--controller",
-        choices=("paper", "none"),
+        choices=("paper", "none", "thruster_turning"),
         default=None,
-        help="the paper's path following, or none: a passive run (paper)",
+        help="the paper's path following, none (a passive run), or the thruster-turning "
+        "baseline (paper)",
     )
     parser.add_argument("--out", type=Path, default=None, help="output folder (results/<name>/)")
     parser.add_argument("--no-html", action="store_true", help="do not write playback.html")

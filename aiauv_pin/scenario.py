@@ -32,13 +32,15 @@ from control.paths import LinePath, Path
 from hydro.currents import Current, as_current
 
 from .controllers import CompiledController
+from .energy import energy_summary
 from .paper_controller import END_EFFECTOR, VehiclePathFollowing, compiled_path_following_reason
 from .simulation import Trajectory, simulate
 from .vehicle import Vehicle
 
 CASES = ("uniform", "stabilised")
-#: Controllers a scenario can name: the paper's path following, or none (passive run).
-CONTROLLERS = ("paper", "none")
+#: Controllers a scenario can name: the paper's path following (turning with the body), none
+#: (passive run), or the thruster-turning baseline (:mod:`aiauv_pin.thruster_turning`).
+CONTROLLERS = ("paper", "none", "thruster_turning")
 
 
 @dataclass(frozen=True)
@@ -67,7 +69,8 @@ class Scenario:
         start_position: End-effector start in the world [m] (default ``(0, *initial_offset)``).
         heading: Direction the straight vehicle points at the start (default: the path's tangent
             at the point closest to the start).
-        controller: ``"paper"`` (path following) or ``"none"`` (passive).
+        controller: ``"paper"`` (path following), ``"none"`` (passive) or ``"thruster_turning"``
+            (straight body steered by the tunnel thrusters, compiled backend only).
         vehicle: URDF file of the vehicle (``None``: the bundled vehicle of ``case``).
     """
 
@@ -300,6 +303,15 @@ def run_scenario(
             )
         law = CompiledController.passive() if use_compiled else None
         servo = None
+    elif scenario.controller == "thruster_turning" and controller is None:
+        from .thruster_turning import VehicleThrusterTurning
+
+        if compiled is False:
+            raise ValueError("thruster turning runs in the compiled loop only")
+        turning = VehicleThrusterTurning(
+            vehicle, scenario.controller_gains, path=scenario.path_to_follow
+        )
+        law, servo, use_compiled = turning.compiled(), turning.joint_servo, True
     else:
         if controller is None:
             controller = VehiclePathFollowing(
@@ -465,4 +477,7 @@ def summary(result: ScenarioResult) -> dict:
         }
         content["total_thruster_work"] = float(np.sum(thruster_power.sum(axis=1) * dt_log))
         content["total_joint_work"] = float(np.sum(joint_power.sum(axis=1) * dt_log))
+    energy = energy_summary(result)
+    if energy is not None:
+        content["energy"] = energy
     return content

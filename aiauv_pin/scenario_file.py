@@ -21,7 +21,8 @@ The format (every key optional; without a file ``aiauv simulate`` runs the paper
     [current]
     velocity = [0.0, 0.0, 0.0]   # [m/s], world (type = "tidal" or "shear": see hydro.currents)
     [controller]
-    type = "paper"               # or "none" (passive: thrusters and joints idle)
+    type = "paper"               # or "none" (passive: thrusters and joints idle), or
+                                 # "thruster_turning" (straight body, tunnel thrusters turn it)
     k_d = 12.0                   # gains as in sweep specs: u_d, k_e, alpha, k_p, k_d, k_qp, k_qd,
                                  # k_1p, k_1i, q_max, feedforward
     [output]

@@ -1,0 +1,178 @@
+"""Vehicle side of the thruster-turning baseline for the compiled loop.
+
+Measurement as :func:`aiauv_pin.fast.controllers.paper_path_following` (end-effector pose, twist,
+finite-difference acceleration, surge speed) plus the hydrostatic moment about the vehicle's centre;
+the law is :func:`control.thruster_turning.thruster_turning_command`; the action ``tau = B(q) thrusts``
+(eq. 20). The joints are held straight by the continuous joint servo at zero references.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from control.laws import SurgeState, joint_pd_torque
+from control.thruster_turning import TurningBuffers, TurningGains, thruster_turning_command
+from hydro.jit import compiled
+
+from .kernels import frame_of_body, kinematics, restoring_into, thrust_into
+
+
+class TurningParameters(NamedTuple):
+    """What :func:`thruster_turning` needs besides the state (built in Python once)."""
+
+    gains: TurningGains
+    inertia: np.ndarray  # (3, 3) straight vehicle about its centre, end-effector axes [kg m^2]
+    centre_in_base: np.ndarray  # (3,) the vehicle's centre in the base frame, straight [m]
+    path_function: object
+    path_parameters: np.ndarray
+    plane: np.ndarray  # (m,) int64 plane codes
+    force_coeff: np.ndarray  # (m,) side force per newton [-]
+    moment_coeff: np.ndarray  # (m,) moment about the centre per newton [m]
+    surge_mask: np.ndarray  # (m,)
+    frame_body: int
+    frame_rotation: np.ndarray  # (3, 3)
+    frame_translation: np.ndarray  # (3,) [m]
+    joint_stiffness: np.ndarray  # (n,) servo gains, for logging its torque [N m/rad]
+    joint_damping: np.ndarray  # (n,) [N m s/rad]
+
+
+class TurningState(NamedTuple):
+    """State of :func:`thruster_turning` (arrays updated in place)."""
+
+    surge: SurgeState
+    velocity_history: np.ndarray  # (5,): has previous, time [s], previous world velocity [m/s]
+    command: TurningBuffers
+
+
+def turning_info_shapes(n_joints: int, n_thrusters: int) -> dict[str, tuple[int, ...]]:
+    """Keys and shapes of the info row of :func:`thruster_turning`."""
+    return {
+        "p": (3,),
+        "u": (),
+        "phi_tilde": (),
+        "omega_tilde": (2,),
+        "base_angles": (2,),  # zero: the body is held straight
+        "joint_references": (n_joints,),  # zero
+        "x_ref": (3,),
+        "pointing": (3,),
+        "turning_moment": (2,),
+        "saturation_scale": (),
+        "thrust": (n_thrusters,),
+        "thruster_power": (n_thrusters,),
+        "joint_torque": (n_joints,),
+        "cross_track": (2,),
+        "path_s": (),
+    }
+
+
+@compiled
+def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
+    """The thruster-turning baseline on the vehicle: measure, law, ``tau = B(q) thrusts``.
+
+    The known moment of eq. (1) is the hydrostatic one: the base part of ``-g(q)`` (a wrench at the
+    base origin, base axes) moved to the vehicle's centre, ``n_c = n_o - c x f``, and turned into
+    end-effector axes. The logged joint torque is the servo's eq. (24) at this sample.
+    """
+    W = workspace
+    P = parameters
+    kinematics(model.bodies, q, v, W)
+    R, p, twist = frame_of_body(W, P.frame_body, P.frame_rotation, P.frame_translation)
+    velocity = np.empty(3)
+    acceleration = np.zeros(3)
+    omega = np.empty(3)
+    for i in range(3):
+        velocity[i] = R[i, 0] * twist[0] + R[i, 1] * twist[1] + R[i, 2] * twist[2]
+        omega[i] = twist[3 + i]
+    history = state.velocity_history
+    if history[0] != 0.0 and t > history[1]:
+        h = t - history[1]
+        for i in range(3):
+            acceleration[i] = (velocity[i] - history[2 + i]) / h
+    history[0] = 1.0
+    history[1] = t
+    for i in range(3):
+        history[2 + i] = velocity[i]
+    g = W.restoring
+    restoring_into(model, W, g)
+    # acting hydrostatic wrench at the base origin (base axes): -g; moment about the centre
+    c = P.centre_in_base
+    f0, f1, f2 = -g[0], -g[1], -g[2]
+    n0 = -g[3] - (c[1] * f2 - c[2] * f1)
+    n1 = -g[4] - (c[2] * f0 - c[0] * f2)
+    n2 = -g[5] - (c[0] * f1 - c[1] * f0)
+    # into end-effector axes: R_ee^T R_base n
+    Rb = W.rotation[0]
+    nw0 = Rb[0, 0] * n0 + Rb[0, 1] * n1 + Rb[0, 2] * n2
+    nw1 = Rb[1, 0] * n0 + Rb[1, 1] * n1 + Rb[1, 2] * n2
+    nw2 = Rb[2, 0] * n0 + Rb[2, 1] * n1 + Rb[2, 2] * n2
+    m_y = R[0, 1] * nw0 + R[1, 1] * nw1 + R[2, 1] * nw2
+    m_z = R[0, 2] * nw0 + R[1, 2] * nw1 + R[2, 2] * nw2
+    out = state.command
+    thruster_turning_command(
+        P.gains,
+        P.inertia,
+        P.path_function,
+        P.path_parameters,
+        P.plane,
+        P.force_coeff,
+        P.moment_coeff,
+        P.surge_mask,
+        state.surge,
+        t,
+        R,
+        p,
+        velocity,
+        acceleration,
+        omega,
+        twist[0],
+        m_y,
+        m_z,
+        out,
+    )
+    thrust_into(model, W, out.thrusts, tau)  # eq. (20)
+    n = q.shape[0] - 7
+    # info row, in the order of turning_info_shapes
+    o = 0
+    for i in range(3):
+        info[o + i] = p[i]
+    o += 3
+    info[o] = twist[0]
+    info[o + 1] = out.scalars[0]
+    info[o + 2] = out.omega_tilde[0]
+    info[o + 3] = out.omega_tilde[1]
+    info[o + 4] = 0.0
+    info[o + 5] = 0.0
+    o += 6
+    for j in range(n):
+        info[o + j] = 0.0
+    o += n
+    for i in range(3):
+        info[o + i] = out.x_ref[i]
+        info[o + 3 + i] = R[i, 0]
+    o += 6
+    info[o] = out.moments[0]
+    info[o + 1] = out.moments[1]
+    info[o + 2] = out.scalars[2]
+    o += 3
+    m = out.thrusts.shape[0]
+    for k in range(m):
+        info[o + k] = out.thrusts[k]
+    o += m
+    th = model.thrusters
+    for k in range(m):
+        b = th.body[k]
+        speed = 0.0
+        for i in range(6):
+            speed += W.twist[b, i] * th.unit_wrench[k, i]
+        info[o + k] = speed * out.thrusts[k]
+    o += m
+    for j in range(n):
+        info[o + j] = joint_pd_torque(
+            q[7 + j], v[6 + j], 0.0, g[6 + j], P.joint_stiffness[j], P.joint_damping[j]
+        )
+    o += n
+    info[o] = out.cross_track[0]
+    info[o + 1] = out.cross_track[1]
+    info[o + 2] = out.scalars[1]
