@@ -72,9 +72,9 @@ class CompiledController:
     def loop_function(self):
         """What the compiled loop is given: ``None`` for a built-in controller (chosen there by its
         parameters, so that the cached loop's signature holds no function), else the function."""
-        from .fast.controllers import paper_path_following
+        from .fast.dispatch import BUILTIN_CONTROLLERS
 
-        return None if self.function in (passive, paper_path_following) else self.function
+        return None if self.function in BUILTIN_CONTROLLERS else self.function
 
     @property
     def info_width(self) -> int:

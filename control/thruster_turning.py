@@ -32,6 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from control.paths import path_point_of
 from hydro.jit import compiled
 
 from .laws import los_guidance, reduced_attitude_law, surge_pi
@@ -163,6 +164,7 @@ def thruster_turning_command(
     gains,
     inertia,
     path_function,
+    path_kind,
     path_parameters,
     plane,
     force_coeff,
@@ -186,7 +188,8 @@ def thruster_turning_command(
         gains: :class:`TurningGains`.
         inertia: (3, 3) inertia of the straight vehicle about its centre, end-effector axes
             [kg m^2] (rigid and added; only the y-z block enters eq. 9).
-        path_function, path_parameters: The path (:mod:`control.paths`).
+        path_function, path_kind, path_parameters: The path (:mod:`control.paths`): a user's
+            compiled function, or ``None`` and the built-in path's ``kind_code``.
         plane, force_coeff, moment_coeff: Per thruster (m,): plane code and side force [-] and moment
             [m] per newton (:func:`tunnel_allocation`).
         surge_mask: 1 for the surge (X) thrusters (m,).
@@ -201,7 +204,7 @@ def thruster_turning_command(
             end-effector axes [N m] (eq. 1's ``m``).
         out: :class:`TurningBuffers`.
     """
-    point = path_function(position, path_parameters)
+    point = path_point_of(path_function, path_kind, position, path_parameters)
     x_ref, x_dot, x_ddot = los_guidance(  # eq. (21)
         point, position, velocity, acceleration, gains.u_d, gains.k_y, gains.k_z
     )

@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from control.laws import CommandBuffers, PaperGains, SurgeState, path_following_command
-from hydro.jit import NUMBA_AVAILABLE, compiled
+from hydro.jit import compiled
 
 from .kernels import frame_of_body, kinematics, restoring_into, thrust_into
 
@@ -177,46 +177,3 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
     info[o] = out.cross_track[0]
     info[o + 1] = out.cross_track[1]
     info[o + 2] = out.scalars[1]
-
-
-def _run_controller_python(user, t, q, v, model, workspace, parameters, state, tau, info):
-    if user is not None:
-        return user(t, q, v, model, workspace, parameters, state, tau, info)
-    if isinstance(parameters, PaperParameters):
-        return paper_path_following(t, q, v, model, workspace, parameters, state, tau, info)
-    return passive(t, q, v, model, workspace, parameters, state, tau, info)
-
-
-#: ``run_controller(user, t, q, v, model, workspace, parameters, state, tau, info)``: a user's
-#: compiled controller (``user``), or with ``user = None`` the built-in one its ``parameters``
-#: select (:class:`PaperParameters`: the paper's, anything else: passive). Chosen at compile time,
-#: so the cached loop's signature holds no function (see :func:`hydro.jit.user_or_builtin`).
-run_controller = _run_controller_python
-
-if NUMBA_AVAILABLE:
-    from numba import types
-    from numba.extending import overload
-
-    @overload(_run_controller_python)
-    def _run_controller(user, t, q, v, model, workspace, parameters, state, tau, info):
-        if not isinstance(user, (types.NoneType, types.Omitted)):
-
-            def call_user(user, t, q, v, model, workspace, parameters, state, tau, info):
-                user(t, q, v, model, workspace, parameters, state, tau, info)
-
-            return call_user
-        paper = (
-            isinstance(parameters, types.BaseNamedTuple)
-            and parameters.instance_class is PaperParameters
-        )
-        if paper:
-
-            def call_paper(user, t, q, v, model, workspace, parameters, state, tau, info):
-                paper_path_following(t, q, v, model, workspace, parameters, state, tau, info)
-
-            return call_paper
-
-        def call_passive(user, t, q, v, model, workspace, parameters, state, tau, info):
-            passive(t, q, v, model, workspace, parameters, state, tau, info)
-
-        return call_passive

@@ -13,7 +13,7 @@ from functools import lru_cache
 
 from hydro.jit import NUMBA_AVAILABLE, PROJECT_PACKAGES, compiled
 
-from .controllers import run_controller
+from .dispatch import run_controller
 from .kernels import is_finite_state, step_into
 
 
@@ -43,7 +43,7 @@ def run_chunk(
     """Steps ``k_start .. k_stop - 1`` (controller, logging, integration), plus the final sample.
 
     ``controller`` is a user's compiled controller, or ``None`` for the built-in one that
-    ``parameters`` select (:func:`aiauv_pin.fast.controllers.run_controller`).
+    ``parameters`` select (:func:`aiauv_pin.fast.dispatch.run_controller`).
 
     ``log`` rows are ``(t, q, v, tau, info)``; ``tau`` and ``info`` hold the last controller output
     between calls (zero-order hold).

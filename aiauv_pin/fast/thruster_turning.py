@@ -25,7 +25,8 @@ class TurningParameters(NamedTuple):
     gains: TurningGains
     inertia: np.ndarray  # (3, 3) straight vehicle about its centre, end-effector axes [kg m^2]
     centre_in_base: np.ndarray  # (3,) the vehicle's centre in the base frame, straight [m]
-    path_function: object
+    path_function: object  # None for a built-in path (then path_kind chooses it)
+    path_kind: int
     path_parameters: np.ndarray
     plane: np.ndarray  # (m,) int64 plane codes
     force_coeff: np.ndarray  # (m,) side force per newton [-]
@@ -114,6 +115,7 @@ def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
         P.gains,
         P.inertia,
         P.path_function,
+        P.path_kind,
         P.path_parameters,
         P.plane,
         P.force_coeff,
