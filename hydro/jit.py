@@ -106,8 +106,18 @@ if _caching is not None:
     class ProjectUserWideCacheLocator(_ProjectStampMixin, _numba_name("UserWideCacheLocator")):
         """Cache in the user's cache folder when the source tree is read-only."""
 
+    class ProjectUserProvidedCacheLocator(
+        _ProjectStampMixin, _numba_name("UserProvidedCacheLocator")
+    ):
+        """Cache in ``NUMBA_CACHE_DIR`` when it is set (numba's own rule)."""
+
     _locators = _numba_name("CacheImpl")._locator_classes
-    for _locator in (ProjectUserWideCacheLocator, ProjectCacheLocator):  # in-tree first
+    # NUMBA_CACHE_DIR first, then in-tree, then user-wide, as numba orders its own locators
+    for _locator in (
+        ProjectUserWideCacheLocator,
+        ProjectCacheLocator,
+        ProjectUserProvidedCacheLocator,
+    ):
         if _locator not in _locators:
             _locators.insert(0, _locator)
 

@@ -124,9 +124,18 @@ def test_compile_notice_only_without_a_cache(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     assert compilation.announce_compilation() is True
     assert capsys.readouterr().err.strip() == compilation.COMPILE_NOTICE
+    import pickle
+
+    from hydro.jit import source_hash
+
     nested = tmp_path / "aiauv_pin" / "fast"
     nested.mkdir(parents=True)
-    (nested / "path_following.run-12.py311.nbi").write_bytes(b"")
+    index = nested / "loop.run_chunk-20.py311.nbi"
+    # numba's index format: its version, then the pickled (source stamp, overloads)
+    index.write_bytes(pickle.dumps("0.0") + pickle.dumps(("stale sources", {})))
+    assert compilation.announce_compilation() is True  # an index of other sources is no cache
+    capsys.readouterr()
+    index.write_bytes(pickle.dumps("0.0") + pickle.dumps((source_hash(), {})))
     assert compilation.announce_compilation() is False
     assert capsys.readouterr().err == ""
 
