@@ -32,6 +32,36 @@ def passive(t, q, v, model, workspace, parameters, state, tau, info):
         tau[i] = 0.0
 
 
+@compiled
+def measure_end_effector(t, q, v, model, W, body, rotation, translation, history):
+    """What the path-following controllers measure at a sample, and ``g(q)`` into ``W.restoring``.
+
+    The end-effector frame (fixed to ``body`` at ``(rotation, translation)``): its rotation ``R`` to
+    the world, position ``p`` [m], twist in its own axes, world velocity [m/s], angular velocity in
+    its own axes [rad/s], and as acceleration [m/s^2] the difference of the world velocity with
+    the previous sample's over the elapsed time (zero at the first sample or when ``t`` does not
+    advance); ``history`` (5,) holds that previous sample (has one, time, velocity) and is updated.
+    """
+    kinematics(model.bodies, q, v, W)
+    R, p, twist = frame_of_body(W, body, rotation, translation)
+    velocity = np.empty(3)
+    acceleration = np.zeros(3)
+    omega = np.empty(3)
+    for i in range(3):
+        velocity[i] = R[i, 0] * twist[0] + R[i, 1] * twist[1] + R[i, 2] * twist[2]
+        omega[i] = twist[3 + i]
+    if history[0] != 0.0 and t > history[1]:
+        h = t - history[1]
+        for i in range(3):
+            acceleration[i] = (velocity[i] - history[2 + i]) / h
+    history[0] = 1.0
+    history[1] = t
+    for i in range(3):
+        history[2 + i] = velocity[i]
+    restoring_into(model, W, W.restoring)
+    return R, p, twist, velocity, acceleration, omega
+
+
 class PaperParameters(NamedTuple):
     """What :func:`paper_path_following` needs besides the state (built in Python once)."""
 
@@ -90,25 +120,18 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
     """
     W = workspace
     P = parameters
-    kinematics(model.bodies, q, v, W)
-    R, p, twist = frame_of_body(W, P.frame_body, P.frame_rotation, P.frame_translation)
-    velocity = np.empty(3)
-    acceleration = np.zeros(3)
-    omega = np.empty(3)
-    for i in range(3):
-        velocity[i] = R[i, 0] * twist[0] + R[i, 1] * twist[1] + R[i, 2] * twist[2]
-        omega[i] = twist[3 + i]
-    history = state.velocity_history
-    if history[0] != 0.0 and t > history[1]:
-        h = t - history[1]
-        for i in range(3):
-            acceleration[i] = (velocity[i] - history[2 + i]) / h
-    history[0] = 1.0
-    history[1] = t
-    for i in range(3):
-        history[2 + i] = velocity[i]
+    R, p, twist, velocity, acceleration, omega = measure_end_effector(
+        t,
+        q,
+        v,
+        model,
+        W,
+        P.frame_body,
+        P.frame_rotation,
+        P.frame_translation,
+        state.velocity_history,
+    )
     g = W.restoring
-    restoring_into(model, W, g)
     n = q.shape[0] - 7
     out = state.command
     path_following_command(

@@ -16,7 +16,8 @@ from control.laws import SurgeState, joint_pd_torque
 from control.thruster_turning import TurningBuffers, TurningGains, thruster_turning_command
 from hydro.jit import compiled
 
-from .kernels import frame_of_body, kinematics, restoring_into, thrust_into
+from .controllers import measure_end_effector
+from .kernels import thrust_into
 
 
 class TurningParameters(NamedTuple):
@@ -78,25 +79,18 @@ def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
     """
     W = workspace
     P = parameters
-    kinematics(model.bodies, q, v, W)
-    R, p, twist = frame_of_body(W, P.frame_body, P.frame_rotation, P.frame_translation)
-    velocity = np.empty(3)
-    acceleration = np.zeros(3)
-    omega = np.empty(3)
-    for i in range(3):
-        velocity[i] = R[i, 0] * twist[0] + R[i, 1] * twist[1] + R[i, 2] * twist[2]
-        omega[i] = twist[3 + i]
-    history = state.velocity_history
-    if history[0] != 0.0 and t > history[1]:
-        h = t - history[1]
-        for i in range(3):
-            acceleration[i] = (velocity[i] - history[2 + i]) / h
-    history[0] = 1.0
-    history[1] = t
-    for i in range(3):
-        history[2 + i] = velocity[i]
+    R, p, twist, velocity, acceleration, omega = measure_end_effector(
+        t,
+        q,
+        v,
+        model,
+        W,
+        P.frame_body,
+        P.frame_rotation,
+        P.frame_translation,
+        state.velocity_history,
+    )
     g = W.restoring
-    restoring_into(model, W, g)
     # acting hydrostatic wrench at the base origin (base axes): -g; moment about the centre
     c = P.centre_in_base
     f0, f1, f2 = -g[0], -g[1], -g[2]
