@@ -102,6 +102,16 @@ def joint_power(torque, rate, parameters: EnergyParameters = EnergyParameters())
     return np.maximum(torque * rate, 0.0) + parameters.joint_winding_resistance * current**2
 
 
+def exact_sum(values) -> float:
+    """The correctly rounded sum of an array's elements (``math.fsum``).
+
+    NumPy's vectorised reductions may round differently with the alignment of the data in memory,
+    so the same run could report integrals differing in the last digit from one process to another;
+    an exactly rounded sum is the same everywhere (a sweep compares its records bit for bit).
+    """
+    return math.fsum(np.asarray(values, dtype=float).ravel().tolist())
+
+
 class Energy(NamedTuple):
     """Electrical energy of a run."""
 
@@ -135,8 +145,8 @@ def run_energy(
     thrust = np.asarray(thrust, dtype=float).reshape(len(t), -1)[:-1]
     torque = np.asarray(joint_torque, dtype=float).reshape(len(t), -1)[:-1]
     rate = np.asarray(joint_rate, dtype=float).reshape(len(t), -1)[:-1]
-    thrusters = float(np.sum(thruster_power(thrust, parameters).sum(axis=1) * step))
-    joints = float(np.sum(joint_power(torque, rate, parameters).sum(axis=1) * step))
+    thrusters = exact_sum(thruster_power(thrust, parameters) * step[:, None])
+    joints = exact_sum(joint_power(torque, rate, parameters) * step[:, None])
     total = thrusters + joints
     path_s = np.asarray(path_s, dtype=float)
     distance = float(path_s[-1] - path_s[0])
@@ -160,7 +170,7 @@ def energy_summary(result, parameters: EnergyParameters = EnergyParameters()) ->
     return {
         "thrusters": energy.thrusters,
         "thruster_each": {
-            name: float(np.sum(each[:, k] * step)) for k, name in enumerate(result.thruster_names)
+            name: exact_sum(each[:, k] * step) for k, name in enumerate(result.thruster_names)
         },
         "joints": energy.joints,
         "total": energy.total,

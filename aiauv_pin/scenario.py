@@ -32,7 +32,7 @@ from control.paths import LinePath, Path
 from hydro.currents import Current, as_current
 
 from .controllers import CompiledController
-from .energy import energy_summary
+from .energy import energy_summary, exact_sum
 from .paper_controller import END_EFFECTOR, VehiclePathFollowing, compiled_path_following_reason
 from .simulation import Trajectory, simulate
 from .vehicle import Vehicle
@@ -468,15 +468,14 @@ def summary(result: ScenarioResult) -> dict:
         settling["u_1cm_s"] = settling_time(t, u - gains.u_d, 0.01)
         settling["phi_tilde_0.02rad"] = settling_time(t, info["phi_tilde"], 0.02)
         content["thruster_work"] = {
-            name: float(np.sum(thruster_power[:, k] * dt_log))
+            name: exact_sum(thruster_power[:, k] * dt_log)
             for k, name in enumerate(result.thruster_names)
         }
         content["joint_work"] = {
-            name: float(np.sum(joint_power[:, k] * dt_log))
-            for k, name in enumerate(result.joint_names)
+            name: exact_sum(joint_power[:, k] * dt_log) for k, name in enumerate(result.joint_names)
         }
-        content["total_thruster_work"] = float(np.sum(thruster_power.sum(axis=1) * dt_log))
-        content["total_joint_work"] = float(np.sum(joint_power.sum(axis=1) * dt_log))
+        content["total_thruster_work"] = exact_sum(thruster_power * dt_log[:, None])
+        content["total_joint_work"] = exact_sum(joint_power * dt_log[:, None])
     energy = energy_summary(result)
     if energy is not None:
         content["energy"] = energy
