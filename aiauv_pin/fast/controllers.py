@@ -62,6 +62,22 @@ def measure_end_effector(t, q, v, model, W, body, rotation, translation, history
     return R, p, twist, velocity, acceleration, omega
 
 
+@compiled
+def thruster_power_into(model, W, thrusts, info, offset):
+    """Mechanical power of each thruster [W] into ``info[offset:offset + m]`` (after kinematics).
+
+    Thrust times the speed of the thruster's point along its axis: ``twist_b . w_k`` times
+    ``T_k``, with ``w_k`` the unit-thrust wrench on body ``b`` (the ``k``-th entry of ``v^T B``).
+    """
+    th = model.thrusters
+    for k in range(thrusts.shape[0]):
+        b = th.body[k]
+        speed = 0.0
+        for i in range(6):
+            speed += W.twist[b, i] * th.unit_wrench[k, i]
+        info[offset + k] = speed * thrusts[k]
+
+
 class PaperParameters(NamedTuple):
     """What :func:`paper_path_following` needs besides the state (built in Python once)."""
 
@@ -185,14 +201,7 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
     for k in range(m):
         info[o + k] = out.thrusts[k]
     o += m
-    # mechanical power of each thruster: thrust times the speed of its point along its axis
-    th = model.thrusters
-    for k in range(m):
-        b = th.body[k]
-        speed = 0.0
-        for i in range(6):
-            speed += W.twist[b, i] * th.unit_wrench[k, i]
-        info[o + k] = speed * out.thrusts[k]
+    thruster_power_into(model, W, out.thrusts, info, o)
     o += m
     for j in range(n):
         info[o + j] = out.joint_torques[j]

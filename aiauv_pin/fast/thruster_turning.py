@@ -16,7 +16,7 @@ from control.laws import SurgeState, joint_pd_torque
 from control.thruster_turning import TurningBuffers, TurningGains, thruster_turning_command
 from hydro.jit import compiled
 
-from .controllers import measure_end_effector
+from .controllers import measure_end_effector, thruster_power_into
 from .kernels import thrust_into
 
 
@@ -156,13 +156,7 @@ def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
     for k in range(m):
         info[o + k] = out.thrusts[k]
     o += m
-    th = model.thrusters
-    for k in range(m):
-        b = th.body[k]
-        speed = 0.0
-        for i in range(6):
-            speed += W.twist[b, i] * th.unit_wrench[k, i]
-        info[o + k] = speed * out.thrusts[k]
+    thruster_power_into(model, W, out.thrusts, info, o)
     o += m
     for j in range(n):
         info[o + j] = joint_pd_torque(
