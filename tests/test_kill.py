@@ -185,7 +185,11 @@ def test_killed_sweep_resumes_to_exactly_the_full_table(tmp_path):
         assert record["status"] == expected["status"] == "complete"
         for key, value in expected["metrics"].items():
             if key not in ("wall_time", "real_time_factor"):
-                assert record["metrics"][key] == value, key
+                # the same run in another process: equal to the last digit or two only, because
+                # numba compiles a caller differently when its callees come from the disk cache
+                # (no inlining, so fast-math contracts differently); every bookkeeping check above
+                # and below stays exact
+                assert record["metrics"][key] == pytest.approx(value, rel=1e-12, abs=1e-15), key
         if point.run_id in partial:  # a run finished before the kill was not run again
             assert partial[point.run_id] == record
     assert text == (out / "spec.toml").read_text()
