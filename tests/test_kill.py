@@ -189,7 +189,11 @@ def test_killed_sweep_resumes_to_exactly_the_full_table(tmp_path):
                 # numba compiles a caller differently when its callees come from the disk cache
                 # (no inlining, so fast-math contracts differently); every bookkeeping check above
                 # and below stays exact
-                assert record["metrics"][key] == pytest.approx(value, rel=1e-12, abs=1e-15), key
+                got = record["metrics"][key]
+                if isinstance(value, float):
+                    assert got == pytest.approx(value, rel=1e-12, abs=1e-15), key
+                else:
+                    assert got == value, key
         if point.run_id in partial:  # a run finished before the kill was not run again
             assert partial[point.run_id] == record
     assert text == (out / "spec.toml").read_text()
