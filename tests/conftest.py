@@ -98,3 +98,16 @@ def single_body(tmp_path):
     path = tmp_path / "single_body.urdf"
     path.write_text(text)
     return path, params
+
+
+#: ``D_Q`` with a positive-definite symmetric part and an energy-injecting antisymmetric coupling.
+QUADRATIC_INJECTING = (
+    "<quadratic_damping>"
+    "6.0 400.0 0.0 0.0 0.0 0.0 "
+    "-400.0 60.0 0.0 0.0 0.0 0.0 "
+    "0.0 0.0 60.0 0.0 0.0 0.0 "
+    "0.0 0.0 0.0 0.2 0.0 0.0 "
+    "0.0 0.0 0.0 0.0 8.0 0.0 "
+    "0.0 0.0 0.0 0.0 0.0 8.0 "
+    "</quadratic_damping>"
+)

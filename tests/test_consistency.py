@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import QUADRATIC_INJECTING
 
 import aiauv_pin
 from aiauv_pin import consistency
@@ -21,18 +22,6 @@ from aiauv_pin.cli import main
 from aiauv_pin.vehicle import Vehicle
 
 DATA = Path(__file__).parent / "data"
-
-#: ``D_Q`` with a positive-definite symmetric part and an energy-injecting antisymmetric coupling.
-QUADRATIC_INJECTING = (
-    "<quadratic_damping>"
-    "6.0 400.0 0.0 0.0 0.0 0.0 "
-    "-400.0 60.0 0.0 0.0 0.0 0.0 "
-    "0.0 0.0 60.0 0.0 0.0 0.0 "
-    "0.0 0.0 0.0 0.2 0.0 0.0 "
-    "0.0 0.0 0.0 0.0 8.0 0.0 "
-    "0.0 0.0 0.0 0.0 0.0 8.0 "
-    "</quadratic_damping>"
-)
 
 
 def test_every_check_is_in_the_pytest_suite():

@@ -12,6 +12,7 @@ import importlib.metadata
 from pathlib import Path
 
 import pytest
+from conftest import QUADRATIC_INJECTING
 
 import aiauv_pin
 import aiauv_pin.builder  # before pytester's sys.modules snapshot (see above)
@@ -22,18 +23,6 @@ pytest_plugins = ["pytester"]
 
 DATA = Path(__file__).parent / "data"
 N_CHECKS = len(consistency.CHECKS)
-
-#: ``D_Q`` with a positive-definite symmetric part and an energy-injecting antisymmetric coupling.
-QUADRATIC_INJECTING = (
-    "<quadratic_damping>"
-    "6.0 400.0 0.0 0.0 0.0 0.0 "
-    "-400.0 60.0 0.0 0.0 0.0 0.0 "
-    "0.0 0.0 60.0 0.0 0.0 0.0 "
-    "0.0 0.0 0.0 0.2 0.0 0.0 "
-    "0.0 0.0 0.0 0.0 8.0 0.0 "
-    "0.0 0.0 0.0 0.0 0.0 8.0 "
-    "</quadratic_damping>"
-)
 
 
 def copy_in(pytester, source: Path, name: str | None = None) -> Path:

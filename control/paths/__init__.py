@@ -134,24 +134,3 @@ def from_mapping(table: Mapping[str, Any], where: str = "path") -> Path:
         return cls(**arguments)
     except PathError as error:
         raise PathError(error.key, error.problem, where=prefix) from None
-
-
-__all__ = [
-    "PATH_TYPES",
-    "PIECE_STRIDE",
-    "VERTICAL_TOLERANCE",
-    "HelixPath",
-    "LinePath",
-    "Path",
-    "PathError",
-    "PathPoint",
-    "UserPath",
-    "WaypointPath",
-    "builtin_path_point",
-    "from_mapping",
-    "helix_point",
-    "line_frame",
-    "line_point",
-    "path_point_of",
-    "waypoints_point",
-]
