@@ -205,14 +205,16 @@ def test_runs_of_a_killed_worker_are_run_again_not_lost(tmp_path):
     from aiauv_pin.sweep import read_records
 
     spec = tmp_path / "s.toml"
-    spec.write_text("duration = 5.0\ndt = 0.01\n[grid]\nk_e = [0.05, 0.06, 0.07, 0.08, 0.09]\n")
+    # each run takes ~1.5 s once compiled (30,000 steps), so the worker is killed mid-sweep: with
+    # 5 s runs it finished all five in the 0.1 s between a first record and the kill (CI, 2026-11-22)
+    spec.write_text("duration = 60.0\ndt = 0.002\n[grid]\nk_e = [0.05, 0.06, 0.07, 0.08, 0.09]\n")
     out = tmp_path / "out"
     command = _aiauv(
         "sweep", str(spec), "--out", str(out), "--workers", "1", "--quiet", "--no-plots"
     )
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     runs = out / "runs"
-    deadline = time.monotonic() + 120
+    deadline = time.monotonic() + 300  # a cold numba cache compiles first
     while not (runs.is_dir() and any(runs.glob("*.json"))) and time.monotonic() < deadline:
         time.sleep(0.1)
     killed = 0
@@ -225,6 +227,7 @@ def test_runs_of_a_killed_worker_are_run_again_not_lost(tmp_path):
             os.kill(pid, signal.SIGKILL)
             killed += 1
     assert killed == 1
+    assert len(list(runs.glob("*.json"))) < 5, "the worker finished before the kill: runs too short"
     _, err = process.communicate(timeout=300)
     assert process.returncode == 0, err
     records = read_records(out)
