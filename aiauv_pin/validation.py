@@ -208,6 +208,8 @@ def validate_parameters(
         _check_psd(link.added_mass, f"{what}: added_mass", where)
         _check_psd(link.linear_damping, f"{what}: linear_damping", where)
         _check_psd(link.quadratic_damping, f"{what}: quadratic_damping", where)
+        # dissipative in forward motion (u_r > 0), as UUV Simulator's coefficients are meant
+        _check_psd(link.forward_speed_damping, f"{what}: linear_damping_forward_speed", where)
     sizes = link_sizes(structure, root, hydro)
     for thruster in hydro.thrusters:
         what = f"thruster '{thruster.name}'"

@@ -166,6 +166,7 @@ class Vehicle:
         identity = np.eye(6)
         linear = np.array([link.linear_damping for link in links]).reshape(nl, 6, 6)
         quadratic = np.array([link.quadratic_damping for link in links]).reshape(nl, 6, 6)
+        forward = np.array([link.forward_speed_damping for link in links]).reshape(nl, 6, 6)
         cylinder = np.tile(identity, (nl, 1, 1))
         length = np.zeros(nl)
         strip = np.zeros(nl)
@@ -194,6 +195,10 @@ class Vehicle:
                 quadratic_is_diagonal=np.array(
                     [np.count_nonzero(d - np.diag(np.diag(d))) == 0 for d in quadratic],
                     dtype=np.int64,
+                ),
+                forward_speed_damping=np.ascontiguousarray(forward),
+                has_forward_speed_damping=np.array(
+                    [np.any(d != 0.0) for d in forward], dtype=np.int64
                 ),
                 has_crossflow=has_crossflow,
                 cylinder_from_link=np.ascontiguousarray(cylinder),

@@ -53,6 +53,10 @@ class FluidModel(NamedTuple):
         linear_damping: ``D_L`` in the link frame (nl, 6, 6) [N s/m, N s, N m s].
         quadratic_damping: ``D_Q`` in the link frame (nl, 6, 6) [N s^2/m^2, ...].
         quadratic_is_diagonal: 1 where ``D_Q`` is diagonal (nl,).
+        forward_speed_damping: ``D_F`` in the link frame (nl, 6, 6) [N s^2/m^2, N s^2/m, N m s^2/m]:
+            the surge-proportional linear damping ``-u_r D_F nu_r``
+            (:func:`forward_speed_damping_wrench`).
+        has_forward_speed_damping: 1 where ``D_F`` is not zero (nl,).
         has_crossflow: 1 for a slender link with strip-theory crossflow drag (nl,).
         cylinder_from_link: Motion transform from the link to its cylinder frame (nl, 6, 6).
         cylinder_is_link: 1 where the cylinder frame is the link frame (nl,).
@@ -71,6 +75,8 @@ class FluidModel(NamedTuple):
     linear_damping: np.ndarray
     quadratic_damping: np.ndarray
     quadratic_is_diagonal: np.ndarray
+    forward_speed_damping: np.ndarray
+    has_forward_speed_damping: np.ndarray
     has_crossflow: np.ndarray
     cylinder_from_link: np.ndarray
     cylinder_is_link: np.ndarray
@@ -203,6 +209,35 @@ def damping_wrench(linear, quadratic, quadratic_is_diagonal, twist):
 
 
 @compiled(fastmath=True)
+def forward_speed_damping_wrench(forward, twist):
+    """Linear damping proportional to the surge speed, ``-u_r D_F nu_r``.
+
+    Newman (1977, *Marine Hydrodynamics*, Sec. 4.17) shows a damping that grows linearly with
+    forward speed, notably on slender bodies; UUV Simulator models it as
+    ``D(nu) = -DLin - u DLinForwardSpeed - ...`` (``HMFossen::ComputeDampingMatrix`` in
+    uuv_gazebo_plugins, after Antonelli 2014), with the signed relative surge speed ``u_r``. Like
+    that plugin, the term is dissipative only while ``u_r > 0`` (for a positive semi-definite
+    ``D_F``); running backwards it adds energy.
+
+    Args:
+        forward: ``D_F`` (6, 6), link frame [N s^2/m^2, N s^2/m, N m s^2/m].
+        twist: ``nu_r``, the link's twist relative to the water (6,) [m/s, rad/s].
+
+    Returns:
+        The wrench acting on the link, 6 floats [N, N m].
+    """
+    u = twist[0]
+    return (
+        -u * _row_dot(forward, 0, twist),
+        -u * _row_dot(forward, 1, twist),
+        -u * _row_dot(forward, 2, twist),
+        -u * _row_dot(forward, 3, twist),
+        -u * _row_dot(forward, 4, twist),
+        -u * _row_dot(forward, 5, twist),
+    )
+
+
+@compiled(fastmath=True)
 def crossflow_wrench(velocity, length, coefficient, nodes, weights):
     """Strip-theory crossflow drag of a slender cylinder, about its rear end, cylinder axes.
 
@@ -289,7 +324,8 @@ def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch
     ``bias_b += nu_r x* (M_A nu_r) + M_A (omega x v_c, 0) - (F e, m x e)
     - sum_links X^T tau_D(X nu_r)``
 
-    with the damping ``tau_D`` of each link (linear, quadratic and crossflow) in its link frame.
+    with the damping ``tau_D`` of each link (linear, quadratic, forward-speed and crossflow) in
+    its link frame.
     The added-mass inertia term ``M_A dv`` is not here: it belongs to the mass matrix.
 
     Args:
@@ -350,6 +386,10 @@ def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch
         )
         for i in range(6):
             link_wrench[i] = w[i]
+        if fluid.has_forward_speed_damping[k]:
+            w = forward_speed_damping_wrench(fluid.forward_speed_damping[k], link_twist)
+            for i in range(6):
+                link_wrench[i] += w[i]
         if fluid.has_crossflow[k]:
             length = fluid.cylinder_length[k]
             coefficient = fluid.strip_coefficient[k]

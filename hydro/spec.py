@@ -94,6 +94,8 @@ class LinkHydrodynamics:
         quadratic_damping: Quadratic damping ``D_Q`` (6x6); wrench ``-D_Q (|nu_r| * nu_r)``
             (element-wise absolute value and product).
         crossflow: Optional strip-theory crossflow drag, added to the quadratic damping.
+        forward_speed_damping: Surge-proportional linear damping ``D_F`` (6x6); wrench
+            ``-u_r D_F nu_r`` (:func:`hydro.laws.forward_speed_damping_wrench`); zero if omitted.
     """
 
     link: str
@@ -104,6 +106,7 @@ class LinkHydrodynamics:
     linear_damping: np.ndarray
     quadratic_damping: np.ndarray
     crossflow: CrossflowDrag | None = None
+    forward_speed_damping: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.volume) and self.volume >= 0.0):
@@ -116,7 +119,9 @@ class LinkHydrodynamics:
             "center_of_buoyancy",
             _frozen_array(self.center_of_buoyancy, (3,), f"link '{self.link}': center_of_buoyancy"),
         )
-        for name in ("added_mass", "linear_damping", "quadratic_damping"):
+        if self.forward_speed_damping is None:
+            object.__setattr__(self, "forward_speed_damping", np.zeros((6, 6)))
+        for name in ("added_mass", "linear_damping", "quadratic_damping", "forward_speed_damping"):
             matrix = _frozen_array(getattr(self, name), (6, 6), f"link '{self.link}': {name}")
             object.__setattr__(self, name, matrix)
         added_mass = self.added_mass

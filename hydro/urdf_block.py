@@ -9,6 +9,7 @@ The block is a top-level child of ``<robot>`` (URDF parsers ignore unknown top-l
         <added_mass>6 (diagonal) or 36 (row-major, symmetric PSD) numbers</added_mass>
         <linear_damping>6 or 36; wrench -D_L nu, positive = dissipative</linear_damping>
         <quadratic_damping>6 or 36; wrench -D_Q (|nu| * nu)</quadratic_damping>
+        <linear_damping_forward_speed>6 or 36; wrench -u D_F nu</linear_damping_forward_speed>
       </link>
       <link name="link3" model="slender_cylinder" C_dC="0.9"/>
       <thruster name="t1" link="link3" xyz="0.237 0 0" direction="0 0 1" max_thrust="50"/>
@@ -108,7 +109,14 @@ def _fossen_link(element: Element, name: str) -> LinkHydrodynamics:
     _check_attributes(element, ("name", "model"), what)
     children = _children(
         element,
-        ("volume", "center_of_buoyancy", "added_mass", "linear_damping", "quadratic_damping"),
+        (
+            "volume",
+            "center_of_buoyancy",
+            "added_mass",
+            "linear_damping",
+            "quadratic_damping",
+            "linear_damping_forward_speed",
+        ),
         what,
     )
     volume = _volume(children.get("volume"), what)
@@ -118,7 +126,12 @@ def _fossen_link(element: Element, name: str) -> LinkHydrodynamics:
     if "center_of_buoyancy" in children:
         center = parse_vector(children["center_of_buoyancy"].text, 3, f"{what} center_of_buoyancy")
     matrices = {}
-    for tag in ("added_mass", "linear_damping", "quadratic_damping"):
+    for tag in (
+        "added_mass",
+        "linear_damping",
+        "quadratic_damping",
+        "linear_damping_forward_speed",
+    ):
         child = children.get(tag)
         matrices[tag] = (
             np.zeros((6, 6)) if child is None else parse_matrix(child.text, f"{what} {tag}")
@@ -132,6 +145,7 @@ def _fossen_link(element: Element, name: str) -> LinkHydrodynamics:
         added_mass=matrices["added_mass"],
         linear_damping=matrices["linear_damping"],
         quadratic_damping=matrices["quadratic_damping"],
+        forward_speed_damping=matrices["linear_damping_forward_speed"],
     )
 
 

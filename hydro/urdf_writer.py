@@ -39,4 +39,8 @@ def fossen_link_element(link: LinkHydrodynamics) -> Element:
     SubElement(element, "center_of_buoyancy").text = format_numbers(link.center_of_buoyancy)
     for tag in ("added_mass", "linear_damping", "quadratic_damping"):
         SubElement(element, tag).text = format_numbers(getattr(link, tag))
+    if np.any(link.forward_speed_damping != 0.0):
+        SubElement(element, "linear_damping_forward_speed").text = format_numbers(
+            link.forward_speed_damping
+        )
     return element

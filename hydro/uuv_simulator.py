@@ -57,8 +57,9 @@ dead zone; ``LinearInterp``: table); our ``max_thrust`` is its value at ``clampM
 dynamics (:func:`freeze_thruster_joints`): UUV Simulator drives its speed kinematically and its
 link is a placeholder of 1 g.
 
-Not representable here and therefore reported by a warning: ``linear_damping_forward_speed`` (a
-damping proportional to surge speed: read, but not applied), off-diagonal quadratic damping (ignored
+``linear_damping_forward_speed`` becomes our surge-proportional damping ``-u_r D_F nu_r``
+(:func:`convert_forward_speed_damping`, :func:`hydro.laws.forward_speed_damping_wrench`).
+Not representable here and therefore reported by a warning: off-diagonal quadratic damping (ignored
 by UUV Simulator as well) and surface-vessel (metacentric) parameters. UUV Simulator applies the
 hydrodynamic wrench with Gazebo's ``AddRelativeForce``, i.e. at the link's centre of mass; we read
 the parameters as given about the link origin (as its velocities are), so a warning is issued when
@@ -190,7 +191,7 @@ def convert_fossen_matrices(
 
 
 def convert_forward_speed_damping(forward: np.ndarray) -> np.ndarray:
-    """UUV Simulator's ``linear_damping_forward_speed`` in our axes and sign (not applied yet).
+    """UUV Simulator's ``linear_damping_forward_speed`` in our axes and sign.
 
     ``HMFossen::ComputeDampingMatrix`` has ``D(nu) = -DLin - u DLinForwardSpeed - ...`` and applies
     ``-D nu``: a wrench ``u DLinForwardSpeed nu`` in FRD axes, with ``u`` the relative surge speed
@@ -453,16 +454,6 @@ def _uuv_link(
         geometric_model(
             kind, model, element, urdf_link.mass, fluid_density, added_mass, quadratic, what
         )
-    if np.any(forward != 0.0):
-        # D(nu) = -DLin - u DLinForwardSpeed (HMFossen::ComputeDampingMatrix): a wrench
-        # u * DLinForwardSpeed nu, bilinear in the velocity; no term of this package has that form
-        converted = convert_forward_speed_damping(forward)
-        warnings.warn(
-            f"{what}: linear_damping_forward_speed (a wrench -u D_F nu, largest |entry| of D_F "
-            f"{float(np.max(np.abs(converted))):.4g}) is read but not applied: this package has "
-            "no damping proportional to the surge speed",
-            stacklevel=4,
-        )
     if (
         element.find("metacentric_width") is not None
         or element.find("metacentric_length") is not None
@@ -472,6 +463,7 @@ def _uuv_link(
             stacklevel=4,
         )
     added_mass, linear, quadratic = convert_fossen_matrices(added_mass, linear, quadratic, what)
+    forward = convert_forward_speed_damping(forward)
 
     neutral_element = element.find("neutrally_buoyant")
     neutral = neutral_element is not None and _parse_bool(
@@ -505,7 +497,8 @@ def _uuv_link(
         added_mass = transform.T @ added_mass @ transform
         added_mass = 0.5 * (added_mass + added_mass.T)
         linear = transform.T @ linear @ transform
-    elif offset and (np.any(added_mass) or np.any(linear) or np.any(quadratic)):
+        forward = transform.T @ forward @ transform  # with u_r at the link origin
+    elif offset and (np.any(added_mass) or np.any(linear) or np.any(quadratic) or np.any(forward)):
         warnings.warn(
             f"{what}: inertial origin is offset from the link origin; the matrices are read about "
             "the link origin, whereas UUV Simulator applies its wrench at the centre of mass",
@@ -519,6 +512,7 @@ def _uuv_link(
         added_mass=added_mass,
         linear_damping=linear,
         quadratic_damping=quadratic,
+        forward_speed_damping=forward,
     )
 
 

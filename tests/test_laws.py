@@ -201,6 +201,7 @@ def test_single_vector_fluid_laws_compiled_equal_interpreted(rng):
             (hydro_laws.current_acceleration_wrench, (inertia, *rng.normal(size=6))),
             (hydro_laws.damping_wrench, (inertia, np.diag(rng.uniform(0, 5, 6)), True, twist)),
             (hydro_laws.damping_wrench, (inertia, a, False, twist)),
+            (hydro_laws.forward_speed_damping_wrench, (a, twist)),
             (hydro_laws.crossflow_wrench, (twist, 0.7, 68.0, nodes, weights)),
             (hydro_laws.hydrostatic_wrench, tuple(rng.normal(size=7))),
         ):
@@ -222,3 +223,16 @@ def test_body_fluid_bias_compiled_equals_interpreted(paper_vehicle, rng):
         results.append((bias, relative))
     np.testing.assert_allclose(results[0][0], results[1][0], rtol=1e-11, atol=1e-10)
     np.testing.assert_allclose(results[0][1], results[1][1], **TIGHT)
+
+
+def test_forward_speed_damping_closed_form_and_power(rng):
+    """``-u D_F nu`` (UUV Simulator's forward-speed term): its power ``-u nu^T D_F nu`` is
+    dissipative for u > 0 and a PSD ``D_F``, and changes sign with the surge speed."""
+    a = rng.normal(size=(6, 6))
+    forward = a @ a.T + np.diag([0, 0, 0, 0, 0, 0.0])
+    for _ in range(20):
+        twist = rng.normal(size=6)
+        wrench = np.array(hydro_laws.forward_speed_damping_wrench(forward, twist))
+        np.testing.assert_allclose(wrench, -twist[0] * forward @ twist, rtol=1e-12, atol=1e-12)
+        power = float(wrench @ twist)
+        assert np.sign(power) == -np.sign(twist[0]) or abs(power) < 1e-12

@@ -159,7 +159,7 @@ def test_our_block_wins_and_sets_density():
     np.testing.assert_array_equal(np.diag(theirs.linear_damping), [1, 2, 3, 4, 5, 6])
 
 
-def test_forward_speed_damping_and_offdiagonal_quadratic_warn():
+def test_forward_speed_damping_is_read_and_offdiagonal_quadratic_warns():
     body = """<volume>0.01</volume><center_of_buoyancy>0 0 0</center_of_buoyancy>
       <hydrodynamic_model><type>fossen</type>
       <linear_damping_forward_speed>-1 0 0 0 0 0</linear_damping_forward_speed>
@@ -170,8 +170,11 @@ def test_forward_speed_damping_and_offdiagonal_quadratic_warn():
     with pytest.warns(UserWarning) as record:
         spec = read_uuv_simulator(text)
     messages = " ".join(str(item.message) for item in record)
-    assert "forward_speed" in messages and "off-diagonal" in messages
+    assert "forward_speed" not in messages and "off-diagonal" in messages
     np.testing.assert_array_equal(spec.links[0].quadratic_damping, np.eye(6))
+    expected = np.zeros((6, 6))
+    expected[0, 0] = 1.0  # -(-1): FRD to FLU keeps surge, dissipative sign made positive
+    np.testing.assert_array_equal(spec.links[0].forward_speed_damping, expected)
 
 
 BAD = {

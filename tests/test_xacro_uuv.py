@@ -312,8 +312,8 @@ def test_lauv_thruster_with_swapped_clamps_and_coupled_damping():
 
 def test_eca_a9_is_read_but_refused_for_its_inertia():
     """As published, ECA A9's inertia breaks the triangle inequality (0.6 + 30 < 35 kg m^2), so the
-    validation gate refuses it in one line; its hydrodynamic block is still read, and says what it
-    cannot apply (forward-speed damping, a thruster with no limit)."""
+    validation gate refuses it in one line; its hydrodynamic block is still read (forward-speed
+    damping included), and says what it cannot apply (a thruster with no limit)."""
     from aiauv_pin.errors import PhysicalParameterError
     from hydro.urdf_block import read_hydrodynamics
 
@@ -326,12 +326,16 @@ def test_eca_a9_is_read_but_refused_for_its_inertia():
     with pytest.warns(UserWarning) as record:
         hydro = read_hydrodynamics(eca)
     messages = " ".join(str(item.message) for item in record)
-    assert "linear_damping_forward_speed" in messages and "not applied" in messages
+    assert "linear_damping_forward_speed" not in messages
     assert "no finite positive thrust limit" in messages
     assert hydro.thrusters == ()
     (link,) = hydro.links
     np.testing.assert_allclose(np.diag(link.added_mass), [4, 95, 75, 0.4, 27, 32])
     assert not np.any(link.linear_damping) and not np.any(link.quadratic_damping)
+    # published DLinForwardSpeed (FRD, negative = dissipative) in FLU, positive = dissipative
+    assert link.forward_speed_damping[1, 1] == pytest.approx(162.0)
+    assert link.forward_speed_damping[1, 5] == pytest.approx(-150.0)
+    assert link.forward_speed_damping[5, 1] == pytest.approx(34.0)
 
 
 def test_forward_speed_damping_conversion():

@@ -813,6 +813,13 @@ def export_sdf(
         notes.append(
             f"crossflow drag of {len(crossflow)} link(s) not exported (gz has no such term)"
         )
+    forward = [
+        link.link for link in source.vehicle.hydro.links if np.any(link.forward_speed_damping)
+    ]
+    if forward:
+        notes.append(
+            f"forward-speed damping of {len(forward)} link(s) not exported (gz has no such term)"
+        )
     if source.vehicle.hydro.thrusters:
         notes.append(f"{len(source.vehicle.hydro.thrusters)} thruster(s) not exported")
     return notes

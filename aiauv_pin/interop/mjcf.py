@@ -89,7 +89,8 @@ def _header(source: ExportSource) -> str:
         "velocity in world, angular velocity in the body frame) of the root link frame.",
         "What MuJoCo drops: each link's 6x6 added-mass matrix (MuJoCo's ellipsoid fluid model",
         "applies only the velocity-dependent forces of its own ellipsoid added mass, none in the",
-        "mass matrix), the linear and quadratic damping matrices and the crossflow strip drag",
+        "mass matrix), the linear, quadratic and forward-speed damping matrices and the",
+        "crossflow strip drag",
         "(replaced by MuJoCo's ellipsoid drag and lift on the link geoms, water density",
         f"{format_number(hydro.fluid_density)} kg/m^3, viscosity {format_number(WATER_VISCOSITY)} "
         "Pa s), and the centre of buoyancy: buoyancy",
