@@ -128,7 +128,7 @@ def scenario_for_args(args):
 def _run_simulate(args) -> int:
     from . import loading
     from .errors import AiauvError, SimulationDiverged
-    from .outputs import preload_plotting, write_results
+    from .outputs import live_path_points, preload_plotting, write_results
     from .result_folder import check_output_folder, staged_folder
     from .scenario import ScenarioResult, run_scenario
     from .validation import explain_divergence
@@ -168,7 +168,7 @@ def _run_simulate(args) -> int:
     if args.view:
         from .viewer import live_view
 
-        on_log = live_view(vehicle)
+        on_log = live_view(vehicle, path_points=live_path_points(scenario))
     start = time.perf_counter()
     try:
         result = run_scenario(

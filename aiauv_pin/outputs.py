@@ -225,6 +225,15 @@ def default_path_points(result: ScenarioResult, n: int = 400) -> np.ndarray:
     return result.scenario.path_to_follow.sample((low - margin, high + margin), n)
 
 
+def live_path_points(scenario, n: int = 400) -> np.ndarray:
+    """The path to draw before a run: the scenario's path from 5 m behind the start's closest
+    point to 20 % beyond the arc length covered at the desired speed, (n, 3) world points [m]."""
+    path = scenario.path_to_follow
+    s0 = path.closest(scenario.start).s
+    speed = max(abs(float(scenario.controller_gains.u_d)), 0.1)
+    return path.sample((s0 - 5.0, s0 + 1.2 * speed * scenario.duration + 5.0), n)
+
+
 def _set_equal_axes(ax, points: np.ndarray) -> None:
     """Equal scales on the three axes of a 3-D plot, framing ``points`` (N, 3) [m]."""
     low, high = np.nanmin(points, axis=0), np.nanmax(points, axis=0)

@@ -849,7 +849,9 @@ class MeshcatViewer:
         urdf: URDF with the visuals (see :func:`vehicle_visuals`).
         visualizer: A ``meshcat.Visualizer``; default starts meshcat's server in a subprocess.
         zmq_url: Connect to a running meshcat server instead of starting one.
-        path_range: ``(x_start, x_end)`` of the path line [m].
+        path_range: ``(x_start, x_end)`` of the path line [m], when no ``path_points`` are given.
+        path_points: The path drawn, world points in order (N, 3) [m]; default the world x-axis
+            over ``path_range``.
         follow: Keep the vehicle in view (by moving ``/aiauv`` by minus its centroid).
         host: Address the started server listens on (:mod:`aiauv_pin.meshcat_server`); the
             default, 127.0.0.1, keeps the view on this machine; ``"0.0.0.0"`` shares it.
@@ -869,10 +871,13 @@ class MeshcatViewer:
         visualizer=None,
         zmq_url: str | None = None,
         path_range: tuple[float, float] = (-5.0, 500.0),
+        path_points: np.ndarray | None = None,
         follow: bool = True,
         host: str = "127.0.0.1",
     ) -> None:
-        self.scene = VehicleScene(vehicle, urdf=urdf, path_range=path_range)
+        self.scene = VehicleScene(
+            vehicle, urdf=urdf, path_range=path_range, path_points=path_points
+        )
         self.server = None
         if visualizer is None:
             import meshcat
@@ -930,6 +935,7 @@ def live_view(
     open_browser: bool = True,
     viewer: MeshcatViewer | None = None,
     host: str = "127.0.0.1",
+    path_points: np.ndarray | None = None,
 ) -> Callable[[float, np.ndarray, Mapping[str, object] | None], None]:
     """A callback ``show(t, q, info)`` that draws a running simulation in meshcat.
 
@@ -943,11 +949,12 @@ def live_view(
         open_browser: Open the viewer page in a browser tab (its URL is printed in any case).
         viewer: Reuse a viewer instead of starting one.
         host: Address the meshcat server listens on (127.0.0.1: this machine only).
+        path_points: The path drawn (N, 3) [m] (see :class:`MeshcatViewer`).
     """
     if not (math.isfinite(fps) and fps > 0):
         raise ValueError(f"fps must be a positive number, got {fps!r}")
     if viewer is None:
-        viewer = MeshcatViewer(vehicle, host=host)
+        viewer = MeshcatViewer(vehicle, host=host, path_points=path_points)
         if open_browser:
             viewer.open()
     state = {"last": -math.inf, "t0": None, "wall0": 0.0}

@@ -283,3 +283,26 @@ def test_visuals_without_urdf_come_from_the_crossflow_cylinders(vehicle):
         assert a.geometry["radiusTop"] == pytest.approx(b.geometry["radiusTop"])
         np.testing.assert_allclose(a.placement[:3, 3], b.placement[:3, 3], atol=1e-12)
         np.testing.assert_allclose(a.placement[:3, 1], b.placement[:3, 1], atol=1e-12)  # axis
+
+
+def test_live_viewer_draws_the_scenario_path(vehicle):
+    """``aiauv simulate --view`` draws the scenario's own path (here a helix), not the x-axis."""
+    from aiauv_pin.outputs import live_path_points
+    from aiauv_pin.scenario import Scenario
+    from control.paths import HelixPath
+
+    helix = HelixPath(centre=(0.0, 0.0, 0.0), axis=(0.0, 0.0, 1.0), radius=10.0, pitch=10.0)
+    scenario = Scenario(path=helix, start_position=(10.0, 0.0, 0.0), duration=60.0)
+    points = live_path_points(scenario)
+    radius = np.hypot(points[:, 0], points[:, 1])
+    np.testing.assert_allclose(radius, 10.0, rtol=1e-12)
+    fake = _FakeVisualizer()
+    viewer.MeshcatViewer(vehicle, urdf=URDF, visualizer=fake, path_points=points)
+    (path,) = [
+        c for c in fake.window.commands if c["type"] == "set_object" and c["path"] == viewer.PATH
+    ]
+    drawn = np.array(path["object"]["geometries"][0]["data"]["attributes"]["position"]["array"])
+    drawn = drawn.reshape(-1, 3)
+    assert drawn[:, 2].max() - drawn[:, 2].min() > 5.0  # climbs with the helix
+    # on the helix's cylinder, but for the tick marks sticking out across it
+    assert np.median(np.hypot(drawn[:, 0], drawn[:, 1])) == pytest.approx(10.0, rel=1e-3)
