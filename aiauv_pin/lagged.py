@@ -149,7 +149,10 @@ class LaggedAddedMass:
 
 
 def slender_link_urdf(
-    mass_ratio: float = 1.0, length: float = 1.0, radius: float = 0.05, fluid_density: float = 1000.0
+    mass_ratio: float = 1.0,
+    length: float = 1.0,
+    radius: float = 0.05,
+    fluid_density: float = 1000.0,
 ) -> str:
     """URDF text of one slender cylinder whose sway added mass is ``mass_ratio`` times its mass.
 

@@ -314,6 +314,8 @@ def simulate(
 
     def dynamics_with(tau: np.ndarray):
         def dynamics(qq, vv, tt):
+            if not (np.all(np.isfinite(qq)) and np.all(np.isfinite(vv))):
+                return np.full(model.nv, np.nan)  # a stage overflowed: the step diverges
             total = tau
             if servo_function is not None:
                 total = total + servo_function(qq, vv)
@@ -335,7 +337,8 @@ def simulate(
             return advance_held(tau, n, t0)
         for i in range(n):  # the lagged added-mass force, recomputed and held step by step
             t_i = t0 + i * dt
-            if advance_held(tau + lag.generalized_force(q, v, dt, current, t_i), 1, t_i) < 1:
+            force = lag.generalized_force(q, v, dt, current, t_i)
+            if not np.all(np.isfinite(force)) or advance_held(tau + force, 1, t_i) < 1:
                 return i
         return n
 
