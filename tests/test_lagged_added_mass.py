@@ -121,3 +121,34 @@ def test_bad_lagged_arguments_get_one_line(tmp_path):
         with pytest.raises(AiauvError) as error:
             aiauv_pin.simulate(rod, q0, v0, 0.1, 0.01, **options)
         assert message in str(error.value) and "\n" not in str(error.value)
+
+
+def test_scenario_files_select_the_lagged_scheme_and_sweeps_keep_it(tmp_path):
+    from aiauv_pin.scenario import Scenario, run_scenario, summary
+    from aiauv_pin.scenario_file import ScenarioFileError, load_scenario
+    from aiauv_pin.sweep_spec import scenario_from_parameters, scenario_parameters
+
+    path = tmp_path / "lagged.toml"
+    path.write_text('duration = 0.05\ndt = 0.005\nadded_mass = "lagged"\nlagged_filter = 1.0\n')
+    scenario = load_scenario(path)
+    assert (scenario.added_mass, scenario.lagged_filter) == ("lagged", 1.0)
+    result = run_scenario(aiauv_pin.load_vehicle(), scenario)
+    assert result.extra["compiled_controller"] is False  # the Python controller ran
+    assert summary(result)["parameters"]["added_mass"] == "lagged"
+    resolved = scenario_parameters(scenario)
+    rebuilt = scenario_from_parameters(resolved)  # what a sweep's worker runs
+    assert (rebuilt.added_mass, rebuilt.lagged_filter) == ("lagged", 1.0)
+    assert "added_mass" not in scenario_parameters(Scenario())  # exact runs keep their keys
+    for line, message in (
+        ('added_mass = "implicit"', "added_mass: expected one of exact, lagged"),
+        ("lagged_filter = 1.5", "lagged_filter: must be <= 1"),
+        ("lagged_filter = 0", "lagged_filter: must be > 0"),
+    ):
+        path.write_text(line + "\n")
+        with pytest.raises(ScenarioFileError, match=message):
+            load_scenario(path)
+    with pytest.raises(ValueError, match="not with added_mass = 'lagged'"):
+        run_scenario(
+            aiauv_pin.load_vehicle(),
+            Scenario(duration=0.05, controller="thruster_turning", added_mass="lagged"),
+        )
