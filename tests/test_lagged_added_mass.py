@@ -152,3 +152,24 @@ def test_scenario_files_select_the_lagged_scheme_and_sweeps_keep_it(tmp_path):
             aiauv_pin.load_vehicle(),
             Scenario(duration=0.05, controller="thruster_turning", added_mass="lagged"),
         )
+
+
+def test_lagged_law_compiled_equals_interpreted_and_matches_its_formula(paper_vehicle, rng):
+    from hydro.jit import interpreted
+    from hydro.laws import add_lagged_added_mass_bias, coriolis_wrench
+
+    added = paper_vehicle.fluid_model().added_mass
+    nb = added.shape[0]
+    relative, previous, filtered = (rng.normal(size=(nb, 6)) for _ in range(3))
+    dt, alpha = 0.01, 0.3
+    expected_filtered = (1 - alpha) * filtered + alpha * (relative - previous) / dt
+    coriolis = interpreted(coriolis_wrench)
+    expected = np.einsum("nij,nj->ni", added, expected_filtered)
+    expected += np.array([coriolis(added[b], relative[b]) for b in range(nb)])
+    for function in (add_lagged_added_mass_bias, interpreted(add_lagged_added_mass_bias)):
+        state = (previous.copy(), filtered.copy())
+        bias = np.zeros((nb, 6))
+        function(added, relative, state[0], state[1], dt, alpha, bias)
+        np.testing.assert_allclose(state[1], expected_filtered, rtol=1e-12, atol=1e-9)
+        np.testing.assert_array_equal(state[0], relative)  # the previous twists move on
+        np.testing.assert_allclose(bias, expected, rtol=1e-11, atol=1e-8)
