@@ -30,9 +30,11 @@ from control.guidance import X_AXIS
 from control.path_following import PathFollowingGains
 from control.paths import LinePath, Path
 from hydro.currents import Current, as_current
+from hydro.laws import UUV_SIMULATOR_FILTER
 
 from .controllers import CompiledController
 from .energy import energy_summary, exact_sum
+from .lagged import check_filter, check_scheme
 from .paper_controller import END_EFFECTOR, VehiclePathFollowing, compiled_path_following_reason
 from .simulation import Trajectory, simulate
 from .vehicle import Vehicle
@@ -72,6 +74,10 @@ class Scenario:
         controller: ``"paper"`` (path following), ``"none"`` (passive) or ``"thruster_turning"``
             (straight body steered by the tunnel thrusters, compiled backend only).
         vehicle: URDF file of the vehicle (``None``: the bundled vehicle of ``case``).
+        added_mass: ``"exact"`` or ``"lagged"`` (UUV Simulator's and gz-sim's scheme,
+            :mod:`aiauv_pin.lagged`; runs the Python controller, not the compiled loop).
+        lagged_filter: The lagged scheme's filter coefficient in ``(0, 1]`` (0.3: UUV Simulator,
+            1: gz-sim).
     """
 
     case: str = "uniform"
@@ -90,8 +96,12 @@ class Scenario:
     heading: tuple[float, float, float] | None = None
     controller: str = "paper"
     vehicle: str | None = None
+    added_mass: str = "exact"
+    lagged_filter: float = UUV_SIMULATOR_FILTER
 
     def __post_init__(self) -> None:
+        check_scheme(self.added_mass)
+        object.__setattr__(self, "lagged_filter", check_filter(self.lagged_filter))
         if self.controller not in CONTROLLERS:
             raise ValueError(
                 f"unknown controller '{self.controller}' (expected {' or '.join(CONTROLLERS)})"
@@ -295,6 +305,14 @@ def run_scenario(
         log_every=scenario.steps_per_control,
         on_log=on_log,
     )
+    lagged = scenario.added_mass == "lagged"
+    if lagged:
+        if compiled:
+            raise ValueError(
+                "added_mass = 'lagged' runs the Python controller, not the compiled loop"
+            )
+        options.update(added_mass="lagged", lagged_filter=scenario.lagged_filter)
+        compiled = False
     if scenario.controller == "none" and controller is None:
         use_compiled = vehicle.fast is not None and compiled is not False
         if compiled and not use_compiled:
@@ -307,7 +325,10 @@ def run_scenario(
         from .thruster_turning import VehicleThrusterTurning
 
         if compiled is False:
-            raise ValueError("thruster turning runs in the compiled loop only")
+            raise ValueError(
+                "thruster turning runs in the compiled loop only"
+                + (" (not with added_mass = 'lagged')" if lagged else "")
+            )
         turning = VehicleThrusterTurning(
             vehicle, scenario.controller_gains, path=scenario.path_to_follow
         )

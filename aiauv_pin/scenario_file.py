@@ -9,6 +9,8 @@ The format (every key optional; without a file ``aiauv simulate`` runs the paper
     method = "rk4"               # or "euler"
     control_period = 0.01        # [s], a whole multiple of dt (default: every step)
     continuous_joints = true     # joint PD (eq. 24) as a servo at every stage
+    added_mass = "exact"         # or "lagged" (UUV Simulator / gz-sim scheme; Python controller)
+    lagged_filter = 0.3          # its filter coefficient in (0, 1]: 0.3 UUV Simulator, 1 gz-sim
     [start]
     position = [0.0, 2.0, 2.0]   # end-effector [m], world; vehicle straight, at rest
     heading = [1.0, 0.0, 0.0]    # direction the vehicle points (default: along the path)
@@ -49,6 +51,7 @@ from hydro.currents import current_from_mapping
 from hydro.spec import HydroError
 
 from .errors import AiauvError
+from .lagged import ADDED_MASS_SCHEMES
 from .scenario import CONTROLLERS, Scenario
 from .scenario_schema import METHODS, TABLES, TOP_LEVEL
 
@@ -142,6 +145,13 @@ def scenario_from_mapping(table: Mapping[str, Any], base_dir: str | Path = ".") 
         options["control_period"] = _number(
             table["control_period"], "control_period", positive=True
         )
+    if "added_mass" in table:
+        options["added_mass"] = _choice(table["added_mass"], "added_mass", ADDED_MASS_SCHEMES)
+    if "lagged_filter" in table:
+        alpha = _number(table["lagged_filter"], "lagged_filter", positive=True)
+        if alpha > 1.0:
+            raise ScenarioFileError(f"lagged_filter: must be <= 1, got {_shown(alpha)}")
+        options["lagged_filter"] = alpha
     if "continuous_joints" in table:
         if not isinstance(table["continuous_joints"], bool):
             raise ScenarioFileError(

@@ -25,6 +25,7 @@ from control.paths import PATH_TYPES
 from control.reduced_attitude import FEEDFORWARD_OPTIONS
 from hydro.currents import CURRENT_KEYS
 
+from .lagged import ADDED_MASS_SCHEMES
 from .scenario import CASES, CONTROLLERS
 
 #: Integrators of :func:`aiauv_pin.simulate`.
@@ -103,6 +104,21 @@ _RUN = (
         "direction the vehicle points at the start (default: the path's tangent there)",
     ),
     Parameter("start.surge", "number", "m/s", "initial forward speed"),
+    Parameter(
+        "added_mass",
+        ("choice", ADDED_MASS_SCHEMES),
+        "-",
+        "exact (in the mass matrix) or lagged (UUV Simulator's and gz-sim's scheme, from the "
+        "previous steps' filtered acceleration; Python controller)",
+        sweepable=False,
+    ),
+    Parameter(
+        "lagged_filter",
+        "number",
+        "-",
+        "filter coefficient alpha of the lagged scheme, in (0, 1]: 0.3 UUV Simulator, 1 gz-sim",
+        sweepable=False,
+    ),
 )
 
 #: Unit and meaning of each key of the path classes (``type`` is added by :func:`_path_keys`).

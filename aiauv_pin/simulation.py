@@ -17,12 +17,14 @@ import numpy as np
 
 from control.laws import joint_pd_torque
 from hydro.currents import as_current
+from hydro.laws import UUV_SIMULATOR_FILTER
 
 from .arguments import check_timing, configuration, float_array, optional_current
 from .controllers import CompiledController
 from .disturbances import Disturbance
 from .errors import ArgumentError, SimulationDiverged
 from .integrators import INTEGRATORS
+from .lagged import LaggedAddedMass, check_scheme
 from .vehicle import Vehicle
 
 #: ``controller(t, q, v) -> tau`` or ``-> (tau, info)``, with ``tau`` the generalised force (nv,) held
@@ -185,6 +187,8 @@ def simulate(
     control_period: float | None = None,
     chunk_seconds: float | None = None,
     after_first_chunk: Callable[[], None] | None = None,
+    added_mass: str = "exact",
+    lagged_filter: float = UUV_SIMULATOR_FILTER,
 ) -> Trajectory:
     """Integrate the vehicle's dynamics with a fixed step.
 
@@ -221,6 +225,12 @@ def simulate(
         after_first_chunk: Compiled controller only: called once after the first chunk (the code
             is then compiled; later chunks release the GIL, so a background thread started here
             overlaps them).
+        added_mass: ``"exact"`` (added mass in the mass matrix) or ``"lagged"``, the scheme of
+            UUV Simulator and gz-sim (:mod:`aiauv_pin.lagged`: rigid mass in the dynamics, the
+            added-mass wrench from the previous steps' filtered acceleration, held over each
+            step; a Python controller or none, with the dynamics on either backend).
+        lagged_filter: The lagged scheme's filter coefficient ``alpha`` in ``(0, 1]``: 0.3 is UUV
+            Simulator's (default), 1 gz-sim's (no filter).
 
     Returns:
         The trajectory.
@@ -241,6 +251,13 @@ def simulate(
         raise ArgumentError(
             f"servo must have one entry per joint ({model.nv - 6}), got {servo.references.size}"
         )
+    lag = None
+    if check_scheme(added_mass) == "lagged":
+        if isinstance(controller, CompiledController):
+            raise ArgumentError(
+                "added_mass='lagged' runs with a Python controller (or none), not a compiled one"
+            )
+        lag = LaggedAddedMass(vehicle, lagged_filter)
     if isinstance(controller, CompiledController):
         return _simulate_compiled(
             vehicle,
@@ -297,6 +314,8 @@ def simulate(
 
     def dynamics_with(tau: np.ndarray):
         def dynamics(qq, vv, tt):
+            if not (np.all(np.isfinite(qq)) and np.all(np.isfinite(vv))):
+                return np.full(model.nv, np.nan)  # a stage overflowed: the step diverges
             total = tau
             if servo_function is not None:
                 total = total + servo_function(qq, vv)
@@ -304,15 +323,26 @@ def simulate(
                 total = total + _generalized(python_disturbance(tt, qq, vv), model.nv)
             elif compiled_disturbance is not None:
                 total = total + compiled_disturbance.generalized_force(tt, qq, vv)
-            return vehicle.acceleration(qq, vv, total, current, t=tt)
+            return body.acceleration(qq, vv, total, current, t=tt)
 
         return dynamics
 
+    body = vehicle if lag is None else lag.rigid  # the dynamics the integrator steps
     compiled_ok = (servo is None or isinstance(servo, JointServo)) and python_disturbance is None
-    fast = vehicle.fast if compiled_ok else None
+    fast = body.fast if compiled_ok else None
 
     def advance(tau: np.ndarray, n: int, t0: float) -> int:
         """Take ``n`` steps from ``t0`` with ``tau`` held; returns how many stayed finite."""
+        if lag is None:
+            return advance_held(tau, n, t0)
+        for i in range(n):  # the lagged added-mass force, recomputed and held step by step
+            t_i = t0 + i * dt
+            force = lag.generalized_force(q, v, dt, current, t_i)
+            if not np.all(np.isfinite(force)) or advance_held(tau + force, 1, t_i) < 1:
+                return i
+        return n
+
+    def advance_held(tau: np.ndarray, n: int, t0: float) -> int:
         nonlocal q, v
         if fast is not None:
             packed = servo.packed() if servo is not None else None

@@ -322,6 +322,9 @@ def scenario_parameters(scenario: Scenario) -> dict[str, Any]:
         "control_period": None if period is None else float(period),
         "continuous_joints": bool(scenario.continuous_joints),
     }
+    if scenario.added_mass != "exact":  # only then: the keys of exact runs stay as they were
+        out["added_mass"] = scenario.added_mass
+        out["lagged_filter"] = float(scenario.lagged_filter)
     heading = scenario.heading
     for k, axis in enumerate(XYZ):
         out[f"start.position.{axis}"] = float(scenario.start[k])

@@ -423,3 +423,53 @@ def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch
                 for j in range(6):
                     s += x_link[j, i] * link_wrench[j]
                 bias[b, i] -= s
+
+
+# ---------------------------------------------------------------------- lagged added mass
+#: Filter coefficient of UUV Simulator's lagged added mass: ``HydrodynamicModel::ComputeAcc`` is
+#: called with ``_alpha = 0.3`` by ``HMFossen::ApplyHydrodynamicForces``
+#: (uuvsimulator/uuv_simulator, uuv_gazebo_plugins/src/HydrodynamicModel.cc, last changed 2018).
+UUV_SIMULATOR_FILTER = 0.3
+#: gz-sim's Hydrodynamics system differences the velocity without a filter, i.e. ``alpha = 1``
+#: (gazebosim/gz-sim, src/systems/hydrodynamics/Hydrodynamics.cc, ``stateDot = (state -
+#: prevState) / dt``, since its first version in 2021 and still in 2026).
+GZ_SIM_FILTER = 1.0
+
+
+@compiled(fastmath=True)
+def add_lagged_added_mass_bias(added_mass, relative, previous_relative, filtered, dt, alpha, bias):
+    """The added-mass wrench of UUV Simulator and gz-sim: from a lagged, filtered acceleration.
+
+    Those simulators give the rigid-body solver the rigid inertia only and apply the added mass as
+    an external wrench computed at the start of each step from the state of the previous steps
+    (UUV Simulator ``HydrodynamicModel::ComputeAcc`` and ``HMFossen::ApplyHydrodynamicForces``;
+    gz-sim ``Hydrodynamics::PreUpdate``). Per body, with ``nu_r,n`` its twist relative to the water
+    at step ``n`` (body axes):
+
+    ``a_n = (nu_r,n - nu_r,n-1) / dt``, ``f_n = (1 - alpha) f_n-1 + alpha a_n``,
+    left-hand side ``+= M_A f_n + C_A(nu_r,n) nu_r,n``
+
+    (the Coriolis part as :func:`coriolis_wrench`, from the current velocity, as both plugins do;
+    the current's ``omega x v_c`` term is inside the difference of relative twists). With
+    ``alpha = 1`` (gz-sim) ``f_n`` is the mean acceleration of the previous step. The exact
+    equations put ``M_A`` in the mass matrix instead (:func:`add_body_fluid_bias`).
+
+    Args:
+        added_mass: ``M_A`` of each body about its origin, body axes (nb, 6, 6).
+        relative: Twists relative to the water at this step, body axes (nb, 6) [m/s, rad/s].
+        previous_relative: The same at the previous step (nb, 6); overwritten with ``relative``.
+        filtered: The filtered acceleration ``f`` (nb, 6) [m/s^2, rad/s^2]; updated in place.
+        dt: Step [s] (> 0).
+        alpha: Filter coefficient in ``(0, 1]`` (:data:`UUV_SIMULATOR_FILTER`,
+            :data:`GZ_SIM_FILTER`).
+        bias: Accumulator (nb, 6) [N, N m]; the wrenches are added (left-hand side).
+    """
+    for b in range(relative.shape[0]):
+        for i in range(6):
+            rate = (relative[b, i] - previous_relative[b, i]) / dt
+            filtered[b, i] = (1.0 - alpha) * filtered[b, i] + alpha * rate
+            previous_relative[b, i] = relative[b, i]
+        added = added_mass[b]
+        w = coriolis_wrench(added, relative[b])
+        for i in range(6):
+            bias[b, i] += _row_dot(added, i, filtered[b]) + w[i]
