@@ -30,7 +30,7 @@ from hydro.urdf_block import parse_robot_text, read_hydrodynamics
 from hydro.uuv_simulator import freeze_thruster_joints
 
 from .errors import VehicleLoadError
-from .input_limits import MAX_FILE_BYTES, check_xml_tree, read_text
+from .input_limits import MAX_FILE_BYTES, check_xml_text, read_text
 from .safe_names import check_name
 from .urdf_validation import UrdfStructure, validate_urdf
 from .validation import validate_mass_matrix, validate_parameters
@@ -182,11 +182,11 @@ def load_vehicle(
             f"path must be a file path (str or os.PathLike), not {type(path).__name__}"
         )
     text = text.removeprefix("\ufeff")
+    check_xml_text(text, str(source))
     try:
         root = parse_robot_text(text, str(source))
     except HydroError as exc:
         raise VehicleLoadError(str(exc)) from None
-    check_xml_tree(root, str(source))
     if freeze_thruster_joints(root):  # UUV Simulator propeller joints: rigid for the dynamics
         text = ElementTree.tostring(root, encoding="unicode")
     try:

@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import stat
@@ -241,14 +242,27 @@ def test_many_attributes_elements_and_links_are_refused_fast(tmp_path, capfd):
             "</robot>", "".join(f'<link name="extra{i}"/>' for i in range(200)) + "</robot>"
         ),
     }
+    paper = _write(tmp_path, PAPER_TEXT, "paper.urdf")
+
+    def seconds(path, status) -> float:
+        start = time.monotonic()
+        assert main(["check", str(path)]) == status
+        return time.monotonic() - start
+
     for name, text in cases.items():
         path = _write(tmp_path, text, f"{name}.urdf")
-        start = time.monotonic()
-        assert main(["check", str(path)]) == 1
-        elapsed = time.monotonic() - start
-        line = _one_line_error(capfd)
-        assert "more than" in line or "attributes" in line, line
-        assert elapsed < 3.0, (name, elapsed)  # well under a second unloaded
+        # against a comparator timed in the same process, interleaved (the machine is shared): the
+        # full check of the real 9-link vehicle (Pinocchio parse, validation, M(q)); Pinocchio's
+        # parser alone took 83 s on the 200,000 attributes (a ratio near 1000), the refusal is a
+        # few times the comparator
+        comparator = sorted(seconds(paper, 0) for _ in range(3))[1]
+        capfd.readouterr()
+        elapsed = math.inf
+        for _ in range(2):
+            elapsed = min(elapsed, seconds(path, 1))
+            line = _one_line_error(capfd)
+            assert "more than" in line or "attributes" in line, line
+        assert elapsed < 25.0 * comparator, (name, elapsed, comparator)
 
 
 def test_a_1000_module_vehicle_is_refused_clearly(tmp_path, capfd):
