@@ -3,9 +3,10 @@
 For each worker count, the local cluster of :func:`aiauv_pin.sweep.dask_client` (one worker
 process running that many runs at once on its threads) is started and warmed up (the worker loads
 the vehicle and runs one short simulation, so imports and compiled kernels are not counted; the
-other threads still load their own copy of the vehicle in their first run); then the same sweep of ``--runs`` path-following runs (``--duration`` s of
-simulated time each, the cross-track gain varied so that every run differs) is run through
-``run_sweep`` into a fresh folder, records and table included. Cluster start-up is reported
+other threads still load their own copy of the vehicle in their first run); then the same sweep of
+``--runs`` path-following runs (``--duration`` s of simulated time each, the cross-track gain
+varied so that every run differs) is run through ``run_sweep`` into a fresh folder, records and
+table included. Cluster start-up is reported
 separately. The result is written atomically as JSON::
 
     python benchmarks/sweep_scaling.py --runs 8 --duration 30 --workers 1 2
