@@ -94,7 +94,10 @@ def _batch_size(counts: dict[str, int | None]) -> int:
 
 
 def _states(value, size: int, name: str, check) -> tuple[np.ndarray, int | None]:
-    array = np.asarray(value, dtype=float) if not isinstance(value, np.ndarray) else value
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ArgumentError(f"rollout: {name} must be an array of numbers") from None
     if array.ndim == 1:
         return check(array, f"{name}")[None, :], None
     if array.ndim != 2 or array.shape[1] != size or array.shape[0] == 0:
@@ -116,10 +119,9 @@ def _controllers(controller) -> tuple[list[CompiledController], int | None]:
             raise ArgumentError(
                 "rollout: controller must be a CompiledController or a non-empty sequence of them"
             )
-        widths = {c.info_width for c in items}
-        if len(widths) > 1:
+        if any(dict(c.info_shapes) != dict(items[0].info_shapes) for c in items):
             raise ArgumentError(
-                f"rollout: the controllers log info rows of different widths {sorted(widths)}"
+                "rollout: the controllers must log the same diagnostics (info_shapes)"
             )
         return items, len(items)
     raise ArgumentError(
@@ -135,7 +137,12 @@ def _currents(current) -> tuple[list[Current], int | None]:
         if not all(isinstance(c, Current) for c in current):
             raise ArgumentError("rollout: current must be one Current or a sequence of Currents")
         return list(current), len(current)
-    array = np.asarray(current, dtype=float)
+    try:
+        array = np.asarray(current, dtype=float)
+    except (TypeError, ValueError):
+        raise ArgumentError(
+            "rollout: current must be a velocity (3,) or (N, 3), a Current or a sequence of them"
+        ) from None
     if array.shape == (3,):
         return [as_current(float_array(array, "current", (3,)))], None
     if array.ndim == 2 and array.shape[1] == 3 and array.shape[0] > 0:
@@ -175,7 +182,7 @@ def rollout(
         dt: Step [s].
         controller: A :class:`~aiauv_pin.controllers.CompiledController` shared by every run (each
             run gets a private copy of its parameters and state, reset first), a sequence of N of
-            them (e.g. N parameter sets; their info rows must have one width), or ``None``
+            them (e.g. N parameter sets; they must log the same ``info_shapes``), or ``None``
             (passive).
         method: ``"rk4"`` or ``"euler"``.
         current: ``None``, a world velocity (3,) or (N, 3) [m/s], a

@@ -83,6 +83,8 @@ def test_a_diverging_run_stops_alone(vehicle):
         ({"v0": np.zeros((3, 14))}, "disagree on the run count"),
         ({"current": np.zeros((2, 2))}, r"current must have shape \(3,\) or \(N, 3\)"),
         ({"controller": "paper"}, "controller must be a CompiledController"),
+        ({"q0": [[1.0, "x"]]}, "q0 must be an array of numbers"),
+        ({"current": "still"}, "current must be a velocity"),
         ({"threads": 0}, "threads must be a whole number >= 1"),
         ({"dt": -1.0}, "dt"),
         ({"method": "rk5"}, "unknown method"),
@@ -99,3 +101,13 @@ def test_bad_arguments_get_one_line_errors(vehicle, change, message):
     with pytest.raises(ArgumentError, match=message) as error:
         aiauv_pin.rollout(vehicle, **arguments)
     assert "\n" not in str(error.value)
+
+
+def test_controllers_logging_different_diagnostics_are_refused(vehicle):
+    from aiauv_pin.controllers import CompiledController
+
+    laws = [CompiledController.passive(), _controller(vehicle, 0.05)]
+    with pytest.raises(ArgumentError, match="must log the same diagnostics"):
+        aiauv_pin.rollout(
+            vehicle, vehicle.neutral_configuration(), np.zeros(vehicle.nv), 0.1, DT, laws
+        )
