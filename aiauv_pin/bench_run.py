@@ -179,7 +179,7 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
         "duration_s": duration,
         "repeats": repeats,
         "commands": {
-            name: "aiauv " + " ".join(c[3:])
+            name: "aiauv " + " ".join(c[3:]).replace(str(base), "DIR")
             if "aiauv_pin.cli" in c[:3]
             else "python " + " ".join(c[1:])
             for name, c in commands.items()
