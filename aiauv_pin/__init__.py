@@ -11,12 +11,14 @@ The main entry points::
 from .errors import AiauvError, SimulationDiverged, VehicleLoadError
 from .integrators import rk4_step, semi_implicit_euler_step
 from .loading import BUNDLED_CASES, bundled_urdf, load_vehicle
+from .rollout import Rollout, rollout
 from .simulation import Trajectory, simulate
 from .vehicle import Vehicle
 
 __all__ = [
     "BUNDLED_CASES",
     "AiauvError",
+    "Rollout",
     "SimulationDiverged",
     "Trajectory",
     "Vehicle",
@@ -24,6 +26,7 @@ __all__ = [
     "bundled_urdf",
     "load_vehicle",
     "rk4_step",
+    "rollout",
     "semi_implicit_euler_step",
     "simulate",
 ]

@@ -526,6 +526,7 @@ def run_bench(quick: bool = False, case: str = "uniform", duration: float | None
         "duration_s": accuracy_duration,
         "rows": accuracy_table(case, accuracy_duration, (0.01,) if quick else (0.02, 0.01, 0.005)),
     }
+    results.update(run_parts(WHOLE_RUN_PARTS, quick=quick, case=case, duration=duration))
     dyn, mj = results["dynamics"], results["mujoco"]
     if "mj_forward_us" in mj and "numba_acceleration_python_call_us" in dyn:
         results["ratio_numba_python_call_to_mj_forward"] = (
@@ -536,6 +537,32 @@ def run_bench(quick: bool = False, case: str = "uniform", duration: float | None
         results["ratio_numba_in_kernel_to_mj_forward"] = h2h["ratio_numba_in_kernel_to_mj_forward"]
         results["ratio_numba_rk4_step_to_mj_step_rk4"] = h2h["ratio_numba_rk4_step_to_mj_step_rk4"]
     return results
+
+
+#: Whole-run measurements of :mod:`aiauv_pin.bench_run` (``aiauv bench --only PART ...``).
+WHOLE_RUN_PARTS = ("throughput", "end-to-end", "accuracy-per-cost")
+
+
+def run_parts(
+    parts, quick: bool = False, case: str = "uniform", duration: float | None = None
+) -> dict:
+    """The whole-run measurements ``parts`` (keys of the results: ``-`` becomes ``_``)."""
+    from . import bench_run
+
+    seconds = duration if duration is not None else (20.0 if quick else 300.0)
+    out: dict = {}
+    for part in parts:
+        if part == "throughput":
+            out["throughput"] = bench_run.throughput(
+                case, seconds, runs=2 if quick else 8, rounds=1 if quick else 3
+            )
+        elif part == "end-to-end":
+            out["end_to_end"] = bench_run.end_to_end(case, seconds, repeats=1 if quick else 5)
+        elif part == "accuracy-per-cost":
+            out["accuracy_per_cost"] = bench_run.accuracy_per_cost(
+                case, 10.0 if quick else seconds, repeats=1 if quick else 3
+            )
+    return out
 
 
 def format_table(results: dict) -> str:
@@ -624,6 +651,9 @@ def format_table(results: dict) -> str:
             1000.0 * r["max_end_effector_error_m"],
             "mm",
         )
+    from .bench_run import format_parts
+
+    lines.extend(format_parts(results))
     return "\n".join(lines)
 
 
@@ -649,10 +679,31 @@ def add_bench_parser(subparsers) -> None:
         help="scenario duration [s] (300; 20 with --quick)",
     )
     parser.add_argument("--out", type=Path, default=DEFAULT_OUTPUT, help="JSON file to write")
+    parser.add_argument(
+        "--only",
+        nargs="+",
+        choices=WHOLE_RUN_PARTS,
+        metavar="PART",
+        help="measure only these whole-run parts (throughput: runs per minute of sweeps and "
+        "rollout; end-to-end: fresh 'aiauv simulate' processes; accuracy-per-cost: error against a "
+        "converged reference per method and step) and update them in the JSON file",
+    )
     parser.set_defaults(handler=_run_bench_command)
 
 
 def _run_bench_command(args) -> int:
+    if args.only:
+        results = {}
+        if args.out.is_file():
+            results = json.loads(args.out.read_text(encoding="utf-8"))
+        measured = run_parts(args.only, quick=args.quick, case=args.case, duration=args.duration)
+        results.update(measured)
+        write_text(args.out, json.dumps(results, indent=2) + "\n")
+        from .bench_run import format_parts
+
+        print("\n".join(format_parts(measured)))
+        print(f"-> {args.out}")
+        return 0
     results = run_bench(quick=args.quick, case=args.case, duration=args.duration)
     write_text(args.out, json.dumps(results, indent=2) + "\n")
     print(format_table(results))

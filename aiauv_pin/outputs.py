@@ -333,6 +333,24 @@ def figure_path(folder: Path, name: str, figure_format: str = "png") -> Path:
     return Path(folder) / Path(name).with_suffix(f".{figure_format}")
 
 
+#: Fixed margins (fractions of the figure) of each kind of figure: they fit the labels
+#: :func:`_draw` writes, and cost nothing, where ``tight_layout`` drew every text once more to
+#: measure it (about 40 % of the drawing time).
+_MARGINS = {
+    "error": {"left": 0.13, "right": 0.97, "bottom": 0.1, "top": 0.93, "hspace": 0.08},
+    "single": {"left": 0.12, "right": 0.97, "bottom": 0.15, "top": 0.9},
+    "three": {"left": 0.1, "right": 0.97, "bottom": 0.09, "top": 0.94, "hspace": 0.1},
+    "3d": {"left": 0.02, "right": 0.92, "bottom": 0.06, "top": 0.93},
+}
+_LAYOUT_OF = {
+    "fig2_cross_track.png": "error",
+    "fig4_phi_tilde.png": "error",
+    "fig5_omega_tilde.png": "error",
+    "fig7_pointing.png": "three",
+    "path_3d.png": "3d",
+}
+
+
 def _render(
     result: ScenarioResult, folder: Path, names, figure_format: str = "png", **drawing
 ) -> list[Path]:
@@ -344,7 +362,7 @@ def _render(
     written = []
     for name in names:
         fig = _draw(name, result, plt, **drawing)
-        fig.tight_layout()
+        fig.subplots_adjust(**_MARGINS[_LAYOUT_OF.get(name, "single")])
         path = figure_path(folder, name, figure_format)
         with atomic_path(path) as temporary:
             fig.savefig(temporary, dpi=FIGURE_DPI, format=figure_format)

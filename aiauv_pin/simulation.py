@@ -221,7 +221,8 @@ def simulate(
             ``dt``.
         on_log: ``on_log(t, q, info)`` called at every logged sample (e.g. a live viewer).
         chunk_seconds: Compiled controller only: simulated time per compiled call (default 1 s
-            with ``on_log``, else 10 s).
+            with ``on_log``, 10 s with a progress bar or ``after_first_chunk``, else the whole
+            run in one call).
         after_first_chunk: Compiled controller only: called once after the first chunk (the code
             is then compiled; later chunks release the GIL, so a background thread started here
             overlaps them).
@@ -465,9 +466,13 @@ def _simulate_compiled(
     info = np.full(width, np.nan)
     workspace = fast.workspace
     run_chunk = loop_for(environment, controller.loop_function, controller.parameters)
+    # nothing to run between chunks (no bar, no callback, no viewer thread): one compiled call,
+    # with no yield to the scheduler between chunks (a sweep's runs on a loaded machine lost
+    # whole time slices there); the steps and their results are the same
+    interactive = progress or on_log is not None or after_first_chunk is not None
     if chunk_seconds is None:
-        chunk_seconds = 1.0 if on_log is not None else 10.0
-    chunk = max(1, round(chunk_seconds / dt))
+        chunk_seconds = 1.0 if on_log is not None else (10.0 if interactive else math.inf)
+    chunk = max(1, n_steps) if math.isinf(chunk_seconds) else max(1, round(chunk_seconds / dt))
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -519,7 +524,8 @@ def _simulate_compiled(
             k = stop
             if k == n_steps:
                 break
-            time.sleep(0)  # let other threads (a viewer) run between chunks
+            if interactive:
+                time.sleep(0)  # let other threads (a viewer) run between chunks
     finally:
         if bar is not None:
             bar.close()

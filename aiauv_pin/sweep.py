@@ -1,9 +1,12 @@
 """Parameter sweeps and Monte Carlo studies of the path-following scenario on Dask.
 
 :func:`run_sweep` expands a spec (:mod:`aiauv_pin.sweep_spec`) into runs, skips those already in the
-output folder, and runs the others on Dask: by default a ``LocalCluster`` of single-threaded worker
-processes on this machine (the simulation is CPU-bound Python, so threads would share one core), or
-an existing cluster given by its scheduler address. The output folder holds
+output folder, and runs the others on Dask: by default a ``LocalCluster`` of one worker process on
+this machine with one thread per usable core (each run's simulation is the compiled loop of
+:func:`aiauv_pin.simulate`, which releases the GIL, so the threads of one process use every core,
+as :func:`aiauv_pin.rollout` does; one process loads the compiled code and the vehicle once instead
+of once per core, and each thread keeps its own copy of the vehicle), or an existing cluster given
+by its scheduler address. The output folder holds
 
 * ``runs/<run_id>.json``: one record per finished run, written atomically by the client as soon as
   the run finishes; these files are the source of truth, so an interrupted sweep loses at most the
@@ -41,6 +44,7 @@ import socket
 import stat
 import sys
 import tempfile
+import threading
 import time
 import uuid
 from collections.abc import Callable, Sequence
@@ -113,7 +117,9 @@ def _now() -> str:
 
 # --- the task (runs on a worker) -----------------------------------------------------------------
 
-_VEHICLES: dict[str, object] = {}
+#: Loaded vehicles by (URDF SHA-256, thread): a vehicle holds scratch memory (Pinocchio's data, the
+#: compiled workspace) that two simulations must not share, so each worker thread loads its own.
+_VEHICLES: dict[tuple[str, int], object] = {}
 
 
 def vehicle_cache_folder() -> Path:
@@ -141,14 +147,15 @@ def vehicle_cache_folder() -> Path:
 
 
 def _vehicle_from_text(urdf_text: str, sha256: str):
-    """Load (once per worker process) the vehicle of this URDF text.
+    """Load (once per worker thread) the vehicle of this URDF text.
 
     The text goes through the private cache (:func:`vehicle_cache_folder`) under the name of its
     own SHA-256; a cached file is used only if its content has that hash (else it is rewritten).
     """
     data = urdf_text.encode("utf-8")
     digest = hashlib.sha256(data).hexdigest()
-    if digest not in _VEHICLES:
+    key = (digest, threading.get_ident())
+    if key not in _VEHICLES:
         from .input_limits import read_bytes
         from .loading import load_vehicle
 
@@ -163,8 +170,8 @@ def _vehicle_from_text(urdf_text: str, sha256: str):
         vehicle = load_vehicle(path)
         if hashlib.sha256(read_bytes(path, "URDF")).hexdigest() != digest:
             raise SweepError(f"{path}: cached vehicle changed while loaded")
-        _VEHICLES[digest] = vehicle
-    return _VEHICLES[digest]
+        _VEHICLES[key] = vehicle
+    return _VEHICLES[key]
 
 
 def flatten_summary(summary: dict) -> dict:
@@ -525,11 +532,15 @@ class SweepReport:
 def dask_client(
     scheduler: str | None = None, workers: int | None = None, worker_timeout: float = 60.0
 ):
-    """A Dask client: on an existing scheduler, or on a new ``LocalCluster`` of worker processes.
+    """A Dask client: on an existing scheduler, or on a new ``LocalCluster`` of one worker process.
+
+    The local worker runs ``workers`` simulations at once on as many threads: the compiled loop
+    releases the GIL, so they share no core (only each run's set-up and summary hold the GIL), and
+    a worker process that dies still has its runs submitted again (to the one the nanny restarts).
 
     Args:
         scheduler: Scheduler address (``tcp://host:8786``); ``None`` starts a ``LocalCluster``.
-        workers: Worker processes of the local cluster (default: the usable cores), one thread each.
+        workers: Threads of the local worker process, i.e. runs at once (default: the usable cores).
         worker_timeout: How long to wait for a first worker on an existing scheduler [s].
 
     Raises:
@@ -550,8 +561,8 @@ def dask_client(
                 f"({MAX_WORKERS_PER_CORE} per usable core), got {count}"
             )
         cluster = LocalCluster(
-            n_workers=count,
-            threads_per_worker=1,
+            n_workers=1,
+            threads_per_worker=count,
             processes=True,
             dashboard_address=None,
             silence_logs=logging.ERROR,
@@ -660,7 +671,8 @@ def run_sweep(
         spec: A parsed spec, or the path of a spec TOML file (copied to ``out/spec.toml``).
         out: Output folder (created).
         scheduler: Address of an existing Dask scheduler; ``None`` starts a local cluster.
-        workers: Worker processes of the local cluster (default: the usable cores).
+        workers: Runs at once on the local cluster (threads of its worker process; default: the
+            usable cores).
         progress: Show a progress bar over the runs (tqdm, on standard error).
         plots: Write the summary plots into ``out/figures``.
         on_record: Called with each record after it is written (in the client process).
@@ -876,7 +888,8 @@ def add_sweep_subcommand(subparsers) -> None:
     parser.add_argument(
         "--workers",
         type=_worker_count,
-        help="worker processes of the local cluster (all cores; at most 4 per core)",
+        help="runs at once on the local cluster (threads of one worker process; default: all "
+        "cores; at most 4 per core)",
     )
     parser.add_argument("--out", type=Path, help="output folder (results/sweeps/<spec name>/)")
     parser.add_argument("--no-plots", action="store_true", help="do not write figures/")

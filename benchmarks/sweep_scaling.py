@@ -1,10 +1,12 @@
 """Sweep throughput: runs per minute of :func:`aiauv_pin.sweep.run_sweep` with 1, 2, ... workers.
 
-For each worker count, a ``LocalCluster`` of single-threaded worker processes is started and warmed
-up (every worker loads the vehicle and runs one short simulation, so imports and compiled kernels
-are not counted); then the same sweep of ``--runs`` path-following runs (``--duration`` s of
-simulated time each, the cross-track gain varied so that every run differs) is run through
-``run_sweep`` into a fresh folder, records and table included. Cluster start-up is reported
+For each worker count, the local cluster of :func:`aiauv_pin.sweep.dask_client` (one worker
+process running that many runs at once on its threads) is started and warmed up (the worker loads
+the vehicle and runs one short simulation, so imports and compiled kernels are not counted; the
+other threads still load their own copy of the vehicle in their first run); then the same sweep of
+``--runs`` path-following runs (``--duration`` s of simulated time each, the cross-track gain
+varied so that every run differs) is run through ``run_sweep`` into a fresh folder, records and
+table included. Cluster start-up is reported
 separately. The result is written atomically as JSON::
 
     python benchmarks/sweep_scaling.py --runs 8 --duration 30 --workers 1 2

@@ -1,0 +1,329 @@
+"""Benchmarks of whole runs (``aiauv bench --only ...``): batch throughput, end to end, accuracy per cost.
+
+* :func:`throughput`: runs per minute of the 300 s paper scenario on this machine, interleaved in
+  rounds: a sweep on the Dask cluster of earlier versions (one single-threaded worker process per
+  core), the local sweep of this version (one worker process, one thread per core, see
+  :mod:`aiauv_pin.sweep`) and :func:`aiauv_pin.rollout` in this process (arrays only, no summary);
+  both clusters are started and warmed up before the first round.
+* :func:`end_to_end`: wall time of fresh ``aiauv simulate`` processes (warm numba cache), with and
+  without the playback page, interleaved.
+* :func:`accuracy_per_cost`: the largest end-effector distance over the whole path between each
+  method and step and a converged reference (RK4 at a step small enough that halving it changes
+  the path by far less than the errors reported), and the CPU time of each run.
+
+Every figure is reported as the median and range of its repeats (the machine is shared).
+"""
+
+from __future__ import annotations
+
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+
+def _spread(values: list[float]) -> dict:
+    return {
+        "median": statistics.median(values),
+        "min": min(values),
+        "max": max(values),
+        "all": values,
+    }
+
+
+# ---------------------------------------------------------------------- throughput
+def _warm(duration: float) -> str:
+    """One short run in a worker thread (loads the compiled code and this thread's vehicle)."""
+    from .loading import bundled_urdf
+    from .sweep import execute_run
+    from .sweep_spec import file_sha256, sweep_spec_from_dict
+
+    path = bundled_urdf("uniform")
+    point = sweep_spec_from_dict({"duration": duration}).points()[0]
+    record = execute_run(
+        point.run_id, point.parameters, path.read_text(encoding="utf-8"), file_sha256(path)
+    )
+    return record["status"]
+
+
+def throughput(
+    case: str = "uniform", duration: float = 300.0, runs: int = 8, rounds: int = 3, cores: int = 2
+) -> dict:
+    """Runs per minute of ``runs`` paper-scenario runs (cross-track gain varied), three ways."""
+    import logging
+
+    from dask.distributed import Client, LocalCluster
+
+    from . import loading
+    from .paper_controller import VehiclePathFollowing
+    from .rollout import rollout
+    from .scenario import Scenario, initial_state
+    from .sweep import run_sweep
+    from .sweep_spec import sweep_spec_from_dict
+
+    gains = [float(x) for x in np.linspace(0.03, 0.1, runs)]
+    spec = sweep_spec_from_dict({"case": case, "duration": duration, "grid": {"k_e": gains}})
+    vehicle = loading.load_vehicle(loading.bundled_urdf(case))
+    scenario = Scenario(case=case, duration=duration)
+    q0, v0 = initial_state(vehicle, scenario)
+    base = scenario.controller_gains
+
+    def laws():
+        return [VehiclePathFollowing(vehicle, replace(base, k_e=(k, k))).compiled() for k in gains]
+
+    clusters = {
+        "sweep_processes": LocalCluster(
+            n_workers=cores,
+            threads_per_worker=1,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        ),
+        "sweep_threads": LocalCluster(
+            n_workers=1,
+            threads_per_worker=cores,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        ),
+    }
+    times: dict[str, list[float]] = {"sweep_processes": [], "sweep_threads": [], "rollout": []}
+    try:
+        for cluster in clusters.values():
+            with Client(cluster) as client:
+                statuses = client.gather(
+                    [client.submit(_warm, 1.0, pure=False) for _ in range(2 * cores)]
+                )
+                assert set(statuses) == {"complete"}, statuses
+        rollout(vehicle, q0, v0, 1.0, scenario.dt, laws()[:cores], threads=cores)
+        for _ in range(rounds):
+            for name, cluster in clusters.items():
+                with tempfile.TemporaryDirectory() as folder:
+                    start = time.perf_counter()
+                    report = run_sweep(
+                        spec,
+                        Path(folder) / "out",
+                        scheduler=cluster.scheduler_address,
+                        progress=False,
+                        plots=False,
+                    )
+                    times[name].append(time.perf_counter() - start)
+                if report.counts["complete"] != runs:
+                    raise RuntimeError(
+                        f"{name}: expected {runs} complete runs, got {report.counts}"
+                    )
+            controllers = laws()
+            start = time.perf_counter()
+            batch = rollout(vehicle, q0, v0, duration, scenario.dt, controllers, threads=cores)
+            times["rollout"].append(time.perf_counter() - start)
+            if not (batch.status == "complete").all():
+                raise RuntimeError("rollout: a run diverged")
+    finally:
+        for cluster in clusters.values():
+            cluster.close()
+    results = {
+        "case": case,
+        "duration_s": duration,
+        "dt_s": scenario.dt,
+        "method": scenario.method,
+        "runs_per_round": runs,
+        "rounds": rounds,
+        "cores": cores,
+    }
+    for name, walls in times.items():
+        results[name] = {
+            "wall_s": _spread(walls),
+            "runs_per_minute": _spread([60.0 * runs / w for w in walls]),
+        }
+    results["ratio_sweep_threads_to_processes"] = (
+        results["sweep_threads"]["runs_per_minute"]["median"]
+        / results["sweep_processes"]["runs_per_minute"]["median"]
+    )
+    results["ratio_rollout_to_sweep_processes"] = (
+        results["rollout"]["runs_per_minute"]["median"]
+        / results["sweep_processes"]["runs_per_minute"]["median"]
+    )
+    return results
+
+
+# ---------------------------------------------------------------------- end to end
+def _simulate_command(case: str, duration: float, out: Path, html: bool) -> list[str]:
+    command = [sys.executable, "-m", "aiauv_pin.cli", "simulate", "--case", case]
+    command += ["--duration", f"{duration:g}", "--quiet", "--out", str(out)]
+    return command if html else [*command, "--no-html"]
+
+
+def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5) -> dict:
+    """Wall time of fresh ``aiauv simulate`` processes (warm cache), with and without playback,
+    interleaved; plus a fresh ``python -c "import aiauv_pin"`` for the import share."""
+    walls: dict[str, list[float]] = {"no_html": [], "with_html": [], "import_only": []}
+    with tempfile.TemporaryDirectory() as folder:
+        base = Path(folder)
+        commands = {
+            "no_html": _simulate_command(case, duration, base / "a", html=False),
+            "with_html": _simulate_command(case, duration, base / "b", html=True),
+            "import_only": [sys.executable, "-c", "import aiauv_pin.cli"],
+        }
+        for command in commands.values():  # one untimed run each (page cache, numba cache)
+            subprocess.run(command, capture_output=True, check=True, cwd=base)
+        for _ in range(repeats):
+            for name, command in commands.items():
+                start = time.perf_counter()
+                subprocess.run(command, capture_output=True, check=True, cwd=base)
+                walls[name].append(time.perf_counter() - start)
+    return {
+        "case": case,
+        "duration_s": duration,
+        "repeats": repeats,
+        "commands": {
+            name: "aiauv " + " ".join(c[3:]).replace(str(base), "DIR")
+            if "aiauv_pin.cli" in c[:3]
+            else "python " + " ".join(c[1:])
+            for name, c in commands.items()
+        },
+        **{f"{name}_wall_s": _spread(w) for name, w in walls.items()},
+    }
+
+
+# ---------------------------------------------------------------------- accuracy per cost
+def accuracy_per_cost(
+    case: str = "uniform",
+    duration: float = 300.0,
+    candidates: tuple[tuple[str, float], ...] = (
+        ("rk4", 0.02),
+        ("rk4", 0.01),
+        ("rk4", 0.005),
+        ("euler", 0.01),
+        ("euler", 0.005),
+        ("euler", 0.0025),
+        ("euler", 0.001),
+    ),
+    reference_dt: float = 0.0005,
+    repeats: int = 3,
+    grid: float = 0.02,
+) -> dict:
+    """End-effector error of each (method, step) against RK4 at ``reference_dt`` and at twice it.
+
+    The controller is sampled at every integration step (the scenario's default), so the errors
+    include the effect of the sampling; the two references bound how converged the reference is.
+    Paths are compared every ``grid`` seconds [s] (a multiple of every step).
+    Costs are CPU seconds of the compiled run (median of ``repeats``, interleaved).
+    """
+    from . import loading
+    from .errors import SimulationDiverged
+    from .paper_controller import VehiclePathFollowing
+    from .scenario import Scenario, initial_state
+    from .simulation import simulate
+
+    vehicle = loading.load_vehicle(loading.bundled_urdf(case))
+
+    def path(method: str, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """The scenario's run (as :func:`aiauv_pin.scenario.run_scenario` runs it), logged every
+        ``grid`` seconds only (a 0.5 ms reference logged every step would take gigabytes)."""
+        scenario = Scenario(case=case, duration=duration, dt=dt, method=method)
+        law = VehiclePathFollowing(
+            vehicle, scenario.controller_gains, path=scenario.path_to_follow
+        ).compiled()
+        q0, v0 = initial_state(vehicle, scenario)
+        run = simulate(
+            vehicle,
+            q0,
+            v0,
+            duration,
+            dt,
+            law,
+            method=method,
+            servo=law.servo,
+            current=scenario.water,
+            log_every=max(1, round(grid / dt)),
+        )
+        return run.t, run.info["p"]
+
+    reference_t, reference_p = path("rk4", reference_dt)
+    check_t, check_p = path("rk4", 2 * reference_dt)
+
+    def error_against_reference(t: np.ndarray, p: np.ndarray) -> float:
+        stride = round((t[1] - t[0]) / (reference_t[1] - reference_t[0]))
+        fine = reference_p[::stride]
+        if not np.allclose(reference_t[::stride], t, atol=1e-9):
+            raise RuntimeError("accuracy: log times do not coincide with the reference's")
+        return float(np.linalg.norm(p - fine, axis=1).max())
+
+    rows = []
+    cpu: dict[tuple[str, float], list[float]] = {c: [] for c in candidates}
+    errors: dict[tuple[str, float], float | None] = {}
+    for _ in range(repeats):
+        for method, dt in candidates:
+            if errors.get((method, dt), 0.0) is None:
+                continue
+            start = time.process_time()
+            try:
+                t, p = path(method, dt)
+            except SimulationDiverged:
+                errors[(method, dt)] = None
+                continue
+            cpu[(method, dt)].append(time.process_time() - start)
+            errors[(method, dt)] = error_against_reference(t, p)
+    rk4_cost = statistics.median(cpu[("rk4", 0.01)]) if cpu.get(("rk4", 0.01)) else None
+    for method, dt in candidates:
+        error = errors.get((method, dt))
+        costs = cpu[(method, dt)]
+        row = {"method": method, "dt": dt, "max_end_effector_error_m": error}
+        if error is not None and costs:
+            row["cpu_s"] = _spread(costs)
+            if rk4_cost:
+                row["cost_relative_to_rk4_0.01"] = statistics.median(costs) / rk4_cost
+        rows.append(row)
+    reachable = [r for r in rows if r["max_end_effector_error_m"] is not None]
+    within = [r for r in reachable if r["max_end_effector_error_m"] <= 0.002 and "cpu_s" in r]
+    cheapest = min(within, key=lambda r: r["cpu_s"]["median"]) if within else None
+    return {
+        "case": case,
+        "duration_s": duration,
+        "reference": {"method": "rk4", "dt": reference_dt},
+        "reference_convergence_m": error_against_reference(check_t, check_p),
+        "rows": rows,
+        "cheapest_within_2mm": (
+            None if cheapest is None else {"method": cheapest["method"], "dt": cheapest["dt"]}
+        ),
+    }
+
+
+# ---------------------------------------------------------------------- table
+def format_parts(results: dict) -> list[str]:
+    """Lines of the table of ``aiauv bench`` for the parts measured here."""
+    lines = []
+
+    def spread(label: str, s: dict, unit: str, scale: float = 1.0) -> None:
+        lines.append(
+            f"{label:<48} {scale * s['median']:10.2f} {unit} "
+            f"({scale * s['min']:.2f}-{scale * s['max']:.2f})"
+        )
+
+    tp = results.get("throughput")
+    if tp:
+        head = f"{tp['duration_s']:.0f} s runs/min on {tp['cores']} cores"
+        spread(f"{head}: sweep, processes", tp["sweep_processes"]["runs_per_minute"], "")
+        spread(f"{head}: sweep, threads", tp["sweep_threads"]["runs_per_minute"], "")
+        spread(f"{head}: rollout()", tp["rollout"]["runs_per_minute"], "")
+    e2e = results.get("end_to_end")
+    if e2e:
+        spread("fresh 'aiauv simulate --no-html' wall", e2e["no_html_wall_s"], "s")
+        spread("fresh 'aiauv simulate' (with playback) wall", e2e["with_html_wall_s"], "s")
+        spread("fresh 'import aiauv_pin.cli' wall", e2e["import_only_wall_s"], "s")
+    acc = results.get("accuracy_per_cost")
+    if acc:
+        for r in acc["rows"]:
+            error = r["max_end_effector_error_m"]
+            label = f"EE error {r['method']} dt={r['dt']:g} vs converged"
+            if error is None:
+                lines.append(f"{label:<48} diverges")
+            else:
+                lines.append(
+                    f"{label:<48} {1000 * error:10.3f} mm, cost "
+                    f"{r.get('cost_relative_to_rk4_0.01', float('nan')):.2f}x RK4 0.01"
+                )
+    return lines

@@ -1,0 +1,65 @@
+"""The whole-run parts of ``aiauv bench`` (:mod:`aiauv_pin.bench_run`): table and command line.
+
+The measurements themselves are long (300 s runs) and live in ``benchmarks/results.json``; here
+their formatting and the accuracy comparison on a few seconds of the scenario.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from aiauv_pin import bench_run
+from aiauv_pin.cli import main
+
+
+def _spread(value: float) -> dict:
+    return {"median": value, "min": value * 0.9, "max": value * 1.1, "all": [value]}
+
+
+def test_format_parts_prints_medians_and_ranges():
+    results = {
+        "throughput": {
+            "duration_s": 300.0,
+            "cores": 2,
+            "sweep_processes": {"runs_per_minute": _spread(140.0)},
+            "sweep_threads": {"runs_per_minute": _spread(141.0)},
+            "rollout": {"runs_per_minute": _spread(150.0)},
+        },
+        "accuracy_per_cost": {
+            "rows": [
+                {"method": "rk4", "dt": 0.02, "max_end_effector_error_m": None},
+                {
+                    "method": "euler",
+                    "dt": 0.004,
+                    "max_end_effector_error_m": 0.0019,
+                    "cost_relative_to_rk4_0.01": 1.02,
+                },
+            ]
+        },
+    }
+    lines = bench_run.format_parts(results)
+    assert any(
+        "rollout()" in line and "150.00" in line and "(135.00-165.00)" in line for line in lines
+    )
+    assert any("rk4 dt=0.02" in line and "diverges" in line for line in lines)
+    assert any("euler dt=0.004" in line and "1.900 mm" in line for line in lines)
+
+
+def test_accuracy_against_a_converged_reference_falls_with_the_step():
+    result = bench_run.accuracy_per_cost(
+        duration=2.0,
+        candidates=(("rk4", 0.01), ("euler", 0.005), ("euler", 0.0025)),
+        reference_dt=0.000625,
+        repeats=1,
+    )
+    rows = {(r["method"], r["dt"]): r["max_end_effector_error_m"] for r in result["rows"]}
+    # first order in dt (the controller is held over each step): halving the step about halves it
+    assert rows[("euler", 0.0025)] < 0.7 * rows[("euler", 0.005)]
+    assert result["reference_convergence_m"] < rows[("euler", 0.0025)]
+
+
+def test_bench_rejects_an_unknown_part(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["bench", "--only", "everything"])
+    assert exit_info.value.code != 0
+    assert "--only" in capsys.readouterr().err
