@@ -158,13 +158,9 @@ def kinematics(bodies, q, v, W):
         W.bias_acceleration,
     )
     place, axis = bodies.placement, bodies.axis
-    for b in range(bodies.parent.shape[0]):
-        parent, kind, iq, iv = (
-            bodies.parent[b],
-            bodies.kind[b],
-            bodies.q_index[b],
-            bodies.v_index[b],
-        )
+    parents, kinds, q_index, v_index = bodies.parent, bodies.kind, bodies.q_index, bodies.v_index
+    for b in range(parents.shape[0]):
+        parent, kind, iq, iv = parents[b], kinds[b], q_index[b], v_index[b]
         if kind == FREE_FLYER:
             rows = quaternion_rotation(q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6])
             for i in range(3):
@@ -553,22 +549,28 @@ def articulated_into(model, servo, q, v, tau, W, out):
     carry_restoring = use_servo and servo.compensate_restoring
     restoring = W.subtree_restoring
     h = model.fluid.hydrostatics
+    parents, v_index, axis_index, axis = (
+        bodies.parent,
+        bodies.v_index,
+        bodies.axis_index,
+        bodies.axis,
+    )
+    inertia, bias, rot = bodies.inertia, W.bias, W.rotation
     for b in range(nb):
         for i in range(6):
-            pa[b, i] = W.bias[b, i]
+            pa[b, i] = bias[b, i]
             for j in range(6):
-                art[b, i, j] = bodies.inertia[b, i, j]
+                art[b, i, j] = inertia[b, i, j]
         if carry_restoring:
-            rot = W.rotation
             w = hydrostatic_wrench(
                 h[b, 0], h[b, 1], h[b, 2], h[b, 3], rot[b, 2, 0], rot[b, 2, 1], rot[b, 2, 2]
             )
             for i in range(6):
                 restoring[b, i] = -w[i]
     for b in range(nb - 1, 0, -1):
-        parent = bodies.parent[b]
-        iv = bodies.v_index[b]
-        k = bodies.axis_index[b]
+        parent = parents[b]
+        iv = v_index[b]
+        k = axis_index[b]
         if k >= 0:
             u0, u1, u2, u3, u4, u5 = (
                 art[b, 0, k],
@@ -582,7 +584,7 @@ def articulated_into(model, servo, q, v, tau, W, out):
             sp = pa[b, k]
             g = restoring[b, k] if carry_restoring else 0.0
         else:
-            s = bodies.axis
+            s = axis
             u0 = _dot6(art, b, 0, s, b)
             u1 = _dot6(art, b, 1, s, b)
             u2 = _dot6(art, b, 2, s, b)
@@ -650,7 +652,7 @@ def articulated_into(model, servo, q, v, tau, W, out):
                 parent,
             )
     # root: free flyer (6 DOF, S = identity)
-    iv0 = bodies.v_index[0]
+    iv0 = v_index[0]
     tmp = W.v6[1]
     for i in range(6):
         tmp[i] = tau[iv0 + i] - pa[0, i]
@@ -658,7 +660,7 @@ def articulated_into(model, servo, q, v, tau, W, out):
     for i in range(6):
         out[iv0 + i] = acc[0, i]
     for b in range(1, nb):
-        parent = bodies.parent[b]
+        parent = parents[b]
         if parent < 0:
             a0, a1, a2 = bias_acc[b, 0], bias_acc[b, 1], bias_acc[b, 2]
             a3, a4, a5 = bias_acc[b, 3], bias_acc[b, 4], bias_acc[b, 5]
@@ -686,8 +688,8 @@ def articulated_into(model, servo, q, v, tau, W, out):
             + u_vec[b, 5] * a5
         )
         qdd = (u_sc[b] - ua) * d_inv[b]
-        out[bodies.v_index[b]] = qdd
-        s = bodies.axis
+        out[v_index[b]] = qdd
+        s = axis
         acc[b, 0] = a0 + s[b, 0] * qdd
         acc[b, 1] = a1 + s[b, 1] * qdd
         acc[b, 2] = a2 + s[b, 2] * qdd

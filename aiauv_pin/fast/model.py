@@ -13,6 +13,7 @@ import numpy as np
 from hydro.currents import Current, as_current
 
 from ..disturbances import Disturbance
+from ..errors import ArgumentError
 from . import kernels
 from .records import Environment, Servo
 
@@ -41,6 +42,21 @@ def environment(current=None, disturbance: Disturbance | None = None) -> Environ
     )
 
 
+def _entry_point(dispatcher, args):
+    """The compiled entry point of ``dispatcher`` for the types of ``args``, or ``dispatcher``.
+
+    Calling a numba dispatcher from Python types every argument first: for the kernels' records
+    (some 70 arrays in named tuples) that costs more than the evaluation itself. The entry point of
+    the overload already chosen for these types skips that step and only unboxes the arguments, so
+    it may be called only with arguments of exactly these types (:class:`FastModel` makes sure).
+    """
+    try:
+        signature = tuple(dispatcher.typeof_pyval(a) for a in args)
+        return dispatcher.overloads[signature].entry_point
+    except (AttributeError, KeyError):  # another numba version or no such overload: dispatch
+        return dispatcher
+
+
 class FastModel:
     """A vehicle's equations of motion evaluated by the compiled kernels.
 
@@ -60,7 +76,7 @@ class FastModel:
         self.still_water = environment()
         self.no_servo = no_servo()
         self._frames: dict[int, tuple[int, np.ndarray, np.ndarray]] = {}
-        self._acceleration_entry = None
+        self._entries: dict = {}
         self._pin_model = vehicle.model
 
     def environment(self, current=None, disturbance=None) -> Environment:
@@ -70,7 +86,36 @@ class FastModel:
         return environment(current, disturbance)
 
     def _state(self, q, v) -> tuple[np.ndarray, np.ndarray]:
-        return np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(v, dtype=float)
+        q, v = np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(v, dtype=float)
+        if q.shape != (self.nq,) or v.shape != (self.nv,):
+            raise ArgumentError(
+                f"q and v must have shapes ({self.nq},) and ({self.nv},), got {q.shape} and {v.shape}"
+            )
+        return q, v
+
+    def _generalized(self, tau) -> np.ndarray:
+        tau = np.ascontiguousarray(tau, dtype=float)
+        if tau.shape != (self.nv,):
+            raise ArgumentError(f"tau must have shape ({self.nv},), got {tau.shape}")
+        return tau
+
+    def _call(self, kernel, args):
+        """``kernel(*args)`` through its cached entry point when the environment and servo records
+        are of the kinds whose types never change for this model (built-in current and
+        disturbance, no servo); by the dispatcher otherwise."""
+        env, servo = args[1], args[2]
+        if (
+            servo is not self.no_servo
+            or env.current_function is not None
+            or env.disturbance_function is not None
+        ):
+            return kernel(*args)
+        entry = self._entries.get(kernel)
+        if entry is None:
+            result = kernel(*args)
+            self._entries[kernel] = _entry_point(kernel, args)
+            return result
+        return entry(*args)
 
     def acceleration(
         self, q, v, tau, current=None, *, t: float = 0.0, servo=None, disturbance=None
@@ -78,16 +123,19 @@ class FastModel:
         """``dv`` (nv,), as :meth:`aiauv_pin.Vehicle.acceleration` (plus an optional servo record)."""
         out = np.empty(self.nv)
         q, v = self._state(q, v)
-        kernels.acceleration_into(
-            self.model,
-            self.environment(current, disturbance),
-            self.no_servo if servo is None else servo,
-            float(t),
-            q,
-            v,
-            np.ascontiguousarray(tau, dtype=float),
-            self.workspace,
-            out,
+        self._call(
+            kernels.acceleration_into,
+            (
+                self.model,
+                self.environment(current, disturbance),
+                self.no_servo if servo is None else servo,
+                float(t),
+                q,
+                v,
+                self._generalized(tau),
+                self.workspace,
+                out,
+            ),
         )
         return out
 
@@ -141,19 +189,22 @@ class FastModel:
         q_out = np.empty(self.nq)
         v_out = np.empty(self.nv)
         q, v = self._state(q, v)
-        kernels.step_into(
-            self.model,
-            self.environment(current, disturbance),
-            self.no_servo if servo is None else servo,
-            float(t),
-            q,
-            v,
-            np.ascontiguousarray(tau, dtype=float),
-            float(dt),
-            METHOD_CODES[method],
-            self.workspace,
-            q_out,
-            v_out,
+        self._call(
+            kernels.step_into,
+            (
+                self.model,
+                self.environment(current, disturbance),
+                self.no_servo if servo is None else servo,
+                float(t),
+                q,
+                v,
+                self._generalized(tau),
+                float(dt),
+                METHOD_CODES[method],
+                self.workspace,
+                q_out,
+                v_out,
+            ),
         )
         return q_out, v_out
 
