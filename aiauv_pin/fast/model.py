@@ -15,6 +15,7 @@ from hydro.currents import Current, as_current
 from ..disturbances import Disturbance
 from ..errors import ArgumentError
 from . import kernels
+from .handle import acceleration_of, new_handle, step_of
 from .records import Environment, Servo
 
 #: ``(method name -> code)`` understood by :func:`kernels.step_into` and :func:`kernels.run_steps`.
@@ -45,10 +46,12 @@ def environment(current=None, disturbance: Disturbance | None = None) -> Environ
 def _entry_point(dispatcher, args):
     """The compiled entry point of ``dispatcher`` for the types of ``args``, or ``dispatcher``.
 
-    Calling a numba dispatcher from Python types every argument first: for the kernels' records
-    (some 70 arrays in named tuples) that costs more than the evaluation itself. The entry point of
-    the overload already chosen for these types skips that step and only unboxes the arguments, so
-    it may be called only with arguments of exactly these types (:class:`FastModel` makes sure).
+    Calling a numba dispatcher from Python types every argument first (for the kernels' records,
+    some 70 arrays in named tuples, that cost more than the evaluation itself; for a
+    :class:`~aiauv_pin.fast.handle.Handle` and the small environment records, still about a
+    microsecond). The entry point of the overload already chosen for these types skips that step
+    and only unboxes the arguments, so it may be called only with arguments of exactly these types
+    (:class:`FastModel` makes sure).
     """
     try:
         signature = tuple(dispatcher.typeof_pyval(a) for a in args)
@@ -77,6 +80,7 @@ class FastModel:
         self.no_servo = no_servo()
         self._frames: dict[int, tuple[int, np.ndarray, np.ndarray]] = {}
         self._entries: dict = {}
+        self._handle = None
         self._pin_model = vehicle.model
 
     def environment(self, current=None, disturbance=None) -> Environment:
@@ -99,17 +103,17 @@ class FastModel:
             raise ArgumentError(f"tau must have shape ({self.nv},), got {tau.shape}")
         return tau
 
-    def _call(self, kernel, args):
-        """``kernel(*args)`` through its cached entry point when the environment and servo records
-        are of the kinds whose types never change for this model (built-in current and
-        disturbance, no servo); by the dispatcher otherwise."""
-        env, servo = args[1], args[2]
-        if (
-            servo is not self.no_servo
-            or env.current_function is not None
-            or env.disturbance_function is not None
-        ):
-            return kernel(*args)
+    def _fixed_types(self, env, servo) -> bool:
+        """Whether ``env`` and ``servo`` are of the kinds whose numba types never change for this
+        model (built-in current and disturbance, no servo): then :meth:`_fast_call` applies."""
+        return (
+            servo is self.no_servo
+            and env.current_function is None
+            and env.disturbance_function is None
+        )
+
+    def _fast_call(self, kernel, args):
+        """``kernel(handle, ...)`` (:mod:`aiauv_pin.fast.handle`) through its cached entry point."""
         entry = self._entries.get(kernel)
         if entry is None:
             result = kernel(*args)
@@ -117,26 +121,34 @@ class FastModel:
             return result
         return entry(*args)
 
+    def __getstate__(self) -> dict:
+        """Picklable state: the handle and the entry points are process-local, made again on use."""
+        state = self.__dict__.copy()
+        state["_handle"], state["_entries"] = None, {}
+        return state
+
+    @property
+    def handle(self):
+        """The :class:`aiauv_pin.fast.handle.Handle` of this model's records (made on first use)."""
+        if self._handle is None:
+            self._handle = new_handle(self.model, self.workspace)
+        return self._handle
+
     def acceleration(
         self, q, v, tau, current=None, *, t: float = 0.0, servo=None, disturbance=None
     ):
         """``dv`` (nv,), as :meth:`aiauv_pin.Vehicle.acceleration` (plus an optional servo record)."""
         out = np.empty(self.nv)
         q, v = self._state(q, v)
-        self._call(
-            kernels.acceleration_into,
-            (
-                self.model,
-                self.environment(current, disturbance),
-                self.no_servo if servo is None else servo,
-                float(t),
-                q,
-                v,
-                self._generalized(tau),
-                self.workspace,
-                out,
-            ),
-        )
+        tau = self._generalized(tau)
+        env = self.environment(current, disturbance)
+        servo = self.no_servo if servo is None else servo
+        if self._fixed_types(env, servo):
+            self._fast_call(acceleration_of, (self.handle, env, servo, float(t), q, v, tau, out))
+        else:
+            kernels.acceleration_into(
+                self.model, env, servo, float(t), q, v, tau, self.workspace, out
+            )
         return out
 
     def restoring_forces(self, q) -> np.ndarray:
@@ -189,23 +201,30 @@ class FastModel:
         q_out = np.empty(self.nq)
         v_out = np.empty(self.nv)
         q, v = self._state(q, v)
-        self._call(
-            kernels.step_into,
-            (
+        tau = self._generalized(tau)
+        env = self.environment(current, disturbance)
+        servo = self.no_servo if servo is None else servo
+        code = METHOD_CODES[method]
+        if self._fixed_types(env, servo):
+            self._fast_call(
+                step_of,
+                (self.handle, env, servo, float(t), q, v, tau, float(dt), code, q_out, v_out),
+            )
+        else:
+            kernels.step_into(
                 self.model,
-                self.environment(current, disturbance),
-                self.no_servo if servo is None else servo,
+                env,
+                servo,
                 float(t),
                 q,
                 v,
-                self._generalized(tau),
+                tau,
                 float(dt),
-                METHOD_CODES[method],
+                code,
                 self.workspace,
                 q_out,
                 v_out,
-            ),
-        )
+            )
         return q_out, v_out
 
     def run(
