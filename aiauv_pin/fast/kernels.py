@@ -34,7 +34,12 @@ import numpy as np
 from control.laws import joint_pd_torque
 from hydro.currents import current_velocity
 from hydro.jit import compiled
-from hydro.laws import add_body_fluid_bias, coriolis_wrench, hydrostatic_wrench
+from hydro.laws import (
+    add_body_fluid_bias,
+    coriolis_of_momentum,
+    hydrostatic_wrench,
+    stacked_row_dot,
+)
 
 from ..disturbances import apply_disturbance
 from .records import FREE_FLYER, REVOLUTE, Workspace
@@ -323,11 +328,26 @@ def body_bias(model, W):
     ``p = nu x* (I_RB nu)`` (rigid Coriolis, Featherstone 2008, eq. (2.67)) plus every fluid term of
     :func:`hydro.laws.add_body_fluid_bias`; after :func:`kinematics` and :func:`sample_current`.
     """
-    rigid = model.bodies.rigid_inertia
-    for b in range(W.bias.shape[0]):
-        w = coriolis_wrench(rigid[b], W.twist[b])
+    rigid, twist, bias = model.bodies.rigid_inertia, W.twist, W.bias
+    for b in range(bias.shape[0]):
+        v0, v1, v2 = twist[b, 0], twist[b, 1], twist[b, 2]
+        w0, w1, w2 = twist[b, 3], twist[b, 4], twist[b, 5]
+        w = coriolis_of_momentum(
+            v0,
+            v1,
+            v2,
+            w0,
+            w1,
+            w2,
+            stacked_row_dot(rigid, b, 0, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 1, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 2, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 3, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 4, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 5, v0, v1, v2, w0, w1, w2),
+        )
         for i in range(6):
-            W.bias[b, i] = w[i]
+            bias[b, i] = w[i]
     add_body_fluid_bias(
         model.fluid, W.rotation, W.twist, W.current, W.bias, W.relative, W.fluid_scratch
     )
