@@ -15,7 +15,10 @@ Measures, in one run on the paper vehicle:
   project's packages) against the built-in one on the same paper scenario, compiled loop, warm,
   interleaved repeats (source checkout only: the file is not installed);
 * MuJoCo's ``mj_forward`` and ``mj_step`` (Euler, RK4) on the 9-body model that ``aiauv export``
-  writes from the URDF (:func:`mujoco_model`), when the optional ``mujoco`` package is installed.
+  writes from the URDF (:func:`mujoco_model`), when the optional ``mujoco`` package is installed;
+* the same comparison with both sides in native code, interleaved, as ratios with their range over
+  rounds, and its scaling from 3 to 127 links (:mod:`aiauv_pin.bench_native`; the figure
+  ``scaling.png`` is written next to the JSON).
 
 The results are printed as a table and written atomically to JSON.
 """
@@ -495,24 +498,59 @@ def accuracy_table(case: str, duration: float, dts: tuple[float, ...]) -> list[d
 
 
 # ---------------------------------------------------------------------- command
-def run_bench(quick: bool = False, case: str = "uniform", duration: float | None = None) -> dict:
-    """Every measurement of ``aiauv bench``; see the module docstring."""
-    from . import loading
+def machine() -> dict:
+    """The machine and the versions of everything timed."""
+    import importlib.metadata
+    import os
 
-    vehicle = loading.load_vehicle(loading.bundled_urdf(case))
+    versions = {}
+    for package in ("aiauv-pin", "numpy", "numba", "pin", "mujoco", "threadpoolctl"):
+        try:
+            versions[package] = importlib.metadata.version(package)
+        except importlib.metadata.PackageNotFoundError:
+            versions[package] = None
+    try:
+        load = os.getloadavg()
+    except OSError:
+        load = None
+    return {
+        "python": platform.python_version(),
+        "processor": platform.processor() or platform.machine(),
+        "platform": platform.platform(),
+        "cpus": os.cpu_count(),
+        "load_average_at_start": load,
+        "versions": versions,
+    }
+
+
+def run_bench(
+    quick: bool = False, case: str = "uniform", duration: float | None = None, only: str = "all"
+) -> dict:
+    """Every measurement of ``aiauv bench``; see the module docstring.
+
+    ``only="kernels"`` times the dynamics, the MuJoCo comparisons and the scaling only (no scenario
+    runs, no accuracy table).
+    """
+    from . import bench_native, loading
+
+    urdf = loading.bundled_urdf(case)
+    vehicle = loading.load_vehicle(urdf)
     scenario_duration = duration if duration is not None else (20.0 if quick else 300.0)
     accuracy_duration = 10.0 if quick else scenario_duration
     results: dict = {
-        "machine": {
-            "python": platform.python_version(),
-            "processor": platform.processor() or platform.machine(),
-        },
+        "machine": machine(),
         "quick": quick,
         "vehicle": {"case": case, "nq": vehicle.nq, "nv": vehicle.nv},
         "dynamics": dynamics_timings(vehicle, quick),
         "mujoco": mujoco_timings(case, quick),
         "head_to_head": head_to_head(vehicle, case, quick),
+        "native": bench_native.native_head_to_head(vehicle, urdf, rounds=5 if quick else 21),
+        "scaling": bench_native.scaling(
+            (3, 9) if quick else bench_native.SCALING_LINKS, rounds=3 if quick else 9
+        ),
     }
+    if only == "kernels":
+        return results
     with tempfile.TemporaryDirectory() as folder:
         results["scenario"] = scenario_timing(case, scenario_duration, Path(folder))
         results["controllers"] = controller_comparison(
@@ -565,9 +603,68 @@ def run_parts(
     return out
 
 
+def _native_lines(results: dict) -> list[str]:
+    """The native and scaling comparisons (:mod:`aiauv_pin.bench_native`) as table lines."""
+    lines = []
+    m = results.get("machine", {})
+    versions = ", ".join(f"{k} {v}" for k, v in m.get("versions", {}).items() if v)
+    lines.append(
+        f"machine: {m.get('processor')}, {m.get('cpus')} CPUs, load average at start "
+        f"{m.get('load_average_at_start')}; {m.get('platform')}; Python {m.get('python')}"
+    )
+    lines.append(f"versions: {versions}")
+    native = results.get("native") or {}
+    if native:
+        t, r = native["times"], native["ratios"]
+        lines.append(
+            f"interleaved, {native['rounds']} rounds, {native['links']} links (median [min-max] us):"
+        )
+        for name, label in (
+            ("ours_forward_native", "evaluation, compiled loop"),
+            ("mujoco_forward_native", "MuJoCo mj_forward, compiled loop"),
+            ("ours_rk4_step_native", "RK4 step, compiled loop"),
+            ("mujoco_rk4_step_native", "MuJoCo mj_step RK4, compiled loop"),
+            ("ours_forward_python", "evaluation, vehicle.fast.acceleration from Python"),
+            ("ours_forward_vehicle_python", "evaluation, Vehicle.acceleration from Python"),
+            ("mujoco_forward_python", "MuJoCo mj_forward from Python"),
+        ):
+            lines.append(
+                f"  {label:<50} {t[name]['median_us']:8.2f} "
+                f"[{t[name]['min_us']:.2f}-{t[name]['max_us']:.2f}]"
+            )
+        for name, label in (
+            ("forward_native", "ratio evaluation / mj_forward, both native"),
+            ("rk4_step_native", "ratio RK4 step / mj_step RK4, both native"),
+            ("forward_python_fast", "ratio from Python: vehicle.fast / mj_forward"),
+            ("forward_python_vehicle", "ratio from Python: Vehicle.acceleration / mj_forward"),
+        ):
+            x = r[name]
+            lines.append(f"  {label:<50} {x['median']:8.3f} [{x['min']:.3f}-{x['max']:.3f}]")
+    rows = (results.get("scaling") or {}).get("rows", [])
+    if rows:
+        lines.append(
+            "scaling (chains of equal modules; median us per evaluation; ratios median [range]):"
+        )
+        lines.append(
+            "  links   compiled    MuJoCo  Pinocchio   eval/mj_forward        RK4/mj_step(RK4)"
+        )
+        for row in rows:
+            t, r = row["times"], row["ratios"]
+            pinocchio = t.get("pinocchio_forward_python", {}).get("median_us", float("nan"))
+            f, k = r["forward_native"], r["rk4_step_native"]
+            lines.append(
+                f"  {row['links']:5d} {t['ours_forward_native']['median_us']:10.2f} "
+                f"{t['mujoco_forward_native']['median_us']:9.2f} {pinocchio:10.1f}   "
+                f"{f['median']:.3f} [{f['min']:.3f}-{f['max']:.3f}]   "
+                f"{k['median']:.3f} [{k['min']:.3f}-{k['max']:.3f}]"
+            )
+    return lines
+
+
 def format_table(results: dict) -> str:
     """Human-readable summary of :func:`run_bench`'s results."""
-    dyn, mj, sc = results["dynamics"], results["mujoco"], results["scenario"]
+    dyn, mj = results["dynamics"], results["mujoco"]
+    sc = results.get("scenario")
     lines = ["quantity                                         value"]
 
     def row(label: str, value, unit: str = "us") -> None:
@@ -611,6 +708,9 @@ def format_table(results: dict) -> str:
             results.get("ratio_numba_rk4_step_to_mj_step_rk4"),
             "",
         )
+    lines.extend(_native_lines(results))
+    if sc is None:
+        return "\n".join(lines)
     row(
         f"scenario {sc['case']} {sc['simulated_time_s']:.0f} s [{sc['backend']}] per step",
         sc.get("simulation_us_per_step"),
@@ -682,11 +782,12 @@ def add_bench_parser(subparsers) -> None:
     parser.add_argument(
         "--only",
         nargs="+",
-        choices=WHOLE_RUN_PARTS,
+        choices=("kernels", *WHOLE_RUN_PARTS),
         metavar="PART",
-        help="measure only these whole-run parts (throughput: runs per minute of sweeps and "
+        help="measure only these parts and update them in the JSON file (kernels: the dynamics, "
+        "MuJoCo and scaling figures, no scenario runs; throughput: runs per minute of sweeps and "
         "rollout; end-to-end: fresh 'aiauv simulate' processes; accuracy-per-cost: error against a "
-        "converged reference per method and step) and update them in the JSON file",
+        "converged reference per method and step)",
     )
     parser.set_defaults(handler=_run_bench_command)
 
@@ -696,16 +797,30 @@ def _run_bench_command(args) -> int:
         results = {}
         if args.out.is_file():
             results = json.loads(args.out.read_text(encoding="utf-8"))
-        measured = run_parts(args.only, quick=args.quick, case=args.case, duration=args.duration)
-        results.update(measured)
-        write_text(args.out, json.dumps(results, indent=2) + "\n")
-        from .bench_run import format_parts
+        lines = []
+        if "kernels" in args.only:
+            kernels = run_bench(
+                quick=args.quick, case=args.case, duration=args.duration, only="kernels"
+            )
+            results.update(kernels)
+            lines.append(format_table(kernels))
+        parts = [part for part in args.only if part != "kernels"]
+        if parts:
+            from .bench_run import format_parts
 
-        print("\n".join(format_parts(measured)))
+            measured = run_parts(parts, quick=args.quick, case=args.case, duration=args.duration)
+            results.update(measured)
+            lines.extend(format_parts(measured))
+        write_text(args.out, json.dumps(results, indent=2) + "\n")
+        print("\n".join(lines))
         print(f"-> {args.out}")
         return 0
     results = run_bench(quick=args.quick, case=args.case, duration=args.duration)
     write_text(args.out, json.dumps(results, indent=2) + "\n")
     print(format_table(results))
     print(f"-> {args.out}")
+    if (results.get("scaling") or {}).get("rows"):
+        from .bench_native import scaling_figure
+
+        print(f"-> {scaling_figure(results['scaling'], Path(args.out).parent / 'scaling.png')}")
     return 0

@@ -27,6 +27,7 @@ numba is missing or the model has joints the kernels do not handle. The environm
 
 from __future__ import annotations
 
+import contextlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,6 +47,33 @@ from .errors import ArgumentError
 from .fast.records import Model, Thrusters, rigid_bodies, unsupported_reason
 
 _LOCAL = pin.ReferenceFrame.LOCAL
+
+_BLAS_CONTROLLER = None
+
+#: Smallest ``nv`` for which the Pinocchio path limits BLAS to one thread: the limit itself costs
+#: about 0.1 ms (threadpoolctl), more than the whole gain on small matrices.
+SINGLE_THREAD_BLAS_FROM_NV = 32
+
+
+def single_threaded_blas(nv: int):
+    """Context that limits BLAS to one thread while the Pinocchio path evaluates, then restores it.
+
+    Its matrices (nv x nv, a few hundred at most) are far too small for threads to pay: on 2 cores
+    the threaded products and solve cost 3.3x more at 127 links (median of 15 interleaved rounds;
+    issue 15). threadpoolctl limits the BLAS that numpy actually loaded, only for the duration of
+    the call, so a user's own numpy work keeps its threads; an environment variable such as
+    ``OPENBLAS_NUM_THREADS`` would act only if set before numpy is imported, and on the whole
+    process. Below :data:`SINGLE_THREAD_BLAS_FROM_NV` it does nothing.
+    """
+    global _BLAS_CONTROLLER
+    if nv < SINGLE_THREAD_BLAS_FROM_NV:
+        return contextlib.nullcontext()
+    if _BLAS_CONTROLLER is None:
+        from threadpoolctl import ThreadpoolController
+
+        _BLAS_CONTROLLER = ThreadpoolController()  # inspects the loaded libraries once
+    return _BLAS_CONTROLLER.limit(limits=1, user_api="blas")
+
 
 #: Accepted values of ``Vehicle(backend=...)``.
 BACKENDS = ("auto", "numba", "pinocchio")
@@ -472,15 +500,17 @@ class Vehicle:
         t = finite_time(t)
         if self._fast is not None:
             return self._fast.acceleration(q, v, tau, current, t=t)
-        mass, bias = self._hydro_terms(q, v, current, t)
-        return np.linalg.solve(mass, tau - bias)
+        with single_threaded_blas(self.nv):
+            mass, bias = self._hydro_terms(q, v, current, t)
+            return np.linalg.solve(mass, tau - bias)
 
     def fluid_forces(
         self, q: np.ndarray, v: np.ndarray, current=None, *, t: float = 0.0
     ) -> FluidForces:
         """Mass matrix and bias of the equations of motion ``M dv + bias = tau``."""
         q, v, current = self._q(q), self._v(v), optional_current(current)
-        mass, bias = self._hydro_terms(q, v, current, t)
+        with single_threaded_blas(self.nv):
+            mass, bias = self._hydro_terms(q, v, current, t)
         return FluidForces(mass, bias)
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
@@ -490,7 +520,8 @@ class Vehicle:
         mass = np.triu(mass) + np.triu(mass, 1).T  # CRBA fills the upper triangle
         if self.added_mass and self._fluid_reference.added_mass.any():
             pin.computeJointJacobians(self.model, self.data, q)
-            mass += self._added_mass_matrix(self._body_jacobians())
+            with single_threaded_blas(self.nv):
+                mass += self._added_mass_matrix(self._body_jacobians())
         return mass
 
     def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:

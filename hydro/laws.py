@@ -125,7 +125,25 @@ def coriolis_wrench(inertia, twist):
         _row_dot(inertia, 4, twist),
         _row_dot(inertia, 5, twist),
     )
-    v0, v1, v2, w0, w1, w2 = twist[0], twist[1], twist[2], twist[3], twist[4], twist[5]
+    return coriolis_of_momentum(
+        twist[0], twist[1], twist[2], twist[3], twist[4], twist[5], f0, f1, f2, n0, n1, n2
+    )
+
+
+@compiled(fastmath=True)
+def coriolis_of_momentum(v0, v1, v2, w0, w1, w2, f0, f1, f2, n0, n1, n2):
+    """``nu x* h``: the Coriolis-centripetal wrench of :func:`coriolis_wrench` from the momentum
+    ``h = M nu`` (for callers that hold ``nu`` and ``h`` in scalars).
+
+    ``(v, w) x* (f, n) = (w x f, v x f + w x n)`` (Featherstone 2008, eq. (2.67)).
+
+    Args:
+        v0, v1, v2, w0, w1, w2: Twist ``nu = (v, w)`` [m/s, rad/s].
+        f0, f1, f2, n0, n1, n2: Momentum ``h = M nu`` [kg m/s, kg m^2/s].
+
+    Returns:
+        The wrench as it appears on the left-hand side, 6 floats [N, N m].
+    """
     return (
         w1 * f2 - w2 * f1,
         w2 * f0 - w0 * f2,
@@ -133,6 +151,19 @@ def coriolis_wrench(inertia, twist):
         v1 * f2 - v2 * f1 + w1 * n2 - w2 * n1,
         v2 * f0 - v0 * f2 + w2 * n0 - w0 * n2,
         v0 * f1 - v1 * f0 + w0 * n1 - w1 * n0,
+    )
+
+
+@compiled(fastmath=True)
+def stacked_row_dot(matrices, b, i, x0, x1, x2, x3, x4, x5):
+    """``matrices[b, i] . x`` for a stack of 6x6 matrices and a 6-vector in scalars (no views)."""
+    return (
+        matrices[b, i, 0] * x0
+        + matrices[b, i, 1] * x1
+        + matrices[b, i, 2] * x2
+        + matrices[b, i, 3] * x3
+        + matrices[b, i, 4] * x4
+        + matrices[b, i, 5] * x5
     )
 
 
@@ -341,31 +372,46 @@ def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch
     link_twist = scratch[0]
     cylinder_twist = scratch[1]
     link_wrench = scratch[2]
+    added, hydrostatics = fluid.added_mass, fluid.hydrostatics
     for b in range(nb):
-        rot = rotation[b]
+        # body by body in scalars, indexing the stacked arrays directly (no views)
         c0, c1, c2 = current[b, 0], current[b, 1], current[b, 2]
-        vc0 = rot[0, 0] * c0 + rot[1, 0] * c1 + rot[2, 0] * c2
-        vc1 = rot[0, 1] * c0 + rot[1, 1] * c1 + rot[2, 1] * c2
-        vc2 = rot[0, 2] * c0 + rot[1, 2] * c1 + rot[2, 2] * c2
+        vc0 = rotation[b, 0, 0] * c0 + rotation[b, 1, 0] * c1 + rotation[b, 2, 0] * c2
+        vc1 = rotation[b, 0, 1] * c0 + rotation[b, 1, 1] * c1 + rotation[b, 2, 1] * c2
+        vc2 = rotation[b, 0, 2] * c0 + rotation[b, 1, 2] * c1 + rotation[b, 2, 2] * c2
+        r0, r1, r2 = twist[b, 0] - vc0, twist[b, 1] - vc1, twist[b, 2] - vc2
+        r3, r4, r5 = twist[b, 3], twist[b, 4], twist[b, 5]
+        relative[b, 0], relative[b, 1], relative[b, 2] = r0, r1, r2
+        relative[b, 3], relative[b, 4], relative[b, 5] = r3, r4, r5
+        w = coriolis_of_momentum(
+            r0,
+            r1,
+            r2,
+            r3,
+            r4,
+            r5,
+            stacked_row_dot(added, b, 0, r0, r1, r2, r3, r4, r5),
+            stacked_row_dot(added, b, 1, r0, r1, r2, r3, r4, r5),
+            stacked_row_dot(added, b, 2, r0, r1, r2, r3, r4, r5),
+            stacked_row_dot(added, b, 3, r0, r1, r2, r3, r4, r5),
+            stacked_row_dot(added, b, 4, r0, r1, r2, r3, r4, r5),
+            stacked_row_dot(added, b, 5, r0, r1, r2, r3, r4, r5),
+        )
+        h = hydrostatic_wrench(
+            hydrostatics[b, 0],
+            hydrostatics[b, 1],
+            hydrostatics[b, 2],
+            hydrostatics[b, 3],
+            rotation[b, 2, 0],
+            rotation[b, 2, 1],
+            rotation[b, 2, 2],
+        )
         for i in range(6):
-            relative[b, i] = twist[b, i]
-        relative[b, 0] -= vc0
-        relative[b, 1] -= vc1
-        relative[b, 2] -= vc2
-        added = fluid.added_mass[b]
-        w = coriolis_wrench(added, relative[b])
-        for i in range(6):
-            bias[b, i] += w[i]
+            bias[b, i] += w[i] - h[i]
         if vc0 != 0.0 or vc1 != 0.0 or vc2 != 0.0:
-            w = current_acceleration_wrench(
-                added, twist[b, 3], twist[b, 4], twist[b, 5], vc0, vc1, vc2
-            )
+            w = current_acceleration_wrench(added[b], r3, r4, r5, vc0, vc1, vc2)
             for i in range(6):
                 bias[b, i] += w[i]
-        h = fluid.hydrostatics[b]
-        w = hydrostatic_wrench(h[0], h[1], h[2], h[3], rot[2, 0], rot[2, 1], rot[2, 2])
-        for i in range(6):
-            bias[b, i] -= w[i]
     for k in range(fluid.link_body.shape[0]):
         b = fluid.link_body[k]
         x_link = fluid.link_from_body[k]

@@ -73,3 +73,56 @@ def test_bench_rejects_a_bad_duration(capsys):
         main(["bench", "--duration", "-1"])
     assert exit_info.value.code != 0
     assert "--duration" in capsys.readouterr().err
+
+
+def test_native_mujoco_loop_calls_mj_forward():
+    """The compiled loop that times MuJoCo natively (ctypes on its own library) computes exactly
+    what ``mujoco.mj_forward`` computes from Python."""
+    mujoco = pytest.importorskip("mujoco")
+    pytest.importorskip("numba")
+    import numpy as np
+
+    from aiauv_pin import bench_native
+
+    model = bench.mujoco_model("uniform", "Euler")
+    data, reference = mujoco.MjData(model), mujoco.MjData(model)
+    for d in (data, reference):
+        d.qvel[:] = 0.1 * np.arange(model.nv)
+        d.qpos[7:] = 0.2
+    mujoco.mj_forward(model, reference)
+    forward_loop, _ = bench_native.native_loops()
+    forward_loop(model._address, data._address, 1)
+    np.testing.assert_array_equal(data.qacc, reference.qacc)
+    assert np.any(data.qacc != 0.0)
+
+
+def test_scaling_chain_has_the_requested_links_on_both_sides(tmp_path):
+    """The scaling figure compares like with like: n links and the same nv in both models."""
+    pytest.importorskip("mujoco")
+    from aiauv_pin import bench_native
+    from aiauv_pin.builder import build_urdf
+    from aiauv_pin.vehicle_spec import spec_from_dict
+
+    urdf = tmp_path / "chain.urdf"
+    urdf.write_text(build_urdf(spec_from_dict(bench_native.chain_spec(5))))
+    vehicle = loading.load_vehicle(urdf)
+    assert vehicle.model.njoints - 1 == 5 and vehicle.nv == 10
+    assert bench_native.mujoco_model_of(urdf, "RK4").nv == vehicle.nv
+
+
+def test_pinocchio_path_runs_blas_on_one_thread_for_large_models():
+    """Issue 15: the reference path's small matrices lose to BLAS threads; the limit holds only
+    during the call and only from SINGLE_THREAD_BLAS_FROM_NV on."""
+    from threadpoolctl import threadpool_info
+
+    from aiauv_pin.vehicle import SINGLE_THREAD_BLAS_FROM_NV, single_threaded_blas
+
+    before = [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+    with single_threaded_blas(SINGLE_THREAD_BLAS_FROM_NV):
+        inside = [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+    after = [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+    assert all(n == 1 for n in inside)
+    assert after == before
+    with single_threaded_blas(SINGLE_THREAD_BLAS_FROM_NV - 1):
+        small = [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+    assert small == before

@@ -270,3 +270,18 @@ def test_unsupported_joint_falls_back(rng):
 def test_unknown_backend_is_one_line_error(paper_vehicle):
     with pytest.raises(ValueError, match="unknown backend 'cuda'"):
         paper_vehicle.backend = "cuda"
+
+
+def test_python_entry_checks_shapes(paper_vehicle):
+    """FastModel calls the compiled entry point without numba's type checks, so it checks the
+    shapes itself (a wrong shape would otherwise read or write out of bounds)."""
+    fast = paper_vehicle.fast
+    if fast is None:
+        pytest.skip("numba backend unavailable")
+    q, v = paper_vehicle.neutral_configuration(), np.zeros(paper_vehicle.nv)
+    first = fast.acceleration(q, v, np.zeros(paper_vehicle.nv))
+    np.testing.assert_array_equal(fast.acceleration(q, v, np.zeros(paper_vehicle.nv)), first)
+    with pytest.raises(aiauv_pin.errors.ArgumentError, match="tau must have shape"):
+        fast.acceleration(q, v, np.zeros(paper_vehicle.nv + 1))
+    with pytest.raises(aiauv_pin.errors.ArgumentError, match="q and v must have shapes"):
+        fast.acceleration(q[:-1], v, np.zeros(paper_vehicle.nv))

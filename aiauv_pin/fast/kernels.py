@@ -34,7 +34,12 @@ import numpy as np
 from control.laws import joint_pd_torque
 from hydro.currents import current_velocity
 from hydro.jit import compiled
-from hydro.laws import add_body_fluid_bias, coriolis_wrench, hydrostatic_wrench
+from hydro.laws import (
+    add_body_fluid_bias,
+    coriolis_of_momentum,
+    hydrostatic_wrench,
+    stacked_row_dot,
+)
 
 from ..disturbances import apply_disturbance
 from .records import FREE_FLYER, REVOLUTE, Workspace
@@ -46,53 +51,29 @@ RK4, EULER = 0, 1
 
 # ---------------------------------------------------------------------- small linear algebra
 @compiled(fastmath=True)
-def _quat_to_rot(x, y, z, w, out):
-    """Rotation matrix of a unit quaternion ``(x, y, z, w)`` into ``out``."""
-    rows = quaternion_rotation(x, y, z, w)
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = rows[i][j]
+def _dot6(m, b, i, x, c):
+    """``m[b, i] . x[c]`` for 6-vectors, indexing the stacked arrays directly (no views)."""
+    return (
+        m[b, i, 0] * x[c, 0]
+        + m[b, i, 1] * x[c, 1]
+        + m[b, i, 2] * x[c, 2]
+        + m[b, i, 3] * x[c, 3]
+        + m[b, i, 4] * x[c, 4]
+        + m[b, i, 5] * x[c, 5]
+    )
 
 
 @compiled(fastmath=True)
-def _axis_rot(ax, ay, az, angle, out):
-    """Rodrigues: rotation by ``angle`` about the unit axis ``a``."""
-    s = math.sin(angle)
-    c1 = 1.0 - math.cos(angle)
-    out[0, 0] = 1.0 - c1 * (ay * ay + az * az)
-    out[1, 1] = 1.0 - c1 * (ax * ax + az * az)
-    out[2, 2] = 1.0 - c1 * (ax * ax + ay * ay)
-    out[0, 1] = -s * az + c1 * ax * ay
-    out[1, 0] = s * az + c1 * ax * ay
-    out[0, 2] = s * ay + c1 * ax * az
-    out[2, 0] = -s * ay + c1 * ax * az
-    out[1, 2] = -s * ax + c1 * ay * az
-    out[2, 1] = s * ax + c1 * ay * az
-
-
-@compiled(fastmath=True)
-def _motion_cross(a, b, out):
-    """``a x b`` for motion vectors (Featherstone's ``crm``): ``(w x v' + v x w', w x w')``."""
-    v0, v1, v2, w0, w1, w2 = a[0], a[1], a[2], a[3], a[4], a[5]
-    out[0] = w1 * b[2] - w2 * b[1] + v1 * b[5] - v2 * b[4]
-    out[1] = w2 * b[0] - w0 * b[2] + v2 * b[3] - v0 * b[5]
-    out[2] = w0 * b[1] - w1 * b[0] + v0 * b[4] - v1 * b[3]
-    out[3] = w1 * b[5] - w2 * b[4]
-    out[4] = w2 * b[3] - w0 * b[5]
-    out[5] = w0 * b[4] - w1 * b[3]
-
-
-@compiled(fastmath=True)
-def _add_force_cross(twist, wrench, out):
-    """``out += twist x* wrench`` (Featherstone's ``crf``): ``(w x f, v x f + w x n)``."""
-    v0, v1, v2, w0, w1, w2 = twist[0], twist[1], twist[2], twist[3], twist[4], twist[5]
-    f0, f1, f2, n0, n1, n2 = wrench[0], wrench[1], wrench[2], wrench[3], wrench[4], wrench[5]
-    out[0] += w1 * f2 - w2 * f1
-    out[1] += w2 * f0 - w0 * f2
-    out[2] += w0 * f1 - w1 * f0
-    out[3] += v1 * f2 - v2 * f1 + w1 * n2 - w2 * n1
-    out[4] += v2 * f0 - v0 * f2 + w2 * n0 - w0 * n2
-    out[5] += v0 * f1 - v1 * f0 + w0 * n1 - w1 * n0
+def _dot_rows(a, i, x, j):
+    """``a[i] . x[j]`` for rows of 6 (no views)."""
+    return (
+        a[i, 0] * x[j, 0]
+        + a[i, 1] * x[j, 1]
+        + a[i, 2] * x[j, 2]
+        + a[i, 3] * x[j, 3]
+        + a[i, 4] * x[j, 4]
+        + a[i, 5] * x[j, 5]
+    )
 
 
 @compiled(fastmath=True)
@@ -101,15 +82,6 @@ def _matvec6(m, x, out):
         s = 0.0
         for j in range(6):
             s += m[i, j] * x[j]
-        out[i] = s
-
-
-@compiled(fastmath=True)
-def _matTvec6(m, x, out):
-    for i in range(6):
-        s = 0.0
-        for j in range(6):
-            s += m[j, i] * x[j]
         out[i] = s
 
 
@@ -135,25 +107,6 @@ def _motion_transform(rot, trans, out):
 
 
 @compiled(fastmath=True)
-def _x_apply(xl, m, out):
-    """``out = X m``: a parent-frame motion vector in the child frame.
-
-    ``xl`` is the child's placement in its parent (rows 0-2 ``R``, row 3 ``p``), so
-    ``X = [[R^T, -R^T [p]], [0, R^T]]`` (Featherstone 2008, eq. (2.24)) and
-    ``X m = (R^T (v - p x w), R^T w)``.
-    """
-    p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
-    w0, w1, w2 = m[3], m[4], m[5]
-    a0 = m[0] - (p1 * w2 - p2 * w1)
-    a1 = m[1] - (p2 * w0 - p0 * w2)
-    a2 = m[2] - (p0 * w1 - p1 * w0)
-    for i in range(3):
-        r0, r1, r2 = xl[0, i], xl[1, i], xl[2, i]
-        out[i] = r0 * a0 + r1 * a1 + r2 * a2
-        out[3 + i] = r0 * w0 + r1 * w1 + r2 * w2
-
-
-@compiled(fastmath=True)
 def _xT_add(xl, f, dst):
     """``dst += X^T f``: a child-frame force vector in the parent frame, ``(R f, p x R f + R n)``."""
     p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
@@ -166,64 +119,6 @@ def _xT_add(xl, f, dst):
     dst[3] += xl[0, 0] * f[3] + xl[0, 1] * f[4] + xl[0, 2] * f[5] + p1 * f2 - p2 * f1
     dst[4] += xl[1, 0] * f[3] + xl[1, 1] * f[4] + xl[1, 2] * f[5] + p2 * f0 - p0 * f2
     dst[5] += xl[2, 0] * f[3] + xl[2, 1] * f[4] + xl[2, 2] * f[5] + p0 * f1 - p1 * f0
-
-
-@compiled(fastmath=True)
-def _add_transformed_inertia(xl, inertia, dst, half, rotated):
-    """``dst += X^T I X`` for a symmetric 6x6 ``I`` given in the child frame, in 3x3 blocks.
-
-    With ``I = [[A, B], [B^T, C]]`` rotated into the parent axes (``A' = R A R^T`` etc.) and
-    ``P = [p]``: ``X^T I X = [[A', B' - A' P], [sym., C' + P B' + (P B')^T - P A' P]]``, the
-    inertia transform of Featherstone 2008, eq. (2.66), written out for ``X`` of :func:`_x_apply`
-    (about half the work of two 6x6 products).
-    """
-    # half = I blockdiag(R, R)^T, rotated = blockdiag(R, R) half
-    for i in range(6):
-        for c in range(0, 6, 3):
-            a0, a1, a2 = inertia[i, c], inertia[i, c + 1], inertia[i, c + 2]
-            for j in range(3):
-                half[i, c + j] = a0 * xl[j, 0] + a1 * xl[j, 1] + a2 * xl[j, 2]
-    for r in range(0, 6, 3):
-        for col in range(6):
-            y0, y1, y2 = half[r, col], half[r + 1, col], half[r + 2, col]
-            for i in range(3):
-                rotated[r + i, col] = xl[i, 0] * y0 + xl[i, 1] * y1 + xl[i, 2] * y2
-    p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
-    # T = A' P (row i: a_i x p) stored in half[0:3, 0:3]; new B = B' - T
-    for i in range(3):
-        a0, a1, a2 = rotated[i, 0], rotated[i, 1], rotated[i, 2]
-        t0 = a1 * p2 - a2 * p1
-        t1 = a2 * p0 - a0 * p2
-        t2 = a0 * p1 - a1 * p0
-        half[i, 0] = t0
-        half[i, 1] = t1
-        half[i, 2] = t2
-        for j in range(3):
-            dst[i, j] += rotated[i, j]
-        b0 = rotated[i, 3] - t0
-        b1 = rotated[i, 4] - t1
-        b2 = rotated[i, 5] - t2
-        dst[i, 3] += b0
-        dst[i, 4] += b1
-        dst[i, 5] += b2
-        dst[3, i] += b0
-        dst[4, i] += b1
-        dst[5, i] += b2
-    # Q = P B' (column j: p x b'_j) in half[0:3, 3:6]; P T (column j: p x t_j) in half[3:6, 0:3]
-    for j in range(3):
-        b0, b1, b2 = rotated[0, 3 + j], rotated[1, 3 + j], rotated[2, 3 + j]
-        half[0, 3 + j] = p1 * b2 - p2 * b1
-        half[1, 3 + j] = p2 * b0 - p0 * b2
-        half[2, 3 + j] = p0 * b1 - p1 * b0
-        t0, t1, t2 = half[0, j], half[1, j], half[2, j]
-        half[3, j] = p1 * t2 - p2 * t1
-        half[4, j] = p2 * t0 - p0 * t2
-        half[5, j] = p0 * t1 - p1 * t0
-    for i in range(3):
-        for j in range(3):
-            dst[3 + i, 3 + j] += (
-                rotated[3 + i, 3 + j] + half[i, 3 + j] + half[j, 3 + i] - half[3 + i, j]
-            )
 
 
 @compiled(fastmath=True)
@@ -255,7 +150,11 @@ def _solve_spd6(a, b, out, low, y):
 # ---------------------------------------------------------------------- kinematics
 @compiled(fastmath=True)
 def kinematics(bodies, q, v, W):
-    """Body poses in the world, placements in the parent, twists and ``v x S qd`` into ``W``."""
+    """Body poses in the world, placements in the parent, twists and ``v x S qd`` into ``W``.
+
+    Written body by body with scalar locals (no helper writes into array views), so the compiler
+    keeps a body's rotation, position and twist in registers; each body's results are stored once.
+    """
     rot_w, pos_w, xform, twist, bias_acc = (
         W.rotation,
         W.position,
@@ -263,81 +162,131 @@ def kinematics(bodies, q, v, W):
         W.twist,
         W.bias_acceleration,
     )
-    rot_l = W.m33[0]
-    rot_j = W.m33[1]
-    pos_l = W.v6[0, :3]
-    tmp = W.v6[1]
     place, axis = bodies.placement, bodies.axis
-    for b in range(bodies.parent.shape[0]):
-        parent, kind, iq, iv = (
-            bodies.parent[b],
-            bodies.kind[b],
-            bodies.q_index[b],
-            bodies.v_index[b],
-        )
+    parents, kinds, q_index, v_index = bodies.parent, bodies.kind, bodies.q_index, bodies.v_index
+    for b in range(parents.shape[0]):
+        parent, kind, iq, iv = parents[b], kinds[b], q_index[b], v_index[b]
         if kind == FREE_FLYER:
-            _quat_to_rot(q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6], rot_w[b])
+            rows = quaternion_rotation(q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6])
             for i in range(3):
                 pos_w[b, i] = q[iq + i]
+                for j in range(3):
+                    rot_w[b, i, j] = rows[i][j]
+                    xform[b, i, j] = 1.0 if i == j else 0.0
+                xform[b, 3, i] = 0.0
             for i in range(6):
                 twist[b, i] = v[iv + i]
                 bias_acc[b, i] = 0.0
-            for i in range(4):
-                for j in range(3):
-                    xform[b, i, j] = 1.0 if i == j else 0.0
             continue
-        qj = q[iq]
-        s = axis[b]
+        qj, qd = q[iq], v[iv]
+        s0, s1, s2, s3, s4, s5 = (
+            axis[b, 0],
+            axis[b, 1],
+            axis[b, 2],
+            axis[b, 3],
+            axis[b, 4],
+            axis[b, 5],
+        )
+        p00, p01, p02 = place[b, 0, 0], place[b, 0, 1], place[b, 0, 2]
+        p10, p11, p12 = place[b, 1, 0], place[b, 1, 1], place[b, 1, 2]
+        p20, p21, p22 = place[b, 2, 0], place[b, 2, 1], place[b, 2, 2]
+        l0, l1, l2 = place[b, 3, 0], place[b, 3, 1], place[b, 3, 2]
         if kind == REVOLUTE:
-            _axis_rot(s[3], s[4], s[5], qj, rot_j)
-            for i in range(3):
-                for j in range(3):
-                    rot_l[i, j] = (
-                        place[b, i, 0] * rot_j[0, j]
-                        + place[b, i, 1] * rot_j[1, j]
-                        + place[b, i, 2] * rot_j[2, j]
-                    )
-                pos_l[i] = place[b, 3, i]
+            # R_l = R_placement exp(q [a]) (Rodrigues about the unit axis a = (s3, s4, s5))
+            sn = math.sin(qj)
+            c1 = 1.0 - math.cos(qj)
+            j00 = 1.0 - c1 * (s4 * s4 + s5 * s5)
+            j11 = 1.0 - c1 * (s3 * s3 + s5 * s5)
+            j22 = 1.0 - c1 * (s3 * s3 + s4 * s4)
+            j01 = -sn * s5 + c1 * s3 * s4
+            j10 = sn * s5 + c1 * s3 * s4
+            j02 = sn * s4 + c1 * s3 * s5
+            j20 = -sn * s4 + c1 * s3 * s5
+            j12 = -sn * s3 + c1 * s4 * s5
+            j21 = sn * s3 + c1 * s4 * s5
+            r00 = p00 * j00 + p01 * j10 + p02 * j20
+            r01 = p00 * j01 + p01 * j11 + p02 * j21
+            r02 = p00 * j02 + p01 * j12 + p02 * j22
+            r10 = p10 * j00 + p11 * j10 + p12 * j20
+            r11 = p10 * j01 + p11 * j11 + p12 * j21
+            r12 = p10 * j02 + p11 * j12 + p12 * j22
+            r20 = p20 * j00 + p21 * j10 + p22 * j20
+            r21 = p20 * j01 + p21 * j11 + p22 * j21
+            r22 = p20 * j02 + p21 * j12 + p22 * j22
         else:
-            for i in range(3):
-                for j in range(3):
-                    rot_l[i, j] = place[b, i, j]
-                pos_l[i] = place[b, 3, i] + qj * (
-                    place[b, i, 0] * s[0] + place[b, i, 1] * s[1] + place[b, i, 2] * s[2]
-                )
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
+                p00,
+                p01,
+                p02,
+                p10,
+                p11,
+                p12,
+                p20,
+                p21,
+                p22,
+            )
+            l0 += qj * (p00 * s0 + p01 * s1 + p02 * s2)
+            l1 += qj * (p10 * s0 + p11 * s1 + p12 * s2)
+            l2 += qj * (p20 * s0 + p21 * s1 + p22 * s2)
+        xform[b, 0, 0], xform[b, 0, 1], xform[b, 0, 2] = r00, r01, r02
+        xform[b, 1, 0], xform[b, 1, 1], xform[b, 1, 2] = r10, r11, r12
+        xform[b, 2, 0], xform[b, 2, 1], xform[b, 2, 2] = r20, r21, r22
+        xform[b, 3, 0], xform[b, 3, 1], xform[b, 3, 2] = l0, l1, l2
         if parent < 0:
-            for i in range(3):
-                pos_w[b, i] = pos_l[i]
-                for j in range(3):
-                    rot_w[b, i, j] = rot_l[i, j]
+            rot_w[b, 0, 0], rot_w[b, 0, 1], rot_w[b, 0, 2] = r00, r01, r02
+            rot_w[b, 1, 0], rot_w[b, 1, 1], rot_w[b, 1, 2] = r10, r11, r12
+            rot_w[b, 2, 0], rot_w[b, 2, 1], rot_w[b, 2, 2] = r20, r21, r22
+            pos_w[b, 0], pos_w[b, 1], pos_w[b, 2] = l0, l1, l2
+            v0, v1, v2, w0, w1, w2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         else:
-            for i in range(3):
-                acc = pos_w[parent, i]
-                for k in range(3):
-                    acc += rot_w[parent, i, k] * pos_l[k]
-                pos_w[b, i] = acc
-                for j in range(3):
-                    rot_w[b, i, j] = (
-                        rot_w[parent, i, 0] * rot_l[0, j]
-                        + rot_w[parent, i, 1] * rot_l[1, j]
-                        + rot_w[parent, i, 2] * rot_l[2, j]
-                    )
-        xl = xform[b]
-        for i in range(3):
-            for j in range(3):
-                xl[i, j] = rot_l[i, j]
-            xl[3, i] = pos_l[i]
-        qd = v[iv]
-        if parent < 0:
-            for i in range(6):
-                twist[b, i] = s[i] * qd
-        else:
-            _x_apply(xl, twist[parent], twist[b])
-            for i in range(6):
-                twist[b, i] += s[i] * qd
-        for i in range(6):
-            tmp[i] = s[i] * qd
-        _motion_cross(twist[b], tmp, bias_acc[b])
+            a00, a01, a02 = rot_w[parent, 0, 0], rot_w[parent, 0, 1], rot_w[parent, 0, 2]
+            a10, a11, a12 = rot_w[parent, 1, 0], rot_w[parent, 1, 1], rot_w[parent, 1, 2]
+            a20, a21, a22 = rot_w[parent, 2, 0], rot_w[parent, 2, 1], rot_w[parent, 2, 2]
+            pos_w[b, 0] = pos_w[parent, 0] + a00 * l0 + a01 * l1 + a02 * l2
+            pos_w[b, 1] = pos_w[parent, 1] + a10 * l0 + a11 * l1 + a12 * l2
+            pos_w[b, 2] = pos_w[parent, 2] + a20 * l0 + a21 * l1 + a22 * l2
+            rot_w[b, 0, 0] = a00 * r00 + a01 * r10 + a02 * r20
+            rot_w[b, 0, 1] = a00 * r01 + a01 * r11 + a02 * r21
+            rot_w[b, 0, 2] = a00 * r02 + a01 * r12 + a02 * r22
+            rot_w[b, 1, 0] = a10 * r00 + a11 * r10 + a12 * r20
+            rot_w[b, 1, 1] = a10 * r01 + a11 * r11 + a12 * r21
+            rot_w[b, 1, 2] = a10 * r02 + a11 * r12 + a12 * r22
+            rot_w[b, 2, 0] = a20 * r00 + a21 * r10 + a22 * r20
+            rot_w[b, 2, 1] = a20 * r01 + a21 * r11 + a22 * r21
+            rot_w[b, 2, 2] = a20 * r02 + a21 * r12 + a22 * r22
+            # X nu_parent = (R^T (v - l x w), R^T w)  (Featherstone 2008, eq. (2.24))
+            pw0, pw1, pw2 = twist[parent, 3], twist[parent, 4], twist[parent, 5]
+            e0 = twist[parent, 0] - (l1 * pw2 - l2 * pw1)
+            e1 = twist[parent, 1] - (l2 * pw0 - l0 * pw2)
+            e2 = twist[parent, 2] - (l0 * pw1 - l1 * pw0)
+            v0 = r00 * e0 + r10 * e1 + r20 * e2
+            v1 = r01 * e0 + r11 * e1 + r21 * e2
+            v2 = r02 * e0 + r12 * e1 + r22 * e2
+            w0 = r00 * pw0 + r10 * pw1 + r20 * pw2
+            w1 = r01 * pw0 + r11 * pw1 + r21 * pw2
+            w2 = r02 * pw0 + r12 * pw1 + r22 * pw2
+        # joint motion S qd, the body twist, and the bias acceleration nu x (S qd)
+        m0, m1, m2, m3, m4, m5 = s0 * qd, s1 * qd, s2 * qd, s3 * qd, s4 * qd, s5 * qd
+        v0 += m0
+        v1 += m1
+        v2 += m2
+        w0 += m3
+        w1 += m4
+        w2 += m5
+        twist[b, 0], twist[b, 1], twist[b, 2], twist[b, 3], twist[b, 4], twist[b, 5] = (
+            v0,
+            v1,
+            v2,
+            w0,
+            w1,
+            w2,
+        )
+        bias_acc[b, 0] = w1 * m2 - w2 * m1 + v1 * m5 - v2 * m4
+        bias_acc[b, 1] = w2 * m0 - w0 * m2 + v2 * m3 - v0 * m5
+        bias_acc[b, 2] = w0 * m1 - w1 * m0 + v0 * m4 - v1 * m3
+        bias_acc[b, 3] = w1 * m5 - w2 * m4
+        bias_acc[b, 4] = w2 * m3 - w0 * m5
+        bias_acc[b, 5] = w0 * m4 - w1 * m3
 
 
 @compiled(fastmath=True)
@@ -379,11 +328,26 @@ def body_bias(model, W):
     ``p = nu x* (I_RB nu)`` (rigid Coriolis, Featherstone 2008, eq. (2.67)) plus every fluid term of
     :func:`hydro.laws.add_body_fluid_bias`; after :func:`kinematics` and :func:`sample_current`.
     """
-    rigid = model.bodies.rigid_inertia
-    for b in range(W.bias.shape[0]):
-        w = coriolis_wrench(rigid[b], W.twist[b])
+    rigid, twist, bias = model.bodies.rigid_inertia, W.twist, W.bias
+    for b in range(bias.shape[0]):
+        v0, v1, v2 = twist[b, 0], twist[b, 1], twist[b, 2]
+        w0, w1, w2 = twist[b, 3], twist[b, 4], twist[b, 5]
+        w = coriolis_of_momentum(
+            v0,
+            v1,
+            v2,
+            w0,
+            w1,
+            w2,
+            stacked_row_dot(rigid, b, 0, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 1, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 2, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 3, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 4, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 5, v0, v1, v2, w0, w1, w2),
+        )
         for i in range(6):
-            W.bias[b, i] = w[i]
+            bias[b, i] = w[i]
     add_body_fluid_bias(
         model.fluid, W.rotation, W.twist, W.current, W.bias, W.relative, W.fluid_scratch
     )
@@ -391,10 +355,207 @@ def body_bias(model, W):
 
 # ---------------------------------------------------------------------- articulated-body algorithm
 @compiled(fastmath=True)
-def _articulated(bodies, tau, W, out):
-    """ABA passes 2 and 3 (Featherstone 2008, Table 7.1) with general 6x6 body inertias."""
+def _rotate_symmetric(r00, r01, r02, r10, r11, r12, r20, r21, r22, a00, a01, a02, a11, a12, a22):
+    """Upper triangle ``(00, 01, 02, 11, 12, 22)`` of ``R A R^T`` for a symmetric 3x3 ``A``."""
+    h00 = a00 * r00 + a01 * r01 + a02 * r02  # h = A R^T
+    h01 = a00 * r10 + a01 * r11 + a02 * r12
+    h02 = a00 * r20 + a01 * r21 + a02 * r22
+    h10 = a01 * r00 + a11 * r01 + a12 * r02
+    h11 = a01 * r10 + a11 * r11 + a12 * r12
+    h12 = a01 * r20 + a11 * r21 + a12 * r22
+    h20 = a02 * r00 + a12 * r01 + a22 * r02
+    h21 = a02 * r10 + a12 * r11 + a22 * r12
+    h22 = a02 * r20 + a12 * r21 + a22 * r22
+    return (
+        r00 * h00 + r01 * h10 + r02 * h20,
+        r00 * h01 + r01 * h11 + r02 * h21,
+        r00 * h02 + r01 * h12 + r02 * h22,
+        r10 * h01 + r11 * h11 + r12 * h21,
+        r10 * h02 + r11 * h12 + r12 * h22,
+        r20 * h02 + r21 * h12 + r22 * h22,
+    )
+
+
+@compiled(fastmath=True)
+def _rotate_full(
+    r00, r01, r02, r10, r11, r12, r20, r21, r22, b00, b01, b02, b10, b11, b12, b20, b21, b22
+):
+    """``R B R^T`` for a 3x3 ``B``, row by row (9 floats)."""
+    h00 = b00 * r00 + b01 * r01 + b02 * r02  # h = B R^T
+    h01 = b00 * r10 + b01 * r11 + b02 * r12
+    h02 = b00 * r20 + b01 * r21 + b02 * r22
+    h10 = b10 * r00 + b11 * r01 + b12 * r02
+    h11 = b10 * r10 + b11 * r11 + b12 * r12
+    h12 = b10 * r20 + b11 * r21 + b12 * r22
+    h20 = b20 * r00 + b21 * r01 + b22 * r02
+    h21 = b20 * r10 + b21 * r11 + b22 * r12
+    h22 = b20 * r20 + b21 * r21 + b22 * r22
+    return (
+        r00 * h00 + r01 * h10 + r02 * h20,
+        r00 * h01 + r01 * h11 + r02 * h21,
+        r00 * h02 + r01 * h12 + r02 * h22,
+        r10 * h00 + r11 * h10 + r12 * h20,
+        r10 * h01 + r11 * h11 + r12 * h21,
+        r10 * h02 + r11 * h12 + r12 * h22,
+        r20 * h00 + r21 * h10 + r22 * h20,
+        r20 * h01 + r21 * h11 + r22 * h21,
+        r20 * h02 + r21 * h12 + r22 * h22,
+    )
+
+
+@compiled(fastmath=True)
+def _add_child_inertia(xform, art, child, parent):
+    """``art[parent] += X^T I^a X`` for the symmetric ``I^a = art[child] = [[A, B], [B^T, C]]``.
+
+    With ``A' = R A R^T``, ``B' = R B R^T``, ``C' = R C R^T`` and ``P = [p]`` (``xform[child]``: rows 0-2
+    ``R``, row 3 ``p``): ``X^T I X = [[A', B' - A' P], [sym., C' + P B' + (P B')^T - P A' P]]``, the inertia
+    transform of Featherstone 2008, eq. (2.66), written for ``X`` of the kinematics; the two
+    symmetric blocks are computed on their upper triangles only (``P A' P`` is symmetric).
+    """
+    r00, r01, r02 = xform[child, 0, 0], xform[child, 0, 1], xform[child, 0, 2]
+    r10, r11, r12 = xform[child, 1, 0], xform[child, 1, 1], xform[child, 1, 2]
+    r20, r21, r22 = xform[child, 2, 0], xform[child, 2, 1], xform[child, 2, 2]
+    p0, p1, p2 = xform[child, 3, 0], xform[child, 3, 1], xform[child, 3, 2]
+    a00, a01, a02, a11, a12, a22 = _rotate_symmetric(
+        r00,
+        r01,
+        r02,
+        r10,
+        r11,
+        r12,
+        r20,
+        r21,
+        r22,
+        art[child, 0, 0],
+        art[child, 0, 1],
+        art[child, 0, 2],
+        art[child, 1, 1],
+        art[child, 1, 2],
+        art[child, 2, 2],
+    )
+    c00, c01, c02, c11, c12, c22 = _rotate_symmetric(
+        r00,
+        r01,
+        r02,
+        r10,
+        r11,
+        r12,
+        r20,
+        r21,
+        r22,
+        art[child, 3, 3],
+        art[child, 3, 4],
+        art[child, 3, 5],
+        art[child, 4, 4],
+        art[child, 4, 5],
+        art[child, 5, 5],
+    )
+    b00, b01, b02, b10, b11, b12, b20, b21, b22 = _rotate_full(
+        r00,
+        r01,
+        r02,
+        r10,
+        r11,
+        r12,
+        r20,
+        r21,
+        r22,
+        art[child, 0, 3],
+        art[child, 0, 4],
+        art[child, 0, 5],
+        art[child, 1, 3],
+        art[child, 1, 4],
+        art[child, 1, 5],
+        art[child, 2, 3],
+        art[child, 2, 4],
+        art[child, 2, 5],
+    )
+    # T = A' P, row i = a'_i x p
+    t00 = a01 * p2 - a02 * p1
+    t01 = a02 * p0 - a00 * p2
+    t02 = a00 * p1 - a01 * p0
+    t10 = a11 * p2 - a12 * p1
+    t11 = a12 * p0 - a01 * p2
+    t12 = a01 * p1 - a11 * p0
+    t20 = a12 * p2 - a22 * p1
+    t21 = a22 * p0 - a02 * p2
+    t22 = a02 * p1 - a12 * p0
+    # Q = P B', column j = p x b'_j
+    q00 = p1 * b20 - p2 * b10
+    q10 = p2 * b00 - p0 * b20
+    q20 = p0 * b10 - p1 * b00
+    q01 = p1 * b21 - p2 * b11
+    q11 = p2 * b01 - p0 * b21
+    q21 = p0 * b11 - p1 * b01
+    q02 = p1 * b22 - p2 * b12
+    q12 = p2 * b02 - p0 * b22
+    q22 = p0 * b12 - p1 * b02
+    # P T, column j = p x t_j (symmetric: upper triangle)
+    s00 = p1 * t20 - p2 * t10
+    s01 = p1 * t21 - p2 * t11
+    s11 = p2 * t01 - p0 * t21
+    s02 = p1 * t22 - p2 * t12
+    s12 = p2 * t02 - p0 * t22
+    s22 = p0 * t12 - p1 * t02
+    art[parent, 0, 0] += a00
+    art[parent, 0, 1] += a01
+    art[parent, 0, 2] += a02
+    art[parent, 1, 0] += a01
+    art[parent, 1, 1] += a11
+    art[parent, 1, 2] += a12
+    art[parent, 2, 0] += a02
+    art[parent, 2, 1] += a12
+    art[parent, 2, 2] += a22
+    e00, e01, e02 = b00 - t00, b01 - t01, b02 - t02
+    e10, e11, e12 = b10 - t10, b11 - t11, b12 - t12
+    e20, e21, e22 = b20 - t20, b21 - t21, b22 - t22
+    art[parent, 0, 3] += e00
+    art[parent, 0, 4] += e01
+    art[parent, 0, 5] += e02
+    art[parent, 1, 3] += e10
+    art[parent, 1, 4] += e11
+    art[parent, 1, 5] += e12
+    art[parent, 2, 3] += e20
+    art[parent, 2, 4] += e21
+    art[parent, 2, 5] += e22
+    art[parent, 3, 0] += e00
+    art[parent, 4, 0] += e01
+    art[parent, 5, 0] += e02
+    art[parent, 3, 1] += e10
+    art[parent, 4, 1] += e11
+    art[parent, 5, 1] += e12
+    art[parent, 3, 2] += e20
+    art[parent, 4, 2] += e21
+    art[parent, 5, 2] += e22
+    d00 = c00 + 2.0 * q00 - s00
+    d01 = c01 + q01 + q10 - s01
+    d02 = c02 + q02 + q20 - s02
+    d11 = c11 + 2.0 * q11 - s11
+    d12 = c12 + q12 + q21 - s12
+    d22 = c22 + 2.0 * q22 - s22
+    art[parent, 3, 3] += d00
+    art[parent, 3, 4] += d01
+    art[parent, 3, 5] += d02
+    art[parent, 4, 3] += d01
+    art[parent, 4, 4] += d11
+    art[parent, 4, 5] += d12
+    art[parent, 5, 3] += d02
+    art[parent, 5, 4] += d12
+    art[parent, 5, 5] += d22
+
+
+@compiled(fastmath=True)
+def articulated_into(model, servo, q, v, tau, W, out):
+    """ABA passes 2 and 3 (Featherstone 2008, Table 7.1) with general 6x6 body inertias.
+
+    After :func:`kinematics` and :func:`body_bias`. The joint servo of the paper, eq. (24)
+    (``tau_q += -k_p (q - q*) - k_d qd + g_q(q)``), is applied inside the inward pass: ``g_q`` is the
+    joint's share of the hydrostatic wrenches of its subtree, carried inward alongside the
+    articulated bias (what :func:`restoring_into` computes in a separate pass).
+    """
+    bodies = model.bodies
     nb = bodies.parent.shape[0]
-    xform, bias_acc, bias = W.placement, W.bias_acceleration, W.bias
+    xform, bias_acc = W.placement, W.bias_acceleration
     art, pa, u_vec, d_inv, u_sc, acc = (
         W.articulated_inertia,
         W.articulated_bias,
@@ -403,61 +564,191 @@ def _articulated(bodies, tau, W, out):
         W.u_scalar,
         W.acceleration,
     )
-    ia = W.m66[0]
-    p_loc = W.v6[0]
-    tmp = W.v6[1]
+    n_joint = servo.references.shape[0]
+    use_servo = servo.enabled and n_joint > 0
+    carry_restoring = use_servo and servo.compensate_restoring
+    restoring = W.subtree_restoring
+    h = model.fluid.hydrostatics
+    parents, v_index, axis_index, axis = (
+        bodies.parent,
+        bodies.v_index,
+        bodies.axis_index,
+        bodies.axis,
+    )
+    inertia, bias, rot = bodies.inertia, W.bias, W.rotation
     for b in range(nb):
         for i in range(6):
             pa[b, i] = bias[b, i]
             for j in range(6):
-                art[b, i, j] = bodies.inertia[b, i, j]
+                art[b, i, j] = inertia[b, i, j]
+        if carry_restoring:
+            w = hydrostatic_wrench(
+                h[b, 0], h[b, 1], h[b, 2], h[b, 3], rot[b, 2, 0], rot[b, 2, 1], rot[b, 2, 2]
+            )
+            for i in range(6):
+                restoring[b, i] = -w[i]
     for b in range(nb - 1, 0, -1):
-        parent = bodies.parent[b]
-        s = bodies.axis[b]
-        _matvec6(art[b], s, u_vec[b])
-        d = 0.0
-        sp = 0.0
-        for i in range(6):
-            d += s[i] * u_vec[b, i]
-            sp += s[i] * pa[b, i]
-        d_inv[b] = 1.0 / d
-        u_sc[b] = tau[bodies.v_index[b]] - sp
+        parent = parents[b]
+        iv = v_index[b]
+        k = axis_index[b]
+        if k >= 0:
+            u0, u1, u2, u3, u4, u5 = (
+                art[b, 0, k],
+                art[b, 1, k],
+                art[b, 2, k],
+                art[b, 3, k],
+                art[b, 4, k],
+                art[b, 5, k],
+            )
+            d = art[b, k, k]
+            sp = pa[b, k]
+            g = restoring[b, k] if carry_restoring else 0.0
+        else:
+            s = axis
+            u0 = _dot6(art, b, 0, s, b)
+            u1 = _dot6(art, b, 1, s, b)
+            u2 = _dot6(art, b, 2, s, b)
+            u3 = _dot6(art, b, 3, s, b)
+            u4 = _dot6(art, b, 4, s, b)
+            u5 = _dot6(art, b, 5, s, b)
+            d = (
+                u0 * s[b, 0]
+                + u1 * s[b, 1]
+                + u2 * s[b, 2]
+                + u3 * s[b, 3]
+                + u4 * s[b, 4]
+                + u5 * s[b, 5]
+            )
+            sp = _dot_rows(pa, b, s, b)
+            g = 0.0
+            if carry_restoring:
+                g = _dot_rows(restoring, b, s, b)
+        tau_b = tau[iv]
+        joint = iv - 6
+        if use_servo and 0 <= joint < n_joint:
+            # joint servo, paper eq. (24): -k_p (q - q*) - k_d qd + g_q(q)
+            tau_b += joint_pd_torque(
+                q[7 + joint],
+                v[6 + joint],
+                servo.references[joint],
+                g,
+                servo.stiffness[joint],
+                servo.damping[joint],
+            )
+        di = 1.0 / d
+        us = tau_b - sp
+        u_vec[b, 0], u_vec[b, 1], u_vec[b, 2] = u0, u1, u2
+        u_vec[b, 3], u_vec[b, 4], u_vec[b, 5] = u3, u4, u5
+        d_inv[b] = di
+        u_sc[b] = us
         if parent < 0:
             continue
+        # I^a = I^A - U U^T / D (in place: the body's own I^A is not needed again)
         for i in range(6):
+            ui = u_vec[b, i] * di
             for j in range(6):
-                ia[i, j] = art[b, i, j] - u_vec[b, i] * u_vec[b, j] * d_inv[b]
-        # p^a = p^A + I^a c + U u / D
-        _matvec6(ia, bias_acc[b], p_loc)
-        for i in range(6):
-            p_loc[i] += pa[b, i] + u_vec[b, i] * u_sc[b] * d_inv[b]
-        # parent += X^T I^a X, X^T p^a
-        _add_transformed_inertia(xform[b], ia, art[parent], W.m66[1], W.m66[2])
-        _xT_add(xform[b], p_loc, pa[parent])
+                art[b, i, j] -= ui * u_vec[b, j]
+        # p^a = p^A + I^a c + U u / D, then the parent's X^T p^a
+        f = us * di
+        x0 = pa[b, 0] + _dot6(art, b, 0, bias_acc, b) + u0 * f
+        x1 = pa[b, 1] + _dot6(art, b, 1, bias_acc, b) + u1 * f
+        x2 = pa[b, 2] + _dot6(art, b, 2, bias_acc, b) + u2 * f
+        x3 = pa[b, 3] + _dot6(art, b, 3, bias_acc, b) + u3 * f
+        x4 = pa[b, 4] + _dot6(art, b, 4, bias_acc, b) + u4 * f
+        x5 = pa[b, 5] + _dot6(art, b, 5, bias_acc, b) + u5 * f
+        _add_child_inertia(xform, art, b, parent)
+        _add_child_force(xform, b, x0, x1, x2, x3, x4, x5, pa, parent)
+        if carry_restoring:
+            _add_child_force(
+                xform,
+                b,
+                restoring[b, 0],
+                restoring[b, 1],
+                restoring[b, 2],
+                restoring[b, 3],
+                restoring[b, 4],
+                restoring[b, 5],
+                restoring,
+                parent,
+            )
     # root: free flyer (6 DOF, S = identity)
-    iv0 = bodies.v_index[0]
+    iv0 = v_index[0]
+    tmp = W.v6[1]
     for i in range(6):
         tmp[i] = tau[iv0 + i] - pa[0, i]
     _solve_spd6(art[0], tmp, acc[0], W.m66[2], W.v6[2])
     for i in range(6):
         out[iv0 + i] = acc[0, i]
     for b in range(1, nb):
-        parent = bodies.parent[b]
-        s = bodies.axis[b]
+        parent = parents[b]
         if parent < 0:
-            for i in range(6):
-                tmp[i] = bias_acc[b, i]
+            a0, a1, a2 = bias_acc[b, 0], bias_acc[b, 1], bias_acc[b, 2]
+            a3, a4, a5 = bias_acc[b, 3], bias_acc[b, 4], bias_acc[b, 5]
         else:
-            _x_apply(xform[b], acc[parent], tmp)
-            for i in range(6):
-                tmp[i] += bias_acc[b, i]
-        ua = 0.0
-        for i in range(6):
-            ua += u_vec[b, i] * tmp[i]
+            r00, r01, r02 = xform[b, 0, 0], xform[b, 0, 1], xform[b, 0, 2]
+            r10, r11, r12 = xform[b, 1, 0], xform[b, 1, 1], xform[b, 1, 2]
+            r20, r21, r22 = xform[b, 2, 0], xform[b, 2, 1], xform[b, 2, 2]
+            p0, p1, p2 = xform[b, 3, 0], xform[b, 3, 1], xform[b, 3, 2]
+            pw0, pw1, pw2 = acc[parent, 3], acc[parent, 4], acc[parent, 5]
+            e0 = acc[parent, 0] - (p1 * pw2 - p2 * pw1)
+            e1 = acc[parent, 1] - (p2 * pw0 - p0 * pw2)
+            e2 = acc[parent, 2] - (p0 * pw1 - p1 * pw0)
+            a0 = r00 * e0 + r10 * e1 + r20 * e2 + bias_acc[b, 0]
+            a1 = r01 * e0 + r11 * e1 + r21 * e2 + bias_acc[b, 1]
+            a2 = r02 * e0 + r12 * e1 + r22 * e2 + bias_acc[b, 2]
+            a3 = r00 * pw0 + r10 * pw1 + r20 * pw2 + bias_acc[b, 3]
+            a4 = r01 * pw0 + r11 * pw1 + r21 * pw2 + bias_acc[b, 4]
+            a5 = r02 * pw0 + r12 * pw1 + r22 * pw2 + bias_acc[b, 5]
+        ua = (
+            u_vec[b, 0] * a0
+            + u_vec[b, 1] * a1
+            + u_vec[b, 2] * a2
+            + u_vec[b, 3] * a3
+            + u_vec[b, 4] * a4
+            + u_vec[b, 5] * a5
+        )
         qdd = (u_sc[b] - ua) * d_inv[b]
-        out[bodies.v_index[b]] = qdd
-        for i in range(6):
-            acc[b, i] = tmp[i] + s[i] * qdd
+        out[v_index[b]] = qdd
+        s = axis
+        acc[b, 0] = a0 + s[b, 0] * qdd
+        acc[b, 1] = a1 + s[b, 1] * qdd
+        acc[b, 2] = a2 + s[b, 2] * qdd
+        acc[b, 3] = a3 + s[b, 3] * qdd
+        acc[b, 4] = a4 + s[b, 4] * qdd
+        acc[b, 5] = a5 + s[b, 5] * qdd
+
+
+@compiled(fastmath=True)
+def _add_child_force(xform, child, f0, f1, f2, n0, n1, n2, dst, parent):
+    """``dst[parent] += X^T (f, n)``: a child-frame force in the parent frame, ``(R f, p x R f + R n)``."""
+    p0, p1, p2 = xform[child, 3, 0], xform[child, 3, 1], xform[child, 3, 2]
+    g0 = xform[child, 0, 0] * f0 + xform[child, 0, 1] * f1 + xform[child, 0, 2] * f2
+    g1 = xform[child, 1, 0] * f0 + xform[child, 1, 1] * f1 + xform[child, 1, 2] * f2
+    g2 = xform[child, 2, 0] * f0 + xform[child, 2, 1] * f1 + xform[child, 2, 2] * f2
+    dst[parent, 0] += g0
+    dst[parent, 1] += g1
+    dst[parent, 2] += g2
+    dst[parent, 3] += (
+        xform[child, 0, 0] * n0
+        + xform[child, 0, 1] * n1
+        + xform[child, 0, 2] * n2
+        + p1 * g2
+        - p2 * g1
+    )
+    dst[parent, 4] += (
+        xform[child, 1, 0] * n0
+        + xform[child, 1, 1] * n1
+        + xform[child, 1, 2] * n2
+        + p2 * g0
+        - p0 * g2
+    )
+    dst[parent, 5] += (
+        xform[child, 2, 0] * n0
+        + xform[child, 2, 1] * n1
+        + xform[child, 2, 2] * n2
+        + p0 * g1
+        - p1 * g0
+    )
 
 
 @compiled(fastmath=True)
@@ -545,6 +836,7 @@ def workspace(nb, nq, nv):
         np.empty(nv),
         np.empty(nq),
         np.empty(nq),
+        np.empty((nb, 6)),
     )
 
 
@@ -566,24 +858,7 @@ def acceleration_into(model, env, servo, t, q, v, tau, W, out):
     apply_disturbance(
         env.disturbance_function, env.disturbance_kind, t, q, v, env.disturbance_parameters, tau_all
     )
-    n_joint = servo.references.shape[0]
-    if servo.enabled and n_joint > 0:
-        # joint servo, paper eq. (24): -k_p (q - q*) - k_d qd + g_q(q)
-        g = W.restoring
-        if servo.compensate_restoring:
-            restoring_into(model, W, g)
-        else:
-            g[:] = 0.0
-        for k in range(n_joint):
-            tau_all[6 + k] += joint_pd_torque(
-                q[7 + k],
-                v[6 + k],
-                servo.references[k],
-                g[6 + k],
-                servo.stiffness[k],
-                servo.damping[k],
-            )
-    _articulated(model.bodies, tau_all, W, out)
+    articulated_into(model, servo, q, v, tau_all, W, out)
 
 
 # ------------------------------------------------------------------ SE(3) x R^n group operations

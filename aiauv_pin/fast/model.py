@@ -13,7 +13,9 @@ import numpy as np
 from hydro.currents import Current, as_current
 
 from ..disturbances import Disturbance
+from ..errors import ArgumentError
 from . import kernels
+from .handle import acceleration_of, new_handle, step_of
 from .records import Environment, Servo
 
 #: ``(method name -> code)`` understood by :func:`kernels.step_into` and :func:`kernels.run_steps`.
@@ -41,6 +43,23 @@ def environment(current=None, disturbance: Disturbance | None = None) -> Environ
     )
 
 
+def _entry_point(dispatcher, args):
+    """The compiled entry point of ``dispatcher`` for the types of ``args``, or ``dispatcher``.
+
+    Calling a numba dispatcher from Python types every argument first (for the kernels' records,
+    some 70 arrays in named tuples, that cost more than the evaluation itself; for a
+    :class:`~aiauv_pin.fast.handle.Handle` and the small environment records, still about a
+    microsecond). The entry point of the overload already chosen for these types skips that step
+    and only unboxes the arguments, so it may be called only with arguments of exactly these types
+    (:class:`FastModel` makes sure).
+    """
+    try:
+        signature = tuple(dispatcher.typeof_pyval(a) for a in args)
+        return dispatcher.overloads[signature].entry_point
+    except (AttributeError, KeyError):  # another numba version or no such overload: dispatch
+        return dispatcher
+
+
 class FastModel:
     """A vehicle's equations of motion evaluated by the compiled kernels.
 
@@ -60,7 +79,8 @@ class FastModel:
         self.still_water = environment()
         self.no_servo = no_servo()
         self._frames: dict[int, tuple[int, np.ndarray, np.ndarray]] = {}
-        self._acceleration_entry = None
+        self._entries: dict = {}
+        self._handle = None
         self._pin_model = vehicle.model
 
     def environment(self, current=None, disturbance=None) -> Environment:
@@ -70,7 +90,49 @@ class FastModel:
         return environment(current, disturbance)
 
     def _state(self, q, v) -> tuple[np.ndarray, np.ndarray]:
-        return np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(v, dtype=float)
+        q, v = np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(v, dtype=float)
+        if q.shape != (self.nq,) or v.shape != (self.nv,):
+            raise ArgumentError(
+                f"q and v must have shapes ({self.nq},) and ({self.nv},), got {q.shape} and {v.shape}"
+            )
+        return q, v
+
+    def _generalized(self, tau) -> np.ndarray:
+        tau = np.ascontiguousarray(tau, dtype=float)
+        if tau.shape != (self.nv,):
+            raise ArgumentError(f"tau must have shape ({self.nv},), got {tau.shape}")
+        return tau
+
+    def _fixed_types(self, env, servo) -> bool:
+        """Whether ``env`` and ``servo`` are of the kinds whose numba types never change for this
+        model (built-in current and disturbance, no servo): then :meth:`_fast_call` applies."""
+        return (
+            servo is self.no_servo
+            and env.current_function is None
+            and env.disturbance_function is None
+        )
+
+    def _fast_call(self, kernel, args):
+        """``kernel(handle, ...)`` (:mod:`aiauv_pin.fast.handle`) through its cached entry point."""
+        entry = self._entries.get(kernel)
+        if entry is None:
+            result = kernel(*args)
+            self._entries[kernel] = _entry_point(kernel, args)
+            return result
+        return entry(*args)
+
+    def __getstate__(self) -> dict:
+        """Picklable state: the handle and the entry points are process-local, made again on use."""
+        state = self.__dict__.copy()
+        state["_handle"], state["_entries"] = None, {}
+        return state
+
+    @property
+    def handle(self):
+        """The :class:`aiauv_pin.fast.handle.Handle` of this model's records (made on first use)."""
+        if self._handle is None:
+            self._handle = new_handle(self.model, self.workspace)
+        return self._handle
 
     def acceleration(
         self, q, v, tau, current=None, *, t: float = 0.0, servo=None, disturbance=None
@@ -78,17 +140,15 @@ class FastModel:
         """``dv`` (nv,), as :meth:`aiauv_pin.Vehicle.acceleration` (plus an optional servo record)."""
         out = np.empty(self.nv)
         q, v = self._state(q, v)
-        kernels.acceleration_into(
-            self.model,
-            self.environment(current, disturbance),
-            self.no_servo if servo is None else servo,
-            float(t),
-            q,
-            v,
-            np.ascontiguousarray(tau, dtype=float),
-            self.workspace,
-            out,
-        )
+        tau = self._generalized(tau)
+        env = self.environment(current, disturbance)
+        servo = self.no_servo if servo is None else servo
+        if self._fixed_types(env, servo):
+            self._fast_call(acceleration_of, (self.handle, env, servo, float(t), q, v, tau, out))
+        else:
+            kernels.acceleration_into(
+                self.model, env, servo, float(t), q, v, tau, self.workspace, out
+            )
         return out
 
     def restoring_forces(self, q) -> np.ndarray:
@@ -141,20 +201,30 @@ class FastModel:
         q_out = np.empty(self.nq)
         v_out = np.empty(self.nv)
         q, v = self._state(q, v)
-        kernels.step_into(
-            self.model,
-            self.environment(current, disturbance),
-            self.no_servo if servo is None else servo,
-            float(t),
-            q,
-            v,
-            np.ascontiguousarray(tau, dtype=float),
-            float(dt),
-            METHOD_CODES[method],
-            self.workspace,
-            q_out,
-            v_out,
-        )
+        tau = self._generalized(tau)
+        env = self.environment(current, disturbance)
+        servo = self.no_servo if servo is None else servo
+        code = METHOD_CODES[method]
+        if self._fixed_types(env, servo):
+            self._fast_call(
+                step_of,
+                (self.handle, env, servo, float(t), q, v, tau, float(dt), code, q_out, v_out),
+            )
+        else:
+            kernels.step_into(
+                self.model,
+                env,
+                servo,
+                float(t),
+                q,
+                v,
+                tau,
+                float(dt),
+                code,
+                self.workspace,
+                q_out,
+                v_out,
+            )
         return q_out, v_out
 
     def run(

@@ -32,6 +32,9 @@ class RigidBodies(NamedTuple):
         axis: Motion subspace ``S`` of a 1-DOF joint in the child frame (nb, 6).
         inertia: Rigid plus added inertia about the body origin, body axes (nb, 6, 6).
         rigid_inertia: Rigid inertia alone (nb, 6, 6) [kg, kg m, kg m^2].
+        axis_index: ``k`` where ``S`` is the unit vector ``e_k`` (a joint about or along a body axis,
+            the usual case), else -1 (nb,); the kernels then read one column instead of
+            multiplying by ``S``.
     """
 
     parent: np.ndarray
@@ -42,6 +45,7 @@ class RigidBodies(NamedTuple):
     axis: np.ndarray
     inertia: np.ndarray
     rigid_inertia: np.ndarray
+    axis_index: np.ndarray
 
 
 class Thrusters(NamedTuple):
@@ -129,6 +133,9 @@ class Workspace(NamedTuple):
     v_next: np.ndarray  # (nv,)
     q_stage: np.ndarray  # (nq,)
     q_next: np.ndarray  # (nq,)
+    subtree_restoring: (
+        np.ndarray
+    )  # (nb, 6) -hydrostatic wrench of each body's subtree (servo's g(q))
 
 
 def _joint_kind_axis(joint) -> tuple[int, np.ndarray] | None:
@@ -193,4 +200,11 @@ def rigid_bodies(model: pin.Model, added_mass: np.ndarray) -> RigidBodies:
         axis=axis,
         inertia=rigid + added_mass,
         rigid_inertia=rigid,
+        axis_index=np.array([_unit_index(row) for row in axis], dtype=np.int64),
     )
+
+
+def _unit_index(axis: np.ndarray) -> int:
+    """``k`` if ``axis`` is exactly the unit vector ``e_k``, else -1."""
+    hits = np.flatnonzero(axis)
+    return int(hits[0]) if len(hits) == 1 and axis[hits[0]] == 1.0 else -1
