@@ -11,7 +11,12 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from control.laws import new_command_buffers, new_guidance_state, new_surge_state, restoring_moment_in_frame
+from control.laws import (
+    new_command_buffers,
+    new_guidance_state,
+    new_surge_state,
+    restoring_moment_in_frame,
+)
 from control.path_following import (
     PathFollowingController,
     PathFollowingGains,

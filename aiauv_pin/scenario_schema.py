@@ -156,7 +156,11 @@ _GAIN_KEYS = {
         "1/(m rad)",
         "turn model: steady path curvature per radian of base angle (identified)",
     ),
-    "turn_time_constant": ("number", "s", "turn model: time constant of the turn rate (identified)"),
+    "turn_time_constant": (
+        "number",
+        "s",
+        "turn model: time constant of the turn rate (identified)",
+    ),
     "current_compensation": (
         "current_compensation",
         "-",

@@ -42,7 +42,20 @@ OUT = HERE / "beyond_paper.json"
 JOINT_LIMIT_DEG = 65.0
 CASES = ("uniform", "stabilised")
 #: The extensions of each comparison (scenario-file ``[controller]`` keys).
-CURVED = {"turn_feedforward": True, "current_compensation": "integral_los"}
+#: Curved paths, by case: the turn-rate feedforward and integral LOS (sigma = 1 for the uniform
+#: vehicle; the roll-stabilised one needs sigma = 2, see the README).
+CURVED = {
+    "uniform": {
+        "turn_feedforward": True,
+        "current_compensation": "integral_los",
+        "los_integral_gain": 1.0,
+    },
+    "stabilised": {
+        "turn_feedforward": True,
+        "current_compensation": "integral_los",
+        "los_integral_gain": 2.0,
+    },
+}
 ILOS = {"current_compensation": "integral_los"}
 HYDROSTATIC = {"hydrostatic_compensation": True}
 #: Item 4: the turn feedforward with the base-angle gains placed on the identified turn model.
@@ -138,7 +151,7 @@ def identify_turn_model(step: float = 0.1, duration: float = 60.0, t_step: float
         v[0] = law.gains.u_d
         base = np.zeros(2)
 
-        def controller(t, q, v, base=base, servo=servo, surge=surge, axis=axis):
+        def controller(t, q, v, base=base, servo=servo, surge=surge, axis=axis, frame=frame):
             _, _, twist = vehicle.frame_motion(q, v, frame)
             thrust = surge.update(t, float(twist[0]))
             base[axis] = step if t >= t_step else 0.0
@@ -189,7 +202,7 @@ def main(argv=None) -> None:
     if "curved" in parts:
         for example in ("helix.toml", "waypoints.toml"):
             for case in CASES:
-                for label, keys in (("paper", {}), ("curvature_ff_ilos", CURVED)):
+                for label, keys in (("paper", {}), ("curvature_ff_ilos", CURVED[case])):
                     result = run(vehicles, case, d, keys, example=example)
                     record("curved", f"{example[:-5]}/{case}/{label}", figures(result))
     if "currents" in parts:

@@ -50,7 +50,10 @@ def test_options_off_by_default_are_the_papers_law():
 @pytest.mark.parametrize(
     "controller, message",
     [
-        ({"current_compensation": "ilos"}, "current_compensation must be one of none, integral_los"),
+        (
+            {"current_compensation": "ilos"},
+            "current_compensation must be one of none, integral_los",
+        ),
         ({"hydrostatic_compensation": 1}, "hydrostatic_compensation must be true or false"),
         ({"turn_feedforward": "yes"}, "turn_feedforward must be true or false"),
         ({"turn_moment_gain": 0.0}, "gain turn_moment_gain must be finite and > 0"),
@@ -104,7 +107,8 @@ def test_integral_los_follows_borhaug_closed_form():
     lookahead, sigma = u_d / k, 0.5
     e, e_dot = 0.8, -0.1
     first = laws.integral_los_bias(state, 0.0, (e, 0.0, e_dot, 0.0), u_d, k, k, sigma)
-    rate = lookahead * e / (e * e + lookahead * lookahead)  # z = 0: z_dot = Delta e / (e^2 + Delta^2)
+    # z = 0: z_dot = Delta e / (e^2 + Delta^2)
+    rate = lookahead * e / (e * e + lookahead * lookahead)
     assert first[0] == 0.0 and first[2] == pytest.approx(sigma * rate, rel=1e-14)
     assert first[1] == first[3] == 0.0  # no error along N2: no bias
     second = laws.integral_los_bias(state, 0.2, (e, 0.0, e_dot, 0.0), u_d, k, k, sigma)
@@ -172,7 +176,10 @@ def test_compiled_and_python_backends_agree_with_every_extension():
     np.testing.assert_allclose(compiled.trajectory.q, python.trajectory.q, rtol=1e-9, atol=1e-11)
     # the extensions acted: the base angles differ from the paper's law's
     paper = run_scenario(vehicle, Scenario(**{**scenario.__dict__, "gains": None}))
-    assert np.abs(paper.trajectory.info["base_angles"] - compiled.trajectory.info["base_angles"]).max() > 1e-3
+    assert (
+        np.abs(paper.trajectory.info["base_angles"] - compiled.trajectory.info["base_angles"]).max()
+        > 1e-3
+    )
 
 
 def test_integral_los_removes_the_current_offset_short_run():
