@@ -42,8 +42,9 @@ OUT = HERE / "beyond_paper.json"
 JOINT_LIMIT_DEG = 65.0
 CASES = ("uniform", "stabilised")
 #: The extensions of each comparison (scenario-file ``[controller]`` keys).
-#: Curved paths, by case: the turn-rate feedforward and integral LOS (sigma = 1 for the uniform
-#: vehicle; the roll-stabilised one needs sigma = 2, see the README).
+#: Curved paths, by case: the turn-rate feedforward and integral LOS (sigma = 1); the
+#: roll-stabilised vehicle also with the hydrostatic compensation at K_m = 10 N m/rad (the best of
+#: a few tried: sigma 1-2, K_m none, 7, 10, 15; see the README).
 CURVED = {
     "uniform": {
         "turn_feedforward": True,
@@ -53,7 +54,9 @@ CURVED = {
     "stabilised": {
         "turn_feedforward": True,
         "current_compensation": "integral_los",
-        "los_integral_gain": 2.0,
+        "los_integral_gain": 1.0,
+        "hydrostatic_compensation": True,
+        "turn_moment_gain": 10.0,
     },
 }
 ILOS = {"current_compensation": "integral_los"}
