@@ -175,7 +175,7 @@ _GAIN_KEYS = {
     "turn_moment_gain": (
         "number",
         "N m/rad",
-        "hydrodynamic moment per radian of base angle (identified)",
+        "effective hydrodynamic moment per radian of base angle (calibrated)",
     ),
 }
 

@@ -626,7 +626,8 @@ def path_following_command(
       marine surface vessels", OCEANS; Lekkas and Fossen 2014, "Integral LOS path following for
       curved paths based on a monotone cubic Hermite spline parametrization", IEEE TCST 22(6)).
     * ``hydrostatic_compensation``: ``+ H^T g_e / K_m``, the base angle whose hydrodynamic turning
-      moment ``K_m q_0`` (identified) balances the vehicle's restoring moment ``g_e`` about the
+      moment ``K_m q_0`` (an effective gain, calibrated on the paper's scenario:
+      :data:`control.path_following.PAPER_TURN_MOMENT_GAIN`) balances the restoring moment ``g_e`` about the
       end-effector (``restoring_moment``, left-hand side of eq. 19, end-effector axes; the paper's
       Conclusions name this as future work).
 

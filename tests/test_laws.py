@@ -135,8 +135,11 @@ def _gains(rng, exact: bool, beyond: bool = False) -> control_laws.PaperGains:
     )
 
 
-@pytest.mark.parametrize("exact", [True, False])
-@pytest.mark.parametrize("beyond", [False, True], ids=["paper", "beyond"])
+@pytest.mark.parametrize(
+    "exact, beyond",
+    [(True, False), (False, False), (True, True)],
+    ids=["exact", "paper", "exact_beyond"],  # beyond: the extensions beyond the paper, all on
+)
 @pytest.mark.parametrize("path", _paths(), ids=["x_axis", "line", "helix", "waypoints"])
 def test_path_following_command_compiled_equals_interpreted(exact, beyond, path, rng):
     n, m = 6, 4
