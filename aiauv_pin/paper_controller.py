@@ -9,8 +9,14 @@ hydrostatic forces ``g_q``) and maps its command back to generalised forces with
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 
-from control.laws import new_command_buffers, new_surge_state
+from control.laws import (
+    new_command_buffers,
+    new_guidance_state,
+    new_surge_state,
+    restoring_moment_in_frame,
+)
 from control.path_following import (
     PathFollowingController,
     PathFollowingGains,
@@ -152,6 +158,8 @@ class VehiclePathFollowing:
         else:
             acceleration = (velocity_in_world - self._previous[1]) / (t - self._previous[0])
         self._previous = (t, velocity_in_world)
+        restoring = self.vehicle.restoring_forces(q)
+        base_rotation = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
         return PathFollowingMeasurement(
             position_in_world=position,
             velocity_in_world=velocity_in_world,
@@ -160,8 +168,11 @@ class VehiclePathFollowing:
             angular_velocity_in_ee=twist[3:].copy(),
             joint_positions=q[7:].copy(),
             joint_velocities=v[6:].copy(),
-            joint_hydrostatic_forces=self.vehicle.restoring_forces(q)[6:],
+            joint_hydrostatic_forces=restoring[6:],
             surge_velocity=float(twist[0]),
+            restoring_moment_in_ee=restoring_moment_in_frame(
+                base_rotation, q[:3], rotation, position, restoring[:6]
+            ),
         )
 
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray):
@@ -223,10 +234,11 @@ class VehiclePathFollowing:
             surge=new_surge_state(),
             velocity_history=np.zeros(5),
             command=new_command_buffers(controller.n_joints, controller.n_thrusters),
+            guidance=new_guidance_state(),
         )
 
         def reset() -> None:
-            for array in (*state.surge, state.velocity_history):
+            for array in (*state.surge, *state.guidance, state.velocity_history):
                 array[:] = 0.0
             self.joint_servo.references[:] = 0.0
 

@@ -26,7 +26,9 @@ The format (every key optional; without a file ``aiauv simulate`` runs the paper
     type = "paper"               # or "none" (passive: thrusters and joints idle), or
                                  # "thruster_turning" (straight body, tunnel thrusters turn it)
     k_d = 12.0                   # gains as in sweep specs: u_d, k_e, alpha, k_p, k_d, k_qp, k_qd,
-                                 # k_1p, k_1i, q_max, feedforward
+                                 # k_1p, k_1i, q_max, feedforward; beyond the paper:
+                                 # current_compensation = "integral_los", turn_feedforward,
+                                 # hydrostatic_compensation (README, "Beyond the paper")
     [output]
     csv_period = 0.05            # [s] between rows of timeseries.csv
 

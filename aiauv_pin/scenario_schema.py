@@ -20,7 +20,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any, NamedTuple
 
-from control.path_following import PathFollowingGains
+from control.path_following import CURRENT_COMPENSATION_OPTIONS, PathFollowingGains
 from control.paths import PATH_TYPES
 from control.reduced_attitude import FEEDFORWARD_OPTIONS
 from hydro.currents import CURRENT_KEYS
@@ -161,6 +161,38 @@ _GAIN_KEYS = {
     "k_1i": ("number", "N/m", "surge integral gain (eq. 25)"),
     "q_max": ("number", "rad", "saturation of the base angles (eq. 22)"),
     "feedforward": ("feedforward", "-", "feedforward of eq. (23): exact or as printed"),
+    "turn_feedforward": (
+        "bool",
+        "-",
+        "beyond the paper: feed the reference turn rate (path curvature) forward through the "
+        "identified turn dynamics",
+    ),
+    "turn_curvature_gain": (
+        "number",
+        "1/(m rad)",
+        "turn model: steady path curvature per radian of base angle (identified)",
+    ),
+    "turn_time_constant": (
+        "number",
+        "s",
+        "turn model: time constant of the turn rate (identified)",
+    ),
+    "current_compensation": (
+        "current_compensation",
+        "-",
+        "none (the paper's LOS) or integral_los (integral LOS against currents)",
+    ),
+    "los_integral_gain": ("number", "-", "integral gain sigma of the integral LOS"),
+    "hydrostatic_compensation": (
+        "bool",
+        "-",
+        "beyond the paper: base angles balance the vehicle's restoring moment",
+    ),
+    "turn_moment_gain": (
+        "number",
+        "N m/rad",
+        "effective hydrodynamic moment per radian of base angle (calibrated)",
+    ),
 }
 
 
@@ -171,6 +203,8 @@ def _kind(tag: str):
         return _vector(("y", "z"))
     if tag == "feedforward":
         return ("choice", FEEDFORWARD_OPTIONS)
+    if tag == "current_compensation":
+        return ("choice", CURRENT_COMPENSATION_OPTIONS)
     return tag
 
 

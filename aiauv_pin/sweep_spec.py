@@ -354,7 +354,7 @@ def scenario_parameters(scenario: Scenario) -> dict[str, Any]:
         if name == "k_e":
             pair = (value, value) if _is_number(value) else tuple(value)[-2:]
             out["controller.k_e.y"], out["controller.k_e.z"] = (float(x) for x in pair)
-        elif name == "feedforward":
+        elif isinstance(value, (str, bool)):  # feedforward, current_compensation, switches
             out[f"controller.{name}"] = value
         else:
             out[f"controller.{name}"] = float(value)

@@ -63,6 +63,7 @@ def user_path_following(t, q, v, model, workspace, parameters, state, tau, info)
         parameters.reference_scale,
         parameters.surge_mask,
         state.surge,
+        state.guidance,
         t,
         R,
         p,
@@ -73,6 +74,7 @@ def user_path_following(t, q, v, model, workspace, parameters, state, tau, info)
         q[7:],
         v[6:],
         workspace.restoring[6:],
+        np.zeros(3),  # restoring moment: only the hydrostatic compensation (off here) reads it
         out,
     )
     thrust_into(model, workspace, out.thrusts, tau)  # tau = B(q) thrusts, eq. (20)

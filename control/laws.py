@@ -8,7 +8,8 @@ Each function here is the only implementation of its law in the project. They ar
 interpreted when numba is missing.
 
 * :func:`los_guidance` - path-parametrised line-of-sight guidance (eq. 21 on any path) with exact
-  first and second time derivatives of the reference direction;
+  first and second time derivatives of the reference direction; :func:`integral_los_bias` - its
+  integral form against currents (Borhaug et al. 2008);
 * :func:`reduced_attitude_law` - the reduced-attitude law of eq. (9) (and eq. 23 for ``J = I``,
   ``m = 0``) with the ``"paper"`` or ``"exact"`` feedforward (findings 1 and 2 of PAPER_DATA.md);
 * :func:`joint_reference` - eq. (22); :func:`joint_pd_torque` - eq. (24);
@@ -36,6 +37,18 @@ ANTIPODAL_TOLERANCE = 1e-12
 # ---------------------------------------------------------------------- LOS guidance (eq. 21)
 @compiled
 def los_guidance(path_point, p, p_dot, p_ddot, u_d, k_y, k_z):
+    """Reference pointing direction ``x_ref = mu / |mu|`` and its exact time derivatives (eq. 21).
+
+    :func:`biased_los_guidance` without bias; see there.
+    """
+    return biased_los_guidance(path_point, p, p_dot, p_ddot, u_d, k_y, k_z, _NO_BIAS)
+
+
+_NO_BIAS = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+@compiled
+def biased_los_guidance(path_point, p, p_dot, p_ddot, u_d, k_y, k_z, bias):
     """Reference pointing direction ``x_ref = mu / |mu|`` and its exact time derivatives.
 
     Path-parametrised vector LOS (the paper's eq. 21 on any path): with the closest path point, its
@@ -53,11 +66,17 @@ def los_guidance(path_point, p, p_dot, p_ddot, u_d, k_y, k_z):
     and ``x_ref_dot = P mu_dot / r``, ``x_ref_ddot = (P mu_ddot - x (x_dot . mu_dot)
     - 2 x_dot (x . mu_dot)) / r`` with ``r = |mu|``, ``P = I - x x^T``.
 
+    With a ``bias`` ``b_i`` the guidance acts on ``e_i + b_i`` instead of ``e_i`` (integral LOS,
+    :func:`integral_los_bias`): ``mu = u_d T - k_y (e_1 + b_1) N1 - k_z (e_2 + b_2) N2``; the
+    bias's own time derivatives enter ``mu_dot`` and ``mu_ddot``. A zero bias gives exactly the
+    unbiased numbers.
+
     Args:
         path_point: The :class:`control.paths.PathPoint` closest to ``p``.
         p, p_dot, p_ddot: End-effector position [m], velocity [m/s] and acceleration [m/s^2] (3,).
         u_d: Desired speed along the path [m/s] (> 0).
         k_y, k_z: Cross-track gains along ``N1`` and ``N2`` [1/s].
+        bias: ``(b_1, b_2, b_1_dot, b_2_dot, b_1_ddot, b_2_ddot)`` [m], [m/s], [m/s^2].
 
     Returns:
         ``(x_ref, x_ref_dot, x_ref_ddot)``, each a 3-tuple (world frame; [-], [1/s], [1/s^2]).
@@ -75,18 +94,21 @@ def los_guidance(path_point, p, p_dot, p_ddot, u_d, k_y, k_z):
     e1_dot = a0 * p_dot[0] + a1 * p_dot[1] + a2 * p_dot[2]
     e2_dot = b0 * p_dot[0] + b1 * p_dot[1] + b2 * p_dot[2]
     ta = t0 * p_ddot[0] + t1 * p_ddot[1] + t2 * p_ddot[2]
+    # the errors the guidance acts on: e_i + b_i (b = 0 without integral LOS)
+    g1, g2 = e1 + bias[0], e2 + bias[1]
+    g1_dot, g2_dot = e1_dot + bias[2], e2_dot + bias[3]
     # mu and its derivatives; on a straight path (k = 0) only the cross-track terms remain
-    m0 = u_d * t0 - k_y * e1 * a0 - k_z * e2 * b0
-    m1 = u_d * t1 - k_y * e1 * a1 - k_z * e2 * b1
-    m2 = u_d * t2 - k_y * e1 * a2 - k_z * e2 * b2
+    m0 = u_d * t0 - k_y * g1 * a0 - k_z * g2 * b0
+    m1 = u_d * t1 - k_y * g1 * a1 - k_z * g2 * b1
+    m2 = u_d * t2 - k_y * g1 * a2 - k_z * g2 * b2
     e1_ddot = a0 * p_ddot[0] + a1 * p_ddot[1] + a2 * p_ddot[2]
     e2_ddot = b0 * p_ddot[0] + b1 * p_ddot[1] + b2 * p_ddot[2]
-    v0 = -k_y * e1_dot * a0 - k_z * e2_dot * b0
-    v1 = -k_y * e1_dot * a1 - k_z * e2_dot * b1
-    v2 = -k_y * e1_dot * a2 - k_z * e2_dot * b2
-    w0 = -k_y * e1_ddot * a0 - k_z * e2_ddot * b0
-    w1 = -k_y * e1_ddot * a1 - k_z * e2_ddot * b1
-    w2 = -k_y * e1_ddot * a2 - k_z * e2_ddot * b2
+    v0 = -k_y * g1_dot * a0 - k_z * g2_dot * b0
+    v1 = -k_y * g1_dot * a1 - k_z * g2_dot * b1
+    v2 = -k_y * g1_dot * a2 - k_z * g2_dot * b2
+    w0 = -k_y * (e1_ddot + bias[4]) * a0 - k_z * (e2_ddot + bias[5]) * b0
+    w1 = -k_y * (e1_ddot + bias[4]) * a1 - k_z * (e2_ddot + bias[5]) * b1
+    w2 = -k_y * (e1_ddot + bias[4]) * a2 - k_z * (e2_ddot + bias[5]) * b2
     if k1 != 0.0 or k2 != 0.0 or dk1 != 0.0 or dk2 != 0.0:
         big_d = 1.0 - k1 * e1 - k2 * e2
         s_dot = tv / big_d
@@ -97,6 +119,9 @@ def los_guidance(path_point, p, p_dot, p_ddot, u_d, k_y, k_z):
         s_ddot = (kp * s_dot + ta) / big_d - tv * d_dot / (big_d * big_d)
         e1_ddot -= k1 * s_dot * tv
         e2_ddot -= k2 * s_dot * tv
+        e1_ddot += bias[4]
+        e2_ddot += bias[5]
+        e1, e2, e1_dot, e2_dot = g1, g2, g1_dot, g2_dot
         # T_dot = kappa s_dot;  N_i_dot = -k_i T s_dot
         # T_ddot = (k1' N1 + k2' N2) s_dot^2 - (k1^2 + k2^2) T s_dot^2 + kappa s_ddot
         # N_i_ddot = -k_i' s_dot^2 T - k_i kappa s_dot^2 - k_i T s_ddot
@@ -147,6 +172,131 @@ def los_guidance(path_point, p, p_dot, p_ddot, u_d, k_y, k_z):
     xdd1 = (w1 - x1 * x_mudd - x1 * xd_mud - 2.0 * xd1 * x_mud) / r
     xdd2 = (w2 - x2 * x_mudd - x2 * xd_mud - 2.0 * xd2 * x_mud) / r
     return (x0, x1, x2), (xd0, xd1, xd2), (xdd0, xdd1, xdd2)
+
+
+# ---------------------------------------------------------------------- integral LOS
+class GuidanceState(NamedTuple):
+    """State of :func:`integral_los_bias`, each field an array updated in place.
+
+    Attributes:
+        integral: ILOS integrator ``z_i`` per normal ``N1``, ``N2`` (2,) [m].
+        has_previous: 1 once a sample has been taken (1,).
+        time: Time of the previous sample (1,) [s].
+        rate: ``z_i_dot`` at the previous sample (2,) [m/s].
+    """
+
+    integral: np.ndarray
+    has_previous: np.ndarray
+    time: np.ndarray
+    rate: np.ndarray
+
+
+def new_guidance_state() -> GuidanceState:
+    """A cleared :class:`GuidanceState`."""
+    return GuidanceState(np.zeros(2), np.zeros(1), np.zeros(1), np.zeros(2))
+
+
+@compiled
+def cross_track_errors(path_point, p, p_dot):
+    """``(e_1, e_2, e_1_dot, e_2_dot)``: offsets from the closest path point along ``N1``, ``N2``
+    [m] and their rates ``N_i . p_dot`` [m/s] (exact on a line; on a curve the normals' own turning
+    is left out, which only the ILOS feedforward uses)."""
+    c = path_point.point
+    n1, n2 = path_point.normal1, path_point.normal2
+    d0, d1, d2 = p[0] - c[0], p[1] - c[1], p[2] - c[2]
+    return (
+        n1[0] * d0 + n1[1] * d1 + n1[2] * d2,
+        n2[0] * d0 + n2[1] * d1 + n2[2] * d2,
+        n1[0] * p_dot[0] + n1[1] * p_dot[1] + n1[2] * p_dot[2],
+        n2[0] * p_dot[0] + n2[1] * p_dot[1] + n2[2] * p_dot[2],
+    )
+
+
+@compiled
+def _ilos_rate(e, z, lookahead, sigma):
+    """``z_dot = Delta e / ((e + sigma z)^2 + Delta^2)`` [m/s] (Borhaug et al. 2008, eq. 9)."""
+    g = e + sigma * z
+    return lookahead * e / (g * g + lookahead * lookahead)
+
+
+@compiled
+def integral_los_bias(state, t, errors, u_d, k_y, k_z, sigma):
+    """Integral LOS bias ``b_i = sigma z_i`` and its time derivatives at time ``t``; advances ``state``.
+
+    Integral line-of-sight guidance of Borhaug, Pavlov and Pettersen (2008, "Integral LOS control for
+    path following of underactuated marine surface vessels in the presence of constant ocean
+    currents", IEEE CDC, eqs. 8-9), applied on each normal of the path as in the 3-D ILOS of
+    Caharija et al. (2016, IEEE TCST 24(5), and their 3-D AUV version, Caharija et al. 2012, IEEE CDC).
+    In the vector form of eq. (21) the lookahead distance is ``Delta_i = u_d / k_i`` and
+
+        mu = u_d T - k_i (e_i + sigma z_i) N_i,    z_i_dot = Delta_i e_i / ((e_i + sigma z_i)^2 + Delta_i^2),
+
+    so that at a steady state with a constant current ``e_i = 0`` and ``sigma z_i`` holds the offset
+    the current needs (the crab angle); the denominator slows the integration far from the path
+    (anti-windup by construction). ``z`` advances by its previous rate held over the elapsed time
+    (zero-order hold, like :func:`surge_pi`).
+
+    Args:
+        state: :class:`GuidanceState` (advanced).
+        t: Time [s].
+        errors: ``(e_1, e_2, e_1_dot, e_2_dot)`` of :func:`cross_track_errors`.
+        u_d: Desired speed [m/s]; k_y, k_z: cross-track gains [1/s]; sigma: integral gain [-] (> 0).
+
+    Returns:
+        ``(b_1, b_2, b_1_dot, b_2_dot, b_1_ddot, b_2_ddot)`` [m], [m/s], [m/s^2] for
+        :func:`biased_los_guidance`.
+    """
+    if state.has_previous[0] != 0.0 and t > state.time[0]:
+        h = t - state.time[0]
+        state.integral[0] += state.rate[0] * h
+        state.integral[1] += state.rate[1] * h
+    out = np.zeros(6)
+    for i in range(2):
+        gain = k_y if i == 0 else k_z
+        lookahead = u_d / gain
+        e, e_dot = errors[i], errors[2 + i]
+        z = state.integral[i]
+        z_dot = _ilos_rate(e, z, lookahead, sigma)
+        g = e + sigma * z
+        den = g * g + lookahead * lookahead
+        # d/dt [Delta e / den] = Delta (e_dot den - e 2 g (e_dot + sigma z_dot)) / den^2
+        z_ddot = lookahead * (e_dot * den - 2.0 * e * g * (e_dot + sigma * z_dot)) / (den * den)
+        state.rate[i] = z_dot
+        out[i] = sigma * z
+        out[2 + i] = sigma * z_dot
+        out[4 + i] = sigma * z_ddot
+    state.has_previous[0] = 1.0
+    state.time[0] = t
+    return out[0], out[1], out[2], out[3], out[4], out[5]
+
+
+@compiled
+def restoring_moment_in_frame(base_rotation, base_position, rotation, position, base_wrench):
+    """Moment of the restoring wrench about a frame's origin, in its axes [N m].
+
+    ``base_wrench`` is the free-flyer part ``g[0:6]`` of the restoring generalised force (left-hand
+    side of eq. 19: weight minus buoyancy), a spatial force ``(f, n)`` in the base frame about the
+    base origin; the frame has rotation ``R_e`` and position ``p_e`` in the world, the base ``R_b``,
+    ``p_b``. Moved to the frame origin: ``n_e = R_e^T (R_b n - (p_e - p_b) x R_b f)`` (for a neutrally
+    buoyant vehicle ``f = 0`` and the moment is the same about every point).
+    """
+    f = np.empty(3)
+    n = np.empty(3)
+    for i in range(3):
+        f[i] = base_rotation[i, 0] * base_wrench[0] + base_rotation[i, 1] * base_wrench[1]
+        f[i] += base_rotation[i, 2] * base_wrench[2]
+        n[i] = base_rotation[i, 0] * base_wrench[3] + base_rotation[i, 1] * base_wrench[4]
+        n[i] += base_rotation[i, 2] * base_wrench[5]
+    r0 = position[0] - base_position[0]
+    r1 = position[1] - base_position[1]
+    r2 = position[2] - base_position[2]
+    n[0] -= r1 * f[2] - r2 * f[1]
+    n[1] -= r2 * f[0] - r0 * f[2]
+    n[2] -= r0 * f[1] - r1 * f[0]
+    out = np.empty(3)
+    for i in range(3):
+        out[i] = rotation[0, i] * n[0] + rotation[1, i] * n[1] + rotation[2, i] * n[2]
+    return out
 
 
 # ---------------------------------------------------------------------- reduced attitude (eq. 9)
@@ -220,6 +370,15 @@ class AttitudeCommand(NamedTuple):
     """Angular velocity error about y [rad/s] (eq. 8)."""
     omega_tilde_z: float
     """Angular velocity error about z [rad/s] (eq. 8)."""
+    rate_ref_y: float = 0.0
+    """Reference angular velocity ``H^T R_tilde omega_ref^b`` about y [rad/s] (eq. 8)."""
+    rate_ref_z: float = 0.0
+    """The same about z [rad/s]."""
+    accel_ref_y: float = 0.0
+    """Reference angular acceleration of the feedforward of eq. (9) (finding 2 included when
+    exact), ``H^T R_tilde R^T (x_ref x x_ref_ddot)`` about y [rad/s^2]."""
+    accel_ref_z: float = 0.0
+    """The same about z [rad/s^2]."""
 
 
 @compiled
@@ -284,6 +443,10 @@ def reduced_attitude_law(R, omega, x_ref, x_dot, x_ddot, J, m_y, m_z, k_p, k_d, 
         error_angle(y0, y1, y2),
         ot_y,
         ot_z,
+        row1[0] * w0 + row1[1] * w1 + row1[2] * w2,
+        row2[0] * w0 + row2[1] * w1 + row2[2] * w2,
+        acc1,
+        acc2,
     )
 
 
@@ -352,7 +515,14 @@ def surge_pi(state, t, u, k_p, k_i, u_d, max_thrust):
 # ---------------------------------------------------------------------- composition (Section 3)
 class PaperGains(NamedTuple):
     """The gains of :func:`path_following_command` as plain floats (see
-    :class:`control.path_following.PathFollowingGains`, which builds it)."""
+    :class:`control.path_following.PathFollowingGains`, which builds it).
+
+    The fields after ``exact`` switch on the extensions beyond the paper (all off by default, so
+    that the paper's law is unchanged): ``turn_feedforward`` with the identified turn model
+    ``turn_rate_gain`` ``G`` [1/s per rad of base angle] and ``turn_time_constant`` ``T`` [s];
+    ``integral_los`` with ``los_integral_gain`` ``sigma`` [-]; ``hydrostatic_compensation`` with
+    ``turn_moment_gain`` ``K_m`` [N m per rad of base angle] (see :func:`path_following_command`).
+    """
 
     u_d: float
     k_y: float
@@ -366,6 +536,13 @@ class PaperGains(NamedTuple):
     max_thrust: float
     q_max: float
     exact: bool
+    turn_feedforward: bool = False
+    turn_rate_gain: float = 0.0
+    turn_time_constant: float = 0.0
+    integral_los: bool = False
+    los_integral_gain: float = 0.0
+    hydrostatic_compensation: bool = False
+    turn_moment_gain: float = 0.0
 
 
 class CommandBuffers(NamedTuple):
@@ -412,6 +589,7 @@ def path_following_command(
     reference_scale,
     surge_mask,
     surge_state,
+    guidance_state,
     t,
     rotation,
     position,
@@ -422,6 +600,7 @@ def path_following_command(
     joint_positions,
     joint_velocities,
     joint_hydrostatic_forces,
+    restoring_moment,
     out,
 ):
     """One evaluation of the paper's path-following controller (Section 3) into ``out``.
@@ -431,6 +610,27 @@ def path_following_command(
     (eq. 22) and joint PD with hydrostatic compensation (eq. 24); the surge PI (eq. 25) on the
     thrusters flagged in ``surge_mask``, all others at zero.
 
+    Beyond the paper, switched on in ``gains`` (all off: the paper's law, to the last bit):
+
+    * ``integral_los``: the guidance acts on ``e_i + sigma z_i`` (:func:`integral_los_bias`), which
+      removes the steady cross-track offset of a constant current.
+    * ``turn_feedforward``: the base angles hold the reference turn rate through the identified
+      turn dynamics of the body, ``T d(omega)/dt + omega = G q_0`` per axis (end-effector angular
+      velocity ``omega`` about its y and z axes, base angle ``q_0``; identified by step responses,
+      see ``benchmarks/beyond_paper.py``). Its inverse replaces the ``J = I`` feedforward of eq. (23):
+      ``q_0 = -k_P phi_tilde H^T n - k_D omega_tilde + (omega_ref + T omega_ref_dot) / G`` with
+      ``omega_ref = H^T R_tilde omega_ref^b`` (eq. 8) and ``omega_ref_dot`` the reference angular
+      acceleration of eq. (9). On a helix ``omega_ref`` is the path's curvature times the speed, so
+      the body holds the curvature of the path without a steady pointing error: the curvature
+      feedforward of path-parametrised guidance (Breivik and Fossen 2004, "Path following for
+      marine surface vessels", OCEANS; Lekkas and Fossen 2014, "Integral LOS path following for
+      curved paths based on a monotone cubic Hermite spline parametrization", IEEE TCST 22(6)).
+    * ``hydrostatic_compensation``: ``+ H^T g_e / K_m``, the base angle whose hydrodynamic turning
+      moment ``K_m q_0`` (an effective gain, calibrated on the paper's scenario:
+      :data:`control.path_following.PAPER_TURN_MOMENT_GAIN`) balances the restoring moment ``g_e`` about the
+      end-effector (``restoring_moment``, left-hand side of eq. 19, end-effector axes; the paper's
+      Conclusions name this as future work).
+
     Args:
         gains: :class:`PaperGains`.
         path_function, path_kind, path_parameters: The path (:mod:`control.paths`): a user's
@@ -439,6 +639,7 @@ def path_following_command(
         reference_scale: ``exp(-alpha (j - 1))`` per joint (n,).
         surge_mask: 1 for the surge thrusters (m,).
         surge_state: :class:`SurgeState` (advanced).
+        guidance_state: :class:`GuidanceState` (advanced when ``gains.integral_los``).
         t: Time [s].
         rotation: End-effector-to-world rotation (3, 3).
         position, velocity, acceleration: End-effector position [m], velocity [m/s] and
@@ -446,11 +647,25 @@ def path_following_command(
         omega: End-effector angular velocity in its own axes (3,) [rad/s].
         surge_velocity: ``u`` [m/s], end-effector velocity along its own x-axis.
         joint_positions, joint_velocities, joint_hydrostatic_forces: (n,) [rad], [rad/s], [N m].
+        restoring_moment: Restoring moment of the whole vehicle about the end-effector, its axes,
+            left-hand side of eq. (19) (3,) [N m] (:func:`restoring_moment_in_frame`; used only with
+            ``gains.hydrostatic_compensation``).
         out: :class:`CommandBuffers`.
     """
     point = path_point_of(path_function, path_kind, position, path_parameters)
-    x_ref, x_dot, x_ddot = los_guidance(  # eq. (21)
-        point, position, velocity, acceleration, gains.u_d, gains.k_y, gains.k_z
+    bias = _NO_BIAS
+    if gains.integral_los:
+        bias = integral_los_bias(  # Borhaug et al. (2008), in 3-D
+            guidance_state,
+            t,
+            cross_track_errors(point, position, velocity),
+            gains.u_d,
+            gains.k_y,
+            gains.k_z,
+            gains.los_integral_gain,
+        )
+    x_ref, x_dot, x_ddot = biased_los_guidance(  # eq. (21)
+        point, position, velocity, acceleration, gains.u_d, gains.k_y, gains.k_z, bias
     )
     command = reduced_attitude_law(  # eqs. (23), (4), (8)
         rotation,
@@ -467,6 +682,19 @@ def path_following_command(
     )
     out.base_angles[0] = command.u_y
     out.base_angles[1] = command.u_z
+    if gains.turn_feedforward:
+        # the inverse turn dynamics replace the J = I feedforward of eq. (23)
+        scale = 1.0 / gains.turn_rate_gain
+        tc = gains.turn_time_constant
+        out.base_angles[0] += (
+            scale * (command.rate_ref_y + tc * command.accel_ref_y) - command.accel_ref_y
+        )
+        out.base_angles[1] += (
+            scale * (command.rate_ref_z + tc * command.accel_ref_z) - command.accel_ref_z
+        )
+    if gains.hydrostatic_compensation:
+        out.base_angles[0] += restoring_moment[1] / gains.turn_moment_gain
+        out.base_angles[1] += restoring_moment[2] / gains.turn_moment_gain
     out.omega_tilde[0] = command.omega_tilde_y
     out.omega_tilde[1] = command.omega_tilde_z
     for j in range(joint_positions.shape[0]):

@@ -25,7 +25,7 @@ body coil.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -35,6 +35,28 @@ from control.joint_references import check_joint_axes, joint_reference_pattern
 from control.paths import Path
 from control.reduced_attitude import check_feedforward, check_rotation
 from control.surge import SurgePIController
+
+#: Options of :attr:`PathFollowingGains.current_compensation`.
+CURRENT_COMPENSATION_OPTIONS = ("none", "integral_los")
+
+#: Turn model of the paper's vehicle, identified from open-loop step responses of the base angles
+#: (joint references of eq. 22 held, surge PI at u_d = 0.5 m/s; ``benchmarks/beyond_paper.py``,
+#: figures in ``benchmarks/beyond_paper.json``): a step of 0.1 rad in ``q_y0`` or ``q_z0`` settles
+#: at an end-effector turn rate of 0.057 rad/s at u = 0.497 m/s, i.e. a steady path curvature of
+#: 1.14 1/m per radian of base angle [1/(m rad)].
+PAPER_TURN_CURVATURE_GAIN = 1.14
+#: Time constant of the turn rate's response, fitted first-order to the same steps (about 10 s), is
+#: NOT the default: fed forward through the measured (finite-difference) acceleration it
+#: destabilises the helix run (the head's lateral acceleration answers the bend at once). 0 keeps
+#: the steady part (the reference turn rate) only [s].
+PAPER_TURN_TIME_CONSTANT = 0.0
+#: Effective hydrodynamic moment per radian of base angle [N m/rad] of the roll-stabilised vehicle
+#: in closed loop, calibrated by a sweep on the paper's scenario (``benchmarks/beyond_paper.py``:
+#: 5 over-cancels the restoring moment and overshoots, 6 settles fastest, 7-9 settle slower). The
+#: margin to over-cancelling is thin: do not lower it without measuring.
+PAPER_TURN_MOMENT_GAIN = 6.0
+#: Integral gain ``sigma`` of the integral LOS guidance [-] (with ``k_e = u_d / 10``).
+DEFAULT_LOS_INTEGRAL_GAIN = 0.5
 
 CASES = ("uniform", "stabilised")
 """Vehicle cases of the paper's Section 4.2 (they differ in the attitude gain ``k_d``)."""
@@ -61,6 +83,19 @@ class PathFollowingGains:
         q_max: Saturation of the base angles [rad] (eq. 22; project choice, see the module
             docstring).
         feedforward: ``"exact"`` (default) or ``"paper"`` feedforward in eq. (23).
+        turn_feedforward: Beyond the paper: feed the reference turn rate (on a curved path, the
+            path's curvature times the speed) forward through the identified turn dynamics
+            (:func:`control.laws.path_following_command`). Off by default (the paper's law).
+        turn_curvature_gain: Steady end-effector path curvature per radian of base angle
+            [1/(m rad)]; the turn model's gain is ``G = turn_curvature_gain * u_d`` [1/s].
+        turn_time_constant: Time constant ``T`` of the turn model [s] (0: steady model only).
+        current_compensation: ``"none"`` (the paper's LOS) or ``"integral_los"`` (integral LOS,
+            Borhaug et al. 2008, in 3-D).
+        los_integral_gain: Integral gain ``sigma`` of the integral LOS [-].
+        hydrostatic_compensation: Beyond the paper: add to the base angles the angle whose
+            hydrodynamic moment balances the vehicle's restoring moment (its Conclusions' future
+            work). Off by default.
+        turn_moment_gain: Hydrodynamic moment per radian of base angle [N m/rad] (identified).
     """
 
     u_d: float = 0.5
@@ -74,10 +109,35 @@ class PathFollowingGains:
     k_1i: float = 5.0
     q_max: float = float(np.deg2rad(30.0))
     feedforward: str = "exact"
+    turn_feedforward: bool = False
+    turn_curvature_gain: float = PAPER_TURN_CURVATURE_GAIN
+    turn_time_constant: float = PAPER_TURN_TIME_CONSTANT
+    current_compensation: str = "none"
+    los_integral_gain: float = DEFAULT_LOS_INTEGRAL_GAIN
+    hydrostatic_compensation: bool = False
+    turn_moment_gain: float = PAPER_TURN_MOMENT_GAIN
 
     def __post_init__(self) -> None:
-        positive = ("u_d", "alpha", "k_p", "k_d", "k_qp", "q_max")
-        non_negative = ("k_qd", "k_1p", "k_1i")
+        positive = (
+            "u_d",
+            "alpha",
+            "k_p",
+            "k_d",
+            "k_qp",
+            "q_max",
+            "turn_curvature_gain",
+            "los_integral_gain",
+            "turn_moment_gain",
+        )
+        non_negative = ("k_qd", "k_1p", "k_1i", "turn_time_constant")
+        for name in ("turn_feedforward", "hydrostatic_compensation"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
+        if self.current_compensation not in CURRENT_COMPENSATION_OPTIONS:
+            raise ValueError(
+                f"current_compensation must be one of {', '.join(CURRENT_COMPENSATION_OPTIONS)}, "
+                f"got {self.current_compensation!r}"
+            )
         for name in positive + non_negative:
             value = getattr(self, name)
             try:
@@ -159,6 +219,9 @@ class PathFollowingMeasurement:
         joint_hydrostatic_forces: ``g_q`` (n,) [N m], left-hand-side convention of eq. (19)
             (see :mod:`control.joint_control`).
         surge_velocity: ``u`` [m/s], x-component of the end-effector velocity in its own frame.
+        restoring_moment_in_ee: Restoring moment of the whole vehicle about the end-effector, its
+            axes, left-hand side of eq. (19) (3,) [N m]; needed only for the hydrostatic
+            compensation (default zero).
     """
 
     position_in_world: np.ndarray
@@ -170,10 +233,12 @@ class PathFollowingMeasurement:
     joint_velocities: np.ndarray
     joint_hydrostatic_forces: np.ndarray
     surge_velocity: float
+    restoring_moment_in_ee: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self) -> None:
         for name, shape in (
             ("position_in_world", (3,)),
+            ("restoring_moment_in_ee", (3,)),
             ("velocity_in_world", (3,)),
             ("acceleration_in_world", (3,)),
             ("rotation_to_world", (3, 3)),
@@ -283,6 +348,7 @@ class PathFollowingController:
         )
         self.surge_mask = np.zeros(self.n_thrusters, dtype=np.int64)
         self.surge_mask[list(self.surge_thrusters)] = 1
+        self._guidance = laws.new_guidance_state()
 
     @property
     def gain_record(self) -> laws.PaperGains:
@@ -302,6 +368,13 @@ class PathFollowingController:
             max_thrust=self._surge.max_thrust,
             q_max=g.q_max,
             exact=g.feedforward == "exact",
+            turn_feedforward=g.turn_feedforward,
+            turn_rate_gain=g.turn_curvature_gain * g.u_d,
+            turn_time_constant=g.turn_time_constant,
+            integral_los=g.current_compensation == "integral_los",
+            los_integral_gain=g.los_integral_gain,
+            hydrostatic_compensation=g.hydrostatic_compensation,
+            turn_moment_gain=g.turn_moment_gain,
         )
 
     @property
@@ -341,8 +414,10 @@ class PathFollowingController:
         return len(self.joint_axes)
 
     def reset(self) -> None:
-        """Clear the surge integrator (and its sampling history)."""
+        """Clear the surge and integral-LOS integrators (and their sampling history)."""
         self._surge.reset()
+        for array in self._guidance:
+            array[:] = 0.0
 
     def command(self, t: float, measurement: PathFollowingMeasurement) -> PathFollowingCommand:
         """Joint torques and thrusts at time ``t`` [s] (non-decreasing between calls).
@@ -379,6 +454,7 @@ class PathFollowingController:
             self._reference_scale,
             self.surge_mask,
             self._surge.state,
+            self._guidance,
             float(t),
             R_e,
             measurement.position_in_world,
@@ -389,6 +465,7 @@ class PathFollowingController:
             measurement.joint_positions,
             measurement.joint_velocities,
             measurement.joint_hydrostatic_forces,
+            measurement.restoring_moment_in_ee,
             out,
         )
         return PathFollowingCommand(

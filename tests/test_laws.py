@@ -106,7 +106,18 @@ def test_reduced_attitude_law_compiled_equals_interpreted(exact, rng):
         assert all(math.isfinite(x) for x in got)
 
 
-def _gains(rng, exact: bool) -> control_laws.PaperGains:
+def _gains(rng, exact: bool, beyond: bool = False) -> control_laws.PaperGains:
+    extensions = {}
+    if beyond:  # the extensions beyond the paper, all on
+        extensions = dict(
+            turn_feedforward=True,
+            turn_rate_gain=float(rng.uniform(0.05, 1.0)),
+            turn_time_constant=float(rng.uniform(0.0, 5.0)),
+            integral_los=True,
+            los_integral_gain=float(rng.uniform(0.1, 3.0)),
+            hydrostatic_compensation=True,
+            turn_moment_gain=float(rng.uniform(10.0, 200.0)),
+        )
     return control_laws.PaperGains(
         u_d=float(rng.uniform(0.1, 2.0)),
         k_y=float(rng.uniform(0.01, 1.0)),
@@ -120,20 +131,26 @@ def _gains(rng, exact: bool) -> control_laws.PaperGains:
         max_thrust=float(rng.uniform(2.0, 50.0)),
         q_max=float(rng.uniform(0.05, 1.0)),  # small limits: many references saturate
         exact=exact,
+        **extensions,
     )
 
 
-@pytest.mark.parametrize("exact", [True, False])
+@pytest.mark.parametrize(
+    "exact, beyond",
+    [(True, False), (False, False), (True, True)],
+    ids=["exact", "paper", "exact_beyond"],  # beyond: the extensions beyond the paper, all on
+)
 @pytest.mark.parametrize("path", _paths(), ids=["x_axis", "line", "helix", "waypoints"])
-def test_path_following_command_compiled_equals_interpreted(exact, path, rng):
+def test_path_following_command_compiled_equals_interpreted(exact, beyond, path, rng):
     n, m = 6, 4
     axis_index = np.array([1, 0, 1, 0, 1, 0])
     scale = np.exp(-0.7 * np.array([0, 0, 1, 1, 2, 2]))
     mask = np.array([1, 0, 1, 0])
     saturated = 0
     for _ in range(20):
-        gains = _gains(rng, exact)
+        gains = _gains(rng, exact, beyond)
         states = [control_laws.new_surge_state() for _ in range(2)]
+        guidance = [control_laws.new_guidance_state() for _ in range(2)]
         t = 0.0
         for _ in range(5):  # a sequence: the surge integral advances (and may saturate)
             t += float(rng.uniform(0.0, 0.3))
@@ -147,25 +164,29 @@ def test_path_following_command_compiled_equals_interpreted(exact, path, rng):
                 rng.uniform(-1, 1, n),
                 rng.normal(size=n),
                 rng.normal(size=n),
+                rng.normal(size=3) * 30.0,
             )
             outs = [control_laws.new_command_buffers(n, m) for _ in range(2)]
-            for function, state, out in zip(
+            for function, state, guide, out in zip(
                 (
                     control_laws.path_following_command,
                     interpreted(control_laws.path_following_command),
                 ),
                 states,
+                guidance,
                 outs,
                 strict=True,
             ):
                 function(
                     gains, path.user_function, path.kind_code, path.params, axis_index, scale,
-                    mask, state, t,
+                    mask, state, guide, t,
                     *measurement, out,
                 )  # fmt: skip
             for name, got, expected in zip(outs[0]._fields, outs[0], outs[1], strict=True):
                 np.testing.assert_allclose(got, expected, err_msg=name, **TIGHT)
             for got, expected in zip(states[0], states[1], strict=True):
+                np.testing.assert_allclose(got, expected, **TIGHT)
+            for got, expected in zip(guidance[0], guidance[1], strict=True):
                 np.testing.assert_allclose(got, expected, **TIGHT)
             saturated += int(np.any(np.abs(outs[0].base_angles) > gains.q_max))
     assert saturated > 10  # the saturation of eq. (22) was exercised

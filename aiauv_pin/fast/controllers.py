@@ -19,7 +19,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from control.laws import CommandBuffers, PaperGains, SurgeState, path_following_command
+from control.laws import (
+    CommandBuffers,
+    GuidanceState,
+    PaperGains,
+    SurgeState,
+    path_following_command,
+    restoring_moment_in_frame,
+)
 from hydro.jit import compiled
 
 from .kernels import frame_of_body, kinematics, restoring_into, thrust_into
@@ -101,6 +108,7 @@ class PaperState(NamedTuple):
     surge: SurgeState
     velocity_history: np.ndarray  # (5,): has previous, time [s], previous world velocity (3) [m/s]
     command: CommandBuffers
+    guidance: GuidanceState  # integral LOS (used when the gains ask for it)
 
 
 #: Diagnostics of the paper's controller, in the order of its info row: name -> shape.
@@ -150,6 +158,8 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
     g = W.restoring
     n = q.shape[0] - 7
     out = state.command
+    # restoring moment about the end-effector (base body 0), for the hydrostatic compensation
+    restoring_moment = restoring_moment_in_frame(W.rotation[0], W.position[0], R, p, g)
     path_following_command(
         P.gains,
         P.path_function,
@@ -159,6 +169,7 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
         P.reference_scale,
         P.surge_mask,
         state.surge,
+        state.guidance,
         t,
         R,
         p,
@@ -169,6 +180,7 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
         q[7:],
         v[6:],
         g[6:],
+        restoring_moment,
         out,
     )
     thrust_into(model, W, out.thrusts, tau)  # eq. (20)
