@@ -446,3 +446,25 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
         for j in range(m + nj):
             B[i, j] = d_q_stage[i, 2 * nv + j]
             B[nv + i, j] = d_v_stage[i, 2 * nv + j]
+
+
+# ---------------------------------------------------------------------- benchmarking
+@compiled(fastmath=True)
+def time_acceleration_derivatives(model, env, q, v, tau, repeats, W, D, outputs):
+    """Evaluate :func:`acceleration_derivatives_into` ``repeats`` times in compiled code.
+
+    ``outputs`` is ``(dv, da_dq, da_dv, da_dtau, da_dcurrent, da_dthrust)``.
+    """
+    no_thrust = np.zeros(0)
+    dv, da_dq, da_dv, da_dtau, da_dc, da_dthrust = outputs
+    for _ in range(repeats):
+        acceleration_derivatives_into(
+            model, env, 0.0, q, v, tau, no_thrust, W, D, dv, da_dq, da_dv, da_dtau, da_dc, da_dthrust
+        )
+
+
+@compiled(fastmath=True)
+def time_transitions(model, env, q, v, tau0, thrusts, dt, method, repeats, W, D, x_out, A, B):
+    """Evaluate :func:`transition_into` ``repeats`` times in compiled code."""
+    for _ in range(repeats):
+        transition_into(model, env, 0.0, q, v, tau0, thrusts, dt, method, W, D, x_out, A, B)
