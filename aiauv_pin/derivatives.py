@@ -140,7 +140,7 @@ def pinocchio_derivatives(
     d_current = np.zeros((nb, 6, 3))
     d_up = np.zeros((nb, 6, 3))
     body_fluid_bias_jacobians(
-        fluid, rotation, twist, currents, d_twist, d_current, d_up, np.zeros((4, 6, 6))
+        fluid, rotation, twist, currents, d_twist, d_current, d_up, np.zeros((5, 6, 6))
     )
     fext = pin.StdVec_Force()
     fext.append(pin.Force.Zero())

@@ -512,22 +512,21 @@ def crossflow_wrench_jacobian(velocity, length, coefficient, nodes, weights, out
         split = 0.0
     elif split > length:
         split = length
-    # jac[o][i]: outputs (fy, fz, my, mz) / coefficient by inputs (a_y, a_z, b_y, b_z)
-    jac = np.zeros((4, 4))
-    by_split = np.zeros(4)
+    # j_oi: outputs o = (fy, fz, my, mz) / coefficient by inputs i = (a_y, a_z, b_y, b_z); s_o: by split
+    j00 = j01 = j02 = j03 = 0.0
+    j10 = j11 = j12 = j13 = 0.0
+    j20 = j21 = j22 = j23 = 0.0
+    j30 = j31 = j32 = j33 = 0.0
+    s0 = s1 = s2 = s3 = 0.0
     for part in range(2):
         start = 0.0 if part == 0 else split
         width = split if part == 0 else length - split
         for k in range(nodes.shape[0]):
             x = start + width * nodes[k]
             w = width * weights[k]
-            dx_ds = nodes[k] if part == 0 else 1.0 - nodes[k]
-            dw_ds = weights[k] if part == 0 else -weights[k]
             ny = a_y + b_y * x
             nz = a_z + b_z * x
             speed = math.sqrt(ny * ny + nz * nz)
-            gy = speed * ny
-            gz = speed * nz
             if speed > 0.0:
                 hyy = speed + ny * ny / speed
                 hzz = speed + nz * nz / speed
@@ -536,47 +535,67 @@ def crossflow_wrench_jacobian(velocity, length, coefficient, nodes, weights, out
                 hyy = 0.0
                 hzz = 0.0
                 hyz = 0.0
-            # d g / d(a_y, a_z, b_y, b_z) = (H, H x)
-            for i in range(2):
-                dgy = hyy if i == 0 else hyz
-                dgz = hyz if i == 0 else hzz
-                jac[0, i] -= w * dgy
-                jac[1, i] -= w * dgz
-                jac[2, i] += w * x * dgz
-                jac[3, i] -= w * x * dgy
-                jac[0, i + 2] -= w * x * dgy
-                jac[1, i + 2] -= w * x * dgz
-                jac[2, i + 2] += w * x * x * dgz
-                jac[3, i + 2] -= w * x * x * dgy
+            # d g / d(a_y, a_z, b_y, b_z) = (H, H x), g = |n| n
+            wx = w * x
+            wxx = wx * x
+            j00 -= w * hyy
+            j01 -= w * hyz
+            j02 -= wx * hyy
+            j03 -= wx * hyz
+            j10 -= w * hyz
+            j11 -= w * hzz
+            j12 -= wx * hyz
+            j13 -= wx * hzz
+            j20 += wx * hyz
+            j21 += wx * hzz
+            j22 += wxx * hyz
+            j23 += wxx * hzz
+            j30 -= wx * hyy
+            j31 -= wx * hyz
+            j32 -= wxx * hyy
+            j33 -= wxx * hyz
             if interior:
-                # d/dx of the integrands, dn/dx = b
-                dgy_dx = hyy * b_y + hyz * b_z
+                dx_ds = nodes[k] if part == 0 else 1.0 - nodes[k]
+                dw_ds = weights[k] if part == 0 else -weights[k]
+                gy = speed * ny
+                gz = speed * nz
+                dgy_dx = hyy * b_y + hyz * b_z  # dn/dx = b
                 dgz_dx = hyz * b_y + hzz * b_z
-                by_split[0] -= dw_ds * gy + w * dgy_dx * dx_ds
-                by_split[1] -= dw_ds * gz + w * dgz_dx * dx_ds
-                by_split[2] += dw_ds * x * gz + w * (gz + x * dgz_dx) * dx_ds
-                by_split[3] -= dw_ds * x * gy + w * (gy + x * dgy_dx) * dx_ds
+                s0 -= dw_ds * gy + w * dgy_dx * dx_ds
+                s1 -= dw_ds * gz + w * dgz_dx * dx_ds
+                s2 += dw_ds * x * gz + w * (gz + x * dgz_dx) * dx_ds
+                s3 -= dw_ds * x * gy + w * (gy + x * dgy_dx) * dx_ds
     if interior:
         dot = a_y * b_y + a_z * b_z
-        ds = (
-            -b_y / slope2,
-            -b_z / slope2,
-            -a_y / slope2 + 2.0 * dot * b_y / (slope2 * slope2),
-            -a_z / slope2 + 2.0 * dot * b_z / (slope2 * slope2),
-        )
-        for o in range(4):
-            for i in range(4):
-                jac[o, i] += by_split[o] * ds[i]
+        e0 = -b_y / slope2
+        e1 = -b_z / slope2
+        e2 = -a_y / slope2 + 2.0 * dot * b_y / (slope2 * slope2)
+        e3 = -a_z / slope2 + 2.0 * dot * b_z / (slope2 * slope2)
+        j00 += s0 * e0
+        j01 += s0 * e1
+        j02 += s0 * e2
+        j03 += s0 * e3
+        j10 += s1 * e0
+        j11 += s1 * e1
+        j12 += s1 * e2
+        j13 += s1 * e3
+        j20 += s2 * e0
+        j21 += s2 * e1
+        j22 += s2 * e2
+        j23 += s2 * e3
+        j30 += s3 * e0
+        j31 += s3 * e1
+        j32 += s3 * e2
+        j33 += s3 * e3
     for i in range(6):
         for j in range(6):
             out[i, j] = 0.0
-    rows = (1, 2, 4, 5)
-    for o in range(4):
-        r = rows[o]
-        out[r, 1] = coefficient * jac[o, 0]
-        out[r, 2] = coefficient * jac[o, 1]
-        out[r, 5] = coefficient * jac[o, 2]
-        out[r, 4] = -coefficient * jac[o, 3]
+    k = coefficient
+    # columns: a_y = nu[1], a_z = nu[2], b_y = nu[5], b_z = -nu[4]
+    out[1, 1], out[1, 2], out[1, 5], out[1, 4] = k * j00, k * j01, k * j02, -k * j03
+    out[2, 1], out[2, 2], out[2, 5], out[2, 4] = k * j10, k * j11, k * j12, -k * j13
+    out[4, 1], out[4, 2], out[4, 5], out[4, 4] = k * j20, k * j21, k * j22, -k * j23
+    out[5, 1], out[5, 2], out[5, 5], out[5, 4] = k * j30, k * j31, k * j32, -k * j33
 
 
 @compiled(fastmath=True)
@@ -626,17 +645,16 @@ def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_curren
         d_twist: Accumulator (nb, 6, 6): ``d bias / d nu``.
         d_current: Accumulator (nb, 6, 3): ``d bias / d v_c`` (current in body axes).
         d_up: Accumulator (nb, 6, 3): ``d bias / d e``.
-        scratch: Work array (4, 6, 6).
+        scratch: Work array (5, 6, 6).
     """
     nb = twist.shape[0]
-    rel = np.empty(6)
-    link_twist = np.empty(6)
-    cyl_twist = np.empty(6)
     jac = scratch[0]
     link_jac = scratch[1]
     tmp = scratch[2]
     cur = scratch[3]
-    relative_jac = np.zeros((nb, 6, 6))  # d bias / d nu_r (Coriolis and damping)
+    rel = scratch[4, 0]
+    link_twist = scratch[4, 1]
+    cyl_twist = scratch[4, 2]
     for b in range(nb):
         rot = rotation[b]
         c0, c1, c2 = current[b, 0], current[b, 1], current[b, 2]
@@ -652,7 +670,9 @@ def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_curren
         coriolis_wrench_jacobian(added, rel, jac)
         for i in range(6):
             for j in range(6):
-                relative_jac[b, i, j] += jac[i, j]
+                d_twist[b, i, j] += jac[i, j]
+            for j in range(3):
+                d_current[b, i, j] -= jac[i, j]
         current_acceleration_wrench_jacobian(
             added, twist[b, 3], twist[b, 4], twist[b, 5], vc0, vc1, vc2, cur[:, :3], cur[:, 3:]
         )
@@ -711,7 +731,7 @@ def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_curren
                     for m in range(6):
                         s += x_cyl[m, i] * tmp[m, j]
                     link_jac[i, j] += s
-        # relative_jac -= X^T link_jac X
+        # the link's damping acts on X nu_r: d_twist -= X^T link_jac X, d_current += its [:, :3]
         for i in range(6):
             for j in range(6):
                 s = 0.0
@@ -723,10 +743,6 @@ def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_curren
                 s = 0.0
                 for m in range(6):
                     s += x_link[m, i] * tmp[m, j]
-                relative_jac[b, i, j] -= s
-    for b in range(nb):
-        for i in range(6):
-            for j in range(6):
-                d_twist[b, i, j] += relative_jac[b, i, j]
-            for j in range(3):
-                d_current[b, i, j] -= relative_jac[b, i, j]
+                d_twist[b, i, j] -= s
+                if j < 3:
+                    d_current[b, i, j] += s

@@ -53,11 +53,12 @@ class DerivativeWorkspace(NamedTuple):
     """Scratch arrays of one derivative evaluation (allocated once per vehicle)."""
 
     xform: np.ndarray  # (nb, 6, 6) motion transforms parent -> body
+    placement: np.ndarray  # (nb, 4, 3) the same as (R, p): rows 0-2 R, row 3 p
     d_twist: np.ndarray  # (nb, 6, 6) d p_b / d nu_b
     d_current: np.ndarray  # (nb, 6, 3) d p_b / d v_c (body axes)
     d_up: np.ndarray  # (nb, 6, 3) d p_b / d e (body axes)
     d_rotation: np.ndarray  # (nb, 6, 3) d p_b / d theta_b
-    fluid_scratch: np.ndarray  # (4, 6, 6)
+    fluid_scratch: np.ndarray  # (5, 6, 6)
     composite: np.ndarray  # (nb, 6, 6) composite inertias
     body_acceleration: np.ndarray  # (nb, 6)
     force: np.ndarray  # (nb, 6) body forces, accumulated to the root
@@ -95,11 +96,12 @@ def new_derivative_workspace(model, nv: int) -> DerivativeWorkspace:
         body_of_dof[bodies.v_index[b] : bodies.v_index[b] + width] = b
     return DerivativeWorkspace(
         np.zeros((nb, 6, 6)),
+        np.zeros((nb, 4, 3)),
         np.zeros((nb, 6, 6)),
         np.zeros((nb, 6, 3)),
         np.zeros((nb, 6, 3)),
         np.zeros((nb, 6, 3)),
-        np.zeros((4, 6, 6)),
+        np.zeros((5, 6, 6)),
         np.zeros((nb, 6, 6)),
         np.zeros((nb, 6)),
         np.zeros((nb, 6)),
@@ -165,6 +167,35 @@ def _apply_transpose_add(x, f, out):
         for j in range(6):
             s += x[j, i] * f[j]
         out[i] += s
+
+
+@compiled(fastmath=True)
+def _to_child(xl, m, out):
+    """``out = X m = (R^T (v - p x w), R^T w)`` for the placement ``xl`` (rows 0-2 ``R``, row 3 ``p``)."""
+    p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
+    w0, w1, w2 = m[3], m[4], m[5]
+    a0 = m[0] - (p1 * w2 - p2 * w1)
+    a1 = m[1] - (p2 * w0 - p0 * w2)
+    a2 = m[2] - (p0 * w1 - p1 * w0)
+    for i in range(3):
+        r0, r1, r2 = xl[0, i], xl[1, i], xl[2, i]
+        out[i] = r0 * a0 + r1 * a1 + r2 * a2
+        out[3 + i] = r0 * w0 + r1 * w1 + r2 * w2
+
+
+@compiled(fastmath=True)
+def _to_parent_add(xl, f, out):
+    """``out += X^T f = (R f, p x R f + R n)`` (Featherstone 2008, eq. (2.25))."""
+    p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
+    f0 = xl[0, 0] * f[0] + xl[0, 1] * f[1] + xl[0, 2] * f[2]
+    f1 = xl[1, 0] * f[0] + xl[1, 1] * f[1] + xl[1, 2] * f[2]
+    f2 = xl[2, 0] * f[0] + xl[2, 1] * f[1] + xl[2, 2] * f[2]
+    out[0] += f0
+    out[1] += f1
+    out[2] += f2
+    out[3] += xl[0, 0] * f[3] + xl[0, 1] * f[4] + xl[0, 2] * f[5] + p1 * f2 - p2 * f1
+    out[4] += xl[1, 0] * f[3] + xl[1, 1] * f[4] + xl[1, 2] * f[5] + p2 * f0 - p0 * f2
+    out[5] += xl[2, 0] * f[3] + xl[2, 1] * f[4] + xl[2, 2] * f[5] + p0 * f1 - p1 * f0
 
 
 @compiled(fastmath=True)
@@ -351,7 +382,7 @@ def _forces(bodies, W, D, qdd):
             for i in range(6):
                 acc[b, i] = qdd[iv + i]
         else:
-            _apply(D.xform[b], acc[parent], acc[b])
+            _to_child(D.placement[b], acc[parent], acc[b])
             for i in range(6):
                 acc[b, i] += bodies.axis[b, i] * qdd[iv] + W.bias_acceleration[b, i]
         _apply(bodies.inertia[b], acc[b], force[b])
@@ -367,7 +398,7 @@ def _forces(bodies, W, D, qdd):
             for i in range(6):
                 s += bodies.axis[b, i] * force[b, i]
             D.bias[iv] = s
-            _apply_transpose_add(D.xform[b], force[b], force[bodies.parent[b]])
+            _to_parent_add(D.placement[b], force[b], force[bodies.parent[b]])
 
 
 @compiled(fastmath=True)
@@ -440,8 +471,8 @@ def _tangent(bodies, W, D, kind, root, component, v, out_col):
             if kind == CONFIGURATION and root == 0:
                 moving = False
             else:
-                _apply(x, dnu[parent], dnu[b])
-                _apply(x, dacc[parent], dacc[b])
+                _to_child(D.placement[b], dnu[parent], dnu[b])
+                _to_child(D.placement[b], dacc[parent], dacc[b])
                 for i in range(6):
                     tmp[i] = s_axis[i] * v[iv]
                 _cross_motion(dnu[b], tmp, tmp2)
@@ -476,7 +507,7 @@ def _tangent(bodies, W, D, kind, root, component, v, out_col):
         out_col[iv] = s
         if b == root and kind == CONFIGURATION:
             _add_cross_force(bodies.axis[b], D.force[b], dforce[b])
-        _apply_transpose_add(D.xform[b], dforce[b], dforce[bodies.parent[b]])
+        _to_parent_add(D.placement[b], dforce[b], dforce[bodies.parent[b]])
 
 
 @compiled(fastmath=True)
@@ -511,6 +542,9 @@ def acceleration_derivatives_into(
     body_bias(model, W)
     for b in range(nb):
         _motion_transform_from_placement(W.placement[b], D.xform[b])
+        for i in range(4):
+            for j in range(3):
+                D.placement[b, i, j] = W.placement[b, i, j]
         coriolis_wrench_jacobian(bodies.rigid_inertia[b], W.twist[b], D.d_twist[b])
         for i in range(6):
             for j in range(3):
