@@ -151,15 +151,11 @@ def pinocchio_derivatives(
     d_id_dcurrent = np.zeros((vehicle.nv, 3))
     for b in range(nb):
         joint = b + 1
-        dnu_dq, da_dq, da_dv, jac = pin.getJointAccelerationDerivatives(
-            model, data, joint, _LOCAL
-        )
+        dnu_dq, da_dq, da_dv, jac = pin.getJointAccelerationDerivatives(model, data, joint, _LOCAL)
         # d theta_b / d dq: the pose perturbation of body b in its own axes is J_b dq
         vc = rotation[b].T @ velocity
         d_rotation = d_up[b] @ _skew(rotation[b][2]) + d_current[b] @ _skew(vc)
-        d_wrench_dq = (
-            fluid.added_mass[b] @ da_dq + d_twist[b] @ dnu_dq + d_rotation @ jac[3:]
-        )
+        d_wrench_dq = fluid.added_mass[b] @ da_dq + d_twist[b] @ dnu_dq + d_rotation @ jac[3:]
         d_wrench_dv = fluid.added_mass[b] @ da_dv + d_twist[b] @ jac
         d_id_dq += jac.T @ d_wrench_dq
         d_id_dv += jac.T @ d_wrench_dv
@@ -169,7 +165,11 @@ def pinocchio_derivatives(
             vehicle._buoyancy_model, vehicle._buoyancy_data, q
         )
     return AccelerationDerivatives(
-        dv, -mass_inverse @ d_id_dq, -mass_inverse @ d_id_dv, mass_inverse, -mass_inverse @ d_id_dcurrent
+        dv,
+        -mass_inverse @ d_id_dq,
+        -mass_inverse @ d_id_dv,
+        mass_inverse,
+        -mass_inverse @ d_id_dcurrent,
     )
 
 

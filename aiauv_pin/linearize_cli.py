@@ -46,9 +46,7 @@ def _run_linearize(args) -> int:
     gains = scenario.controller_gains
     speed = gains.u_d if args.speed is None else args.speed
     trim = straight_line_trim(vehicle, speed, current=scenario.current)
-    servo = (
-        not args.open_loop and scenario.controller == "paper" and scenario.continuous_joints
-    )
+    servo = not args.open_loop and scenario.controller == "paper" and scenario.continuous_joints
     model = linearize(
         vehicle,
         trim,

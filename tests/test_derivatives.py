@@ -58,7 +58,7 @@ def test_coriolis_wrench_jacobian(rng):
         inertia, twist = _random_inertia(rng), rng.normal(size=6)
         exact = np.zeros((6, 6))
         laws.coriolis_wrench_jacobian(inertia, twist, exact)
-        approx = _central(lambda x: laws.coriolis_wrench(inertia, x), twist)
+        approx = _central(lambda x, m=inertia: laws.coriolis_wrench(m, x), twist)
         assert_close_relative(exact, approx, 1e-8, "coriolis")
 
 
@@ -67,8 +67,12 @@ def test_current_acceleration_wrench_jacobian(rng):
         added, omega, vc = _random_inertia(rng), rng.normal(size=3), rng.normal(size=3)
         exact = np.zeros((2, 6, 3))
         laws.current_acceleration_wrench_jacobian(added, *omega, *vc, exact[0], exact[1])
-        by_omega = _central(lambda x: laws.current_acceleration_wrench(added, *x, *vc), omega)
-        by_current = _central(lambda x: laws.current_acceleration_wrench(added, *omega, *x), vc)
+        by_omega = _central(
+            lambda x, m=added, c=vc: laws.current_acceleration_wrench(m, *x, *c), omega
+        )
+        by_current = _central(
+            lambda x, m=added, w=omega: laws.current_acceleration_wrench(m, *w, *x), vc
+        )
         assert_close_relative(exact[0], by_omega, 1e-8, "d/domega")
         assert_close_relative(exact[1], by_current, 1e-8, "d/dv_c")
 
@@ -81,7 +85,9 @@ def test_damping_wrench_jacobian(rng, diagonal):
         twist = rng.normal(size=6)
         exact = np.zeros((6, 6))
         laws.damping_wrench_jacobian(linear, quadratic, twist, exact)
-        approx = _central(lambda x: laws.damping_wrench(linear, quadratic, diagonal, x), twist)
+        approx = _central(
+            lambda x, d=linear, e=quadratic: laws.damping_wrench(d, e, diagonal, x), twist
+        )
         assert_close_relative(exact, approx, 1e-8, "damping")
 
 

@@ -72,7 +72,7 @@ def _simulate(vehicle, q, v, trim, duration, dt):
     """RK4 run holding the trim's thrusts; the simulator holds the generalised force of a step,
     computed at its start (the thrusters turn with the body only from one step to the next)."""
     fast = vehicle.fast
-    for _ in range(int(round(duration / dt))):
+    for _ in range(round(duration / dt)):
         tau = fast.thrust_matrix(q) @ trim.thrusts
         tau[6:] += trim.joint_torques
         q, v = fast.step(q, v, tau, dt, method="rk4")

@@ -465,8 +465,10 @@ def _tangent(bodies, W, D, kind, root, component, v, out_col):
             parent = bodies.parent[b]
             x = D.xform[b]
             for i in range(3):
-                dth[b, i] = x[3 + i, 3] * dth[parent, 0] + x[3 + i, 4] * dth[parent, 1] + (
-                    x[3 + i, 5] * dth[parent, 2]
+                dth[b, i] = (
+                    x[3 + i, 3] * dth[parent, 0]
+                    + x[3 + i, 4] * dth[parent, 1]
+                    + (x[3 + i, 5] * dth[parent, 2])
                 )
             if kind == CONFIGURATION and root == 0:
                 moving = False

@@ -304,17 +304,54 @@ def _configuration_tangent(xi, d_xi, nv, out, d_conf, d_inc):
 
 @compiled(fastmath=True)
 def _acceleration_tangent(
-    model, env, t, q, v, tau, W, D, dq_s, dv_s, input_force, out, dv_out, scratch
+    model, env, t, q, v, tau, W, D, dq_s, dv_s, input_force, out, dv_out, scratch, no_thrust
 ):
-    """Stage acceleration (into ``dv_out``) and its tangents ``A_q dq_s + A_v dv_s + M^-1 d tau``."""
+    """Stage acceleration (into ``dv_out``) and its tangents ``A_q dq_s + A_v dv_s + M^-1 d tau``.
+
+    ``input_force`` (the tangent of the held generalised force) is zero in the columns of ``dv``.
+    """
     nv = v.shape[0]
+    nz = out.shape[1]
     da_dq, da_dv, minv, da_dc = scratch[0], scratch[1], scratch[2], scratch[3][:, :3]
-    no_thrust = np.zeros(0)
-    da_dthrust = np.zeros((nv, 0))
+    no_thrust_jacobian = scratch[3][:, 3:3]  # (nv, 0)
     acceleration_derivatives_into(
-        model, env, t, q, v, tau, no_thrust, W, D, dv_out, da_dq, da_dv, minv, da_dc, da_dthrust
+        model,
+        env,
+        t,
+        q,
+        v,
+        tau,
+        no_thrust,
+        W,
+        D,
+        dv_out,
+        da_dq,
+        da_dv,
+        minv,
+        da_dc,
+        no_thrust_jacobian,
     )
-    out[:, :] = da_dq @ dq_s + da_dv @ dv_s + minv @ input_force
+    for i in range(nv):
+        for c in range(nz):
+            out[i, c] = 0.0
+        for j in range(nv):
+            a_q = da_dq[i, j]
+            a_v = da_dv[i, j]
+            m_ij = minv[i, j]
+            for c in range(nv):
+                out[i, c] += a_q * dq_s[j, c] + a_v * dv_s[j, c] + m_ij * input_force[j, c]
+            for c in range(nv, 2 * nv):
+                out[i, c] += a_q * dq_s[j, c] + a_v * dv_s[j, c]
+            for c in range(2 * nv, nz):
+                out[i, c] += a_q * dq_s[j, c] + a_v * dv_s[j, c] + m_ij * input_force[j, c]
+
+
+@compiled(fastmath=True)
+def _axpy(alpha, x, y, out):
+    """``out = y + alpha x`` (2-D)."""
+    for i in range(out.shape[0]):
+        for c in range(out.shape[1]):
+            out[i, c] = y[i, c] + alpha * x[i, c]
 
 
 @compiled(fastmath=True)
@@ -377,15 +414,32 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
     v_stage = np.empty(nv)
     d_q_stage = np.empty((nv, nz))
     d_v_stage = np.empty((nv, nz))
+    no_thrust = np.zeros(0)
     if method == EULER:
         _acceleration_tangent(
-            model, env, t, q, v, tau, W, D, dq0, dv0, force_tangent, d_acc[0], acc[0], scratch
+            model,
+            env,
+            t,
+            q,
+            v,
+            tau,
+            W,
+            D,
+            dq0,
+            dv0,
+            force_tangent,
+            d_acc[0],
+            acc[0],
+            scratch,
+            no_thrust,
         )
         for i in range(nv):
             v_next[i] = v[i] + dt * acc[0, i]
             xi[i] = dt * v_next[i]
-        d_v_stage[:, :] = dv0 + dt * d_acc[0]
-        d_xi[:, :] = dt * d_v_stage
+        _axpy(dt, d_acc[0], dv0, d_v_stage)
+        for i in range(nv):
+            for c in range(nz):
+                d_xi[i, c] = dt * d_v_stage[i, c]
         integrate(q, xi, q_next)
         _configuration_tangent(xi, d_xi, nv, d_q_stage, d_conf, d_inc)
     else:
@@ -393,7 +447,21 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
         rate = np.empty((3, nv))  # k2, k3, k4
         d_rate = np.empty((3, nv, nz))
         _acceleration_tangent(
-            model, env, t, q, v, tau, W, D, dq0, dv0, force_tangent, d_acc[0], acc[0], scratch
+            model,
+            env,
+            t,
+            q,
+            v,
+            tau,
+            W,
+            D,
+            dq0,
+            dv0,
+            force_tangent,
+            d_acc[0],
+            acc[0],
+            scratch,
+            no_thrust,
         )
         for stage in range(1, 4):
             factor = half if stage < 3 else dt
@@ -404,11 +472,11 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
                 else:
                     xi[i] = factor * rate[stage - 2, i]
                 v_stage[i] = v[i] + factor * acc[stage - 1, i]
-            if stage == 1:
-                d_xi[:, :] = factor * dv0
-            else:
-                d_xi[:, :] = factor * d_rate[stage - 2]
-            d_v_stage[:, :] = dv0 + factor * d_acc[stage - 1]
+            source = dv0 if stage == 1 else d_rate[stage - 2]
+            for i in range(nv):
+                for c in range(nz):
+                    d_xi[i, c] = factor * source[i, c]
+            _axpy(factor, d_acc[stage - 1], dv0, d_v_stage)
             integrate(q, xi, q_stage)
             _configuration_tangent(xi, d_xi, nv, d_q_stage, d_conf, d_inc)
             _acceleration_tangent(
@@ -426,6 +494,7 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
                 d_acc[stage],
                 acc[stage],
                 scratch,
+                no_thrust,
             )
             tangent_rate(xi, v_stage, rate[stage - 1])
             rate_jacobians(xi, v_stage, d_rate_xi, d_rate_v)
@@ -435,8 +504,14 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
         for i in range(nv):
             xi[i] = sixth * (v[i] + 2.0 * rate[0, i] + 2.0 * rate[1, i] + rate[2, i])
             v_next[i] = v[i] + sixth * (acc[0, i] + 2.0 * acc[1, i] + 2.0 * acc[2, i] + acc[3, i])
-        d_xi[:, :] = sixth * (dv0 + 2.0 * d_rate[0] + 2.0 * d_rate[1] + d_rate[2])
-        d_v_stage[:, :] = dv0 + sixth * (d_acc[0] + 2.0 * d_acc[1] + 2.0 * d_acc[2] + d_acc[3])
+        for i in range(nv):
+            for c in range(nz):
+                d_xi[i, c] = sixth * (
+                    dv0[i, c] + 2.0 * d_rate[0, i, c] + 2.0 * d_rate[1, i, c] + d_rate[2, i, c]
+                )
+                d_v_stage[i, c] = dv0[i, c] + sixth * (
+                    d_acc[0, i, c] + 2.0 * d_acc[1, i, c] + 2.0 * d_acc[2, i, c] + d_acc[3, i, c]
+                )
         integrate(q, xi, q_next)
         _configuration_tangent(xi, d_xi, nv, d_q_stage, d_conf, d_inc)
     for i in range(nv):
@@ -459,7 +534,21 @@ def time_acceleration_derivatives(model, env, q, v, tau, repeats, W, D, outputs)
     dv, da_dq, da_dv, da_dtau, da_dc, da_dthrust = outputs
     for _ in range(repeats):
         acceleration_derivatives_into(
-            model, env, 0.0, q, v, tau, no_thrust, W, D, dv, da_dq, da_dv, da_dtau, da_dc, da_dthrust
+            model,
+            env,
+            0.0,
+            q,
+            v,
+            tau,
+            no_thrust,
+            W,
+            D,
+            dv,
+            da_dq,
+            da_dv,
+            da_dtau,
+            da_dc,
+            da_dthrust,
         )
 
 
