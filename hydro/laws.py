@@ -695,21 +695,29 @@ def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_curren
         rel[1] -= rot[0, 1] * c0 + rot[1, 1] * c1 + rot[2, 1] * c2
         rel[2] -= rot[0, 2] * c0 + rot[1, 2] * c1 + rot[2, 2] * c2
         x_link = fluid.link_from_body[k]
-        for i in range(6):
-            s = 0.0
-            for j in range(6):
-                s += x_link[i, j] * rel[j]
-            link_twist[i] = s
+        if fluid.link_is_body[k]:
+            for i in range(6):
+                link_twist[i] = rel[i]
+        else:
+            for i in range(6):
+                s = 0.0
+                for j in range(6):
+                    s += x_link[i, j] * rel[j]
+                link_twist[i] = s
         damping_wrench_jacobian(
             fluid.linear_damping[k], fluid.quadratic_damping[k], link_twist, link_jac
         )
         if fluid.has_crossflow[k]:
             x_cyl = fluid.cylinder_from_link[k]
-            for i in range(6):
-                s = 0.0
-                for j in range(6):
-                    s += x_cyl[i, j] * link_twist[j]
-                cyl_twist[i] = s
+            if fluid.cylinder_is_link[k]:
+                for i in range(6):
+                    cyl_twist[i] = link_twist[i]
+            else:
+                for i in range(6):
+                    s = 0.0
+                    for j in range(6):
+                        s += x_cyl[i, j] * link_twist[j]
+                    cyl_twist[i] = s
             crossflow_wrench_jacobian(
                 cyl_twist,
                 fluid.cylinder_length[k],
@@ -718,20 +726,31 @@ def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_curren
                 fluid.gauss_weights,
                 jac,
             )
-            # link_jac += X_cyl^T jac X_cyl
-            for i in range(6):
-                for j in range(6):
-                    s = 0.0
-                    for m in range(6):
-                        s += jac[i, m] * x_cyl[m, j]
-                    tmp[i, j] = s
-            for i in range(6):
-                for j in range(6):
-                    s = 0.0
-                    for m in range(6):
-                        s += x_cyl[m, i] * tmp[m, j]
-                    link_jac[i, j] += s
+            if fluid.cylinder_is_link[k]:
+                for i in range(6):
+                    for j in range(6):
+                        link_jac[i, j] += jac[i, j]
+            else:  # link_jac += X_cyl^T jac X_cyl
+                for i in range(6):
+                    for j in range(6):
+                        s = 0.0
+                        for m in range(6):
+                            s += jac[i, m] * x_cyl[m, j]
+                        tmp[i, j] = s
+                for i in range(6):
+                    for j in range(6):
+                        s = 0.0
+                        for m in range(6):
+                            s += x_cyl[m, i] * tmp[m, j]
+                        link_jac[i, j] += s
         # the link's damping acts on X nu_r: d_twist -= X^T link_jac X, d_current += its [:, :3]
+        if fluid.link_is_body[k]:
+            for i in range(6):
+                for j in range(6):
+                    d_twist[b, i, j] -= link_jac[i, j]
+                for j in range(3):
+                    d_current[b, i, j] += link_jac[i, j]
+            continue
         for i in range(6):
             for j in range(6):
                 s = 0.0

@@ -216,3 +216,72 @@ def test_non_uniform_current_is_a_one_line_error(paper_vehicle):
     shear = Current.shear([0.2, 0.0, 0.0], [0.0, 0.0, 0.1])
     with pytest.raises(ArgumentError, match="uniform in space"):
         paper_vehicle.acceleration_derivatives(q, v, np.zeros(paper_vehicle.nv), shear)
+
+
+def _random_fluid_model(rng, nb: int = 2) -> laws.FluidModel:
+    """Two bodies, two links whose frames and cylinder frames are moved off the bodies' (the
+    branches a bundled vehicle, whose links are their bodies, does not take)."""
+    from hydro.spatial import motion_transform
+
+    def rotation():
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        return q * np.sign(np.linalg.det(q))
+
+    nodes, weights = gauss_legendre_unit(laws.CROSSFLOW_NODES)
+    nl = 2
+    return laws.FluidModel(
+        added_mass=np.array([_random_inertia(rng) for _ in range(nb)]),
+        hydrostatics=rng.normal(size=(nb, 4)),
+        current_probe=np.zeros((nb, 3)),
+        link_body=np.array([0, 1], dtype=np.int64),
+        link_from_body=np.array(
+            [motion_transform(rotation(), rng.normal(size=3)) for _ in range(nl)]
+        ),
+        link_is_body=np.zeros(nl, dtype=np.int64),
+        linear_damping=rng.normal(size=(nl, 6, 6)),
+        quadratic_damping=rng.normal(size=(nl, 6, 6)),
+        quadratic_is_diagonal=np.zeros(nl, dtype=np.int64),
+        has_crossflow=np.ones(nl, dtype=np.int64),
+        cylinder_from_link=np.array(
+            [motion_transform(rotation(), rng.normal(size=3)) for _ in range(nl)]
+        ),
+        cylinder_is_link=np.zeros(nl, dtype=np.int64),
+        cylinder_length=np.array([0.6, 0.9]),
+        strip_coefficient=np.array([50.0, 80.0]),
+        gauss_nodes=nodes,
+        gauss_weights=weights,
+    )
+
+
+def test_body_fluid_bias_jacobians_with_moved_link_frames(rng):
+    fluid = _random_fluid_model(rng)
+    nb = 2
+    rotation = np.tile(np.eye(3), (nb, 1, 1))  # body axes = world axes: v_c is the current
+    twist = rng.normal(size=(nb, 6))
+    current = rng.normal(size=(nb, 3))
+
+    def bias(twist, current):
+        out = np.zeros((nb, 6))
+        laws.add_body_fluid_bias(
+            fluid, rotation, twist, current, out, np.zeros((nb, 6)), np.zeros((3, 6))
+        )
+        return out
+
+    d_twist, d_current, d_up = np.zeros((nb, 6, 6)), np.zeros((nb, 6, 3)), np.zeros((nb, 6, 3))
+    laws.body_fluid_bias_jacobians(
+        fluid, rotation, twist, current, d_twist, d_current, d_up, np.zeros((5, 6, 6))
+    )
+    for b in range(nb):
+
+        def by_twist(x, b=b):
+            moved = twist.copy()
+            moved[b] = x
+            return bias(moved, current)[b]
+
+        def by_current(x, b=b):
+            moved = current.copy()
+            moved[b] = x
+            return bias(twist, moved)[b]
+
+        assert_close_relative(d_twist[b], _central(by_twist, twist[b], 1e-6), 1e-7, "d/dnu")
+        assert_close_relative(d_current[b], _central(by_current, current[b], 1e-6), 1e-7, "d/dv_c")
