@@ -168,7 +168,8 @@ def integrate_jacobians(xi, d_configuration, d_increment):
     """Free-flyer blocks (6, 6) of ``d(q (+) xi)/d q`` (= ``Ad(exp(-xi))``) and ``d/d xi`` (= ``J_r(xi)``).
 
     ``Ad(exp(-xi))`` is the motion transform ``[[R^T, -R^T [p]], [0, R^T]]`` of ``exp(xi) = (R, p)``;
-    ``J_r(xi)`` is the inverse of the matrix of :func:`aiauv_pin.fast.kernels.tangent_rate`.
+    ``J_r(xi)`` is the inverse of the matrix of :func:`aiauv_pin.fast.kernels.tangent_rate`, block
+    upper triangular, so inverted by its 3x3 diagonal block.
     """
     identity = np.zeros(7)
     identity[6] = 1.0
@@ -200,7 +201,38 @@ def integrate_jacobians(xi, d_configuration, d_increment):
         unit[j] = 0.0
         for i in range(6):
             inverse[i, j] = column[i]
-    d_increment[:, :] = np.linalg.inv(inverse)
+    # J_r^-1 = [[Ai, Bi], [0, Ai]] (block upper triangular) => J_r = [[A, -A Bi A], [0, A]], A = Ai^-1
+    a00, a01, a02 = inverse[0, 0], inverse[0, 1], inverse[0, 2]
+    a10, a11, a12 = inverse[1, 0], inverse[1, 1], inverse[1, 2]
+    a20, a21, a22 = inverse[2, 0], inverse[2, 1], inverse[2, 2]
+    c00 = a11 * a22 - a12 * a21
+    c01 = a02 * a21 - a01 * a22
+    c02 = a01 * a12 - a02 * a11
+    det = a00 * c00 + a10 * c01 + a20 * c02
+    inv = np.empty((3, 3))
+    inv[0, 0], inv[0, 1], inv[0, 2] = c00 / det, c01 / det, c02 / det
+    inv[1, 0] = (a12 * a20 - a10 * a22) / det
+    inv[1, 1] = (a00 * a22 - a02 * a20) / det
+    inv[1, 2] = (a02 * a10 - a00 * a12) / det
+    inv[2, 0] = (a10 * a21 - a11 * a20) / det
+    inv[2, 1] = (a01 * a20 - a00 * a21) / det
+    inv[2, 2] = (a00 * a11 - a01 * a10) / det
+    for i in range(6):
+        for j in range(6):
+            d_increment[i, j] = 0.0
+    for i in range(3):
+        for j in range(3):
+            d_increment[i, j] = inv[i, j]
+            d_increment[3 + i, 3 + j] = inv[i, j]
+    for i in range(3):  # upper-right: -A Bi A
+        for j in range(3):
+            s = 0.0
+            for k in range(3):
+                t = 0.0
+                for m in range(3):
+                    t += inverse[k, 3 + m] * inv[m, j]
+                s += inv[i, k] * t
+            d_increment[i, 3 + j] = -s
 
 
 @compiled(fastmath=True)
