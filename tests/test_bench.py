@@ -73,3 +73,20 @@ def test_bench_rejects_a_bad_duration(capsys):
         main(["bench", "--duration", "-1"])
     assert exit_info.value.code != 0
     assert "--duration" in capsys.readouterr().err
+
+
+def test_derivative_section_measures_ratios_and_prints_them():
+    """The derivatives' section of ``aiauv bench`` (issue 16): a short run gives positive times,
+    the ratios to one evaluation and the targets, and the table prints them."""
+    pytest.importorskip("numba")
+    import aiauv_pin
+    from aiauv_pin.bench_derivatives import TARGETS, derivative_timings, format_rows
+
+    results = derivative_timings(aiauv_pin.load_vehicle(), quick=True, rounds=1)
+    assert results["targets"] == TARGETS
+    for name in ("all_jacobians", "rk4_transition", "euler_transition"):
+        assert results[f"{name}_us"] > 0.0
+        ratio = results[f"ratio_{name}_to_evaluation"]
+        assert ratio == pytest.approx(results[f"{name}_us"] / results["evaluation_us"])
+    text = "\n".join(format_rows(results))
+    assert "target <= 8x" in text and "target <= 40x" in text
