@@ -121,3 +121,21 @@ def test_format_modes_names_the_states(paper_vehicle):
     model = linearize(paper_vehicle, joint_gains=(30.0, 50.0))
     text = format_modes(model)
     assert "joint servo" in text and "base u" in text
+
+
+def test_a_users_controller_closes_the_loop_like_the_servo(paper_vehicle):
+    """A joint PD given as a controller function (differentiated by central differences) gives the
+    closed loop of the exact servo without hydrostatic compensation."""
+    vehicle = paper_vehicle
+    trim = straight_line_trim(vehicle, 0.5)
+    m, k_p, k_d = len(vehicle.thruster_names), 30.0, 50.0
+
+    def controller(q, v):
+        return np.concatenate(
+            (trim.thrusts, trim.joint_torques - k_p * (q[7:] - trim.q[7:]) - k_d * v[6:])
+        )
+
+    exact = linearize(vehicle, trim, joint_gains=(k_p, k_d), compensate_restoring=False)
+    by_function = linearize(vehicle, trim, controller=controller)
+    assert by_function.closed_loop == "controller" and m == 7
+    np.testing.assert_allclose(by_function.A, exact.A, rtol=1e-6, atol=1e-6 * np.abs(exact.A).max())
