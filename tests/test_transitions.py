@@ -9,6 +9,7 @@ import pytest
 from conftest import random_state
 
 import aiauv_pin
+from aiauv_pin.derivatives import compiled_derivatives
 from aiauv_pin.errors import ArgumentError
 from aiauv_pin.transitions import transition_jacobians
 
@@ -18,9 +19,10 @@ STEP = 1e-6
 
 
 def _step(vehicle, q, v, thrusts, joint_torques, dt, method, current):
-    tau = vehicle.fast.thrust_matrix(q) @ thrusts
+    fast = compiled_derivatives(vehicle)._fast  # the kernels (interpreted under NUMBA_DISABLE_JIT)
+    tau = fast.thrust_matrix(q) @ thrusts
     tau[6:] += joint_torques
-    return vehicle.fast.step(q, v, tau, dt, method=method, current=current)
+    return fast.step(q, v, tau, dt, method=method, current=current)
 
 
 def _finite_difference_jacobians(vehicle, q, v, thrusts, torques, dt, method, current):
