@@ -6,10 +6,12 @@ The main entry points::
     vehicle = aiauv_pin.load_vehicle()            # the paper's vehicle, uniform density
     dv = vehicle.acceleration(q, v, tau)          # forward dynamics with added mass, damping, restoring
     trajectory = aiauv_pin.simulate(vehicle, q0, v0, duration=10.0, dt=0.01)
+    model = aiauv_pin.linearize(vehicle)          # linear model about straight-line motion
 """
 
 from .errors import AiauvError, SimulationDiverged, VehicleLoadError
 from .integrators import rk4_step, semi_implicit_euler_step
+from .linear_model import linearize, straight_line_trim
 from .loading import BUNDLED_CASES, bundled_urdf, load_vehicle
 from .rollout import Rollout, rollout
 from .simulation import Trajectory, simulate
@@ -24,11 +26,13 @@ __all__ = [
     "Vehicle",
     "VehicleLoadError",
     "bundled_urdf",
+    "linearize",
     "load_vehicle",
     "rk4_step",
     "rollout",
     "semi_implicit_euler_step",
     "simulate",
+    "straight_line_trim",
 ]
 
 __version__ = "0.1.0"

@@ -570,6 +570,9 @@ def run_bench(
         results["ratio_numba_python_call_to_mj_forward"] = (
             dyn["numba_acceleration_python_call_us"] / mj["mj_forward_us"]
         )
+    from .bench_derivatives import derivative_timings
+
+    results["derivatives"] = derivative_timings(vehicle, quick)
     h2h = results["head_to_head"]
     if h2h:
         results["ratio_numba_in_kernel_to_mj_forward"] = h2h["ratio_numba_in_kernel_to_mj_forward"]
@@ -741,6 +744,10 @@ def format_table(results: dict) -> str:
     if cl is not None:
         row(f"'{cl['command']}' wall time", cl["wall_s"], "s")
         row("  end-to-end real-time factor (fresh process)", cl["real_time_factor"], "x")
+    if "derivatives" in results:
+        from .bench_derivatives import format_rows
+
+        lines.extend(format_rows(results["derivatives"]))
     acc = results["accuracy"]
     for r in acc["rows"]:
         if r["max_end_effector_error_m"] is None:

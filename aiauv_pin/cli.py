@@ -398,6 +398,7 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     from .bench import add_bench_parser
     from .interop.cli import add_interop_subcommands
+    from .linearize_cli import add_linearize_parser
     from .sweep import add_sweep_subcommand
 
     _add_simulate(subparsers)
@@ -407,6 +408,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_bench_parser(subparsers)
     add_sweep_subcommand(subparsers)
     add_interop_subcommands(subparsers)
+    add_linearize_parser(subparsers)
     return parser
 
 

@@ -504,6 +504,20 @@ class Vehicle:
             mass, bias = self._hydro_terms(q, v, current, t)
             return np.linalg.solve(mass, tau - bias)
 
+    def acceleration_derivatives(
+        self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, current=None, *, t: float = 0.0
+    ):
+        """Exact Jacobians of :meth:`acceleration` (see :mod:`aiauv_pin.derivatives`).
+
+        Returns:
+            An :class:`aiauv_pin.derivatives.AccelerationDerivatives`: ``(acceleration, da_dq,
+            da_dv, da_dtau, da_dcurrent)``, ``da_dq`` with respect to ``q (+) dq`` (tangent space, as
+            ``pinocchio.integrate``), ``da_dcurrent`` with respect to a uniform current (world axes).
+        """
+        from .derivatives import acceleration_derivatives
+
+        return acceleration_derivatives(self, q, v, tau, current, t=t)
+
     def fluid_forces(
         self, q: np.ndarray, v: np.ndarray, current=None, *, t: float = 0.0
     ) -> FluidForces:

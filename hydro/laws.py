@@ -519,3 +519,385 @@ def add_lagged_added_mass_bias(added_mass, relative, previous_relative, filtered
         w = coriolis_wrench(added, relative[b])
         for i in range(6):
             bias[b, i] += _row_dot(added, i, filtered[b]) + w[i]
+
+
+# ---------------------------------------------------------------------- derivatives of the laws
+# One law, one place: the derivative of each law above sits here, in the same module, and is
+# called by every backend's derivative code (aiauv_pin.fast.derivatives and the Pinocchio path of
+# aiauv_pin.derivatives). Each is the exact derivative of what its law computes (tests/test_laws.py
+# checks each against central differences of the law).
+@compiled(fastmath=True)
+def coriolis_wrench_jacobian(inertia, twist, out):
+    """``d/dnu [nu x* (M nu)]`` (6, 6) into ``out``: the derivative of :func:`coriolis_wrench`.
+
+    With ``h = M nu = (f, n)``: ``d(nu x* h) = dnu x* h + nu x* (M dnu)``, and
+    ``(dv, dw) x* (f, n) = (-[f] dw, -[f] dv - [n] dw)``, so
+    ``J = crf(nu) M + [[0, -[f]], [-[f], -[n]]]`` (Featherstone 2008, eq. (2.67);
+    Carpentier and Mansard 2018, the ``nu x*`` derivative of their RNEA derivatives).
+
+    Args:
+        inertia: Generalised inertia ``M`` (6, 6).
+        twist: Twist ``nu`` (6,) [m/s, rad/s].
+        out: Output (6, 6) [N s/m, N s, N m s].
+    """
+    v0, v1, v2, w0, w1, w2 = twist[0], twist[1], twist[2], twist[3], twist[4], twist[5]
+    for j in range(6):  # column j of crf(nu) M
+        f0, f1, f2 = inertia[0, j], inertia[1, j], inertia[2, j]
+        n0, n1, n2 = inertia[3, j], inertia[4, j], inertia[5, j]
+        out[0, j] = w1 * f2 - w2 * f1
+        out[1, j] = w2 * f0 - w0 * f2
+        out[2, j] = w0 * f1 - w1 * f0
+        out[3, j] = v1 * f2 - v2 * f1 + w1 * n2 - w2 * n1
+        out[4, j] = v2 * f0 - v0 * f2 + w2 * n0 - w0 * n2
+        out[5, j] = v0 * f1 - v1 * f0 + w0 * n1 - w1 * n0
+    f0 = _row_dot(inertia, 0, twist)
+    f1 = _row_dot(inertia, 1, twist)
+    f2 = _row_dot(inertia, 2, twist)
+    n0 = _row_dot(inertia, 3, twist)
+    n1 = _row_dot(inertia, 4, twist)
+    n2 = _row_dot(inertia, 5, twist)
+    # -[f] in the (0:3, 3:6) and (3:6, 0:3) blocks, -[n] in (3:6, 3:6); [a] b = a x b
+    for r in range(2):
+        o = 3 * r
+        c = 3 - o
+        out[o + 0, c + 1] += f2
+        out[o + 0, c + 2] -= f1
+        out[o + 1, c + 0] -= f2
+        out[o + 1, c + 2] += f0
+        out[o + 2, c + 0] += f1
+        out[o + 2, c + 1] -= f0
+    out[3, 4] += n2
+    out[3, 5] -= n1
+    out[4, 3] -= n2
+    out[4, 5] += n0
+    out[5, 3] += n1
+    out[5, 4] -= n0
+
+
+@compiled(fastmath=True)
+def current_acceleration_wrench_jacobian(
+    added_mass, omega0, omega1, omega2, vc0, vc1, vc2, by_omega, by_current
+):
+    """Derivatives of :func:`current_acceleration_wrench` ``M_A (omega x v_c, 0)``.
+
+    ``d/domega = -M_A[:, :3] [v_c]`` and ``d/dv_c = M_A[:, :3] [omega]`` (``[a] b = a x b``).
+
+    Args:
+        added_mass: ``M_A`` (6, 6).
+        omega0, omega1, omega2: Body angular velocity [rad/s].
+        vc0, vc1, vc2: Current in body axes [m/s].
+        by_omega: Output (6, 3): ``d/domega`` [N s, N m s].
+        by_current: Output (6, 3): ``d/dv_c`` [N s/m, N s].
+    """
+    for i in range(6):
+        m0, m1, m2 = added_mass[i, 0], added_mass[i, 1], added_mass[i, 2]
+        # row i of M_A[:, :3] [a] is (m_i x a)^T, [a] = [[0, -a2, a1], [a2, 0, -a0], [-a1, a0, 0]]
+        by_omega[i, 0] = -(m1 * vc2 - m2 * vc1)
+        by_omega[i, 1] = -(m2 * vc0 - m0 * vc2)
+        by_omega[i, 2] = -(m0 * vc1 - m1 * vc0)
+        by_current[i, 0] = m1 * omega2 - m2 * omega1
+        by_current[i, 1] = m2 * omega0 - m0 * omega2
+        by_current[i, 2] = m0 * omega1 - m1 * omega0
+
+
+@compiled(fastmath=True)
+def damping_wrench_jacobian(linear, quadratic, twist, out):
+    """``d/dnu_r`` of :func:`damping_wrench`: ``-D_L - D_Q diag(2 |nu_r|)`` (6, 6) into ``out``.
+
+    ``d(|x| x)/dx = 2 |x|`` (continuous, so the derivative exists everywhere).
+
+    Args:
+        linear: ``D_L`` (6, 6).
+        quadratic: ``D_Q`` (6, 6).
+        twist: ``nu_r`` (6,) [m/s, rad/s].
+        out: Output (6, 6) [N s/m, N s, N m s].
+    """
+    for j in range(6):
+        s = 2.0 * abs(twist[j])
+        for i in range(6):
+            out[i, j] = -linear[i, j] - quadratic[i, j] * s
+
+
+@compiled(fastmath=True)
+def crossflow_wrench_jacobian(velocity, length, coefficient, nodes, weights, out):
+    """``d/dnu`` of :func:`crossflow_wrench` (6, 6) into ``out``: exact for its quadrature.
+
+    With ``n(x) = a + b x`` (``a = (v, w)``, ``b = (r, -q)``) and ``g = |n| n``,
+    ``dg/dn = |n| I + n n^T / |n|`` (continuous). The rule's nodes move with the split point
+    ``s = -(a . b) / |b|^2`` (when it lies inside ``(0, L)``): on the first part ``x_k = s t_k``,
+    ``w_k = s omega_k``, on the second ``x_k = s + (L - s) t_k``, ``w_k = (L - s) omega_k``; the
+    derivative of the sum through ``s`` is added, so this is the derivative of the computed
+    quadrature, not of the exact integral (they differ by the quadrature error).
+
+    Args:
+        velocity: Twist of the cylinder frame relative to the water (6,).
+        length: ``L`` [m].
+        coefficient: ``k = rho r C_dC`` [kg/m^2].
+        nodes: Gauss-Legendre nodes on ``[0, 1]`` (n,).
+        weights: Their weights (n,).
+        out: Output (6, 6) [N s/m, N s, N m s]; rows 0 and 3 and columns 0 and 3 are 0.
+    """
+    a_y, a_z = velocity[1], velocity[2]
+    b_y, b_z = velocity[5], -velocity[4]
+    slope2 = b_y * b_y + b_z * b_z
+    split = 0.0
+    if slope2 > 0.0:
+        split = -(a_y * b_y + a_z * b_z) / slope2
+    interior = 0.0 < split < length
+    if split < 0.0:
+        split = 0.0
+    elif split > length:
+        split = length
+    # j_oi: outputs o = (fy, fz, my, mz) / coefficient by inputs i = (a_y, a_z, b_y, b_z); s_o: by split
+    j00 = j01 = j02 = j03 = 0.0
+    j10 = j11 = j12 = j13 = 0.0
+    j20 = j21 = j22 = j23 = 0.0
+    j30 = j31 = j32 = j33 = 0.0
+    s0 = s1 = s2 = s3 = 0.0
+    for part in range(2):
+        start = 0.0 if part == 0 else split
+        width = split if part == 0 else length - split
+        for k in range(nodes.shape[0]):
+            x = start + width * nodes[k]
+            w = width * weights[k]
+            ny = a_y + b_y * x
+            nz = a_z + b_z * x
+            speed = math.sqrt(ny * ny + nz * nz)
+            if speed > 0.0:
+                hyy = speed + ny * ny / speed
+                hzz = speed + nz * nz / speed
+                hyz = ny * nz / speed
+            else:
+                hyy = 0.0
+                hzz = 0.0
+                hyz = 0.0
+            # d g / d(a_y, a_z, b_y, b_z) = (H, H x), g = |n| n
+            wx = w * x
+            wxx = wx * x
+            j00 -= w * hyy
+            j01 -= w * hyz
+            j02 -= wx * hyy
+            j03 -= wx * hyz
+            j10 -= w * hyz
+            j11 -= w * hzz
+            j12 -= wx * hyz
+            j13 -= wx * hzz
+            j20 += wx * hyz
+            j21 += wx * hzz
+            j22 += wxx * hyz
+            j23 += wxx * hzz
+            j30 -= wx * hyy
+            j31 -= wx * hyz
+            j32 -= wxx * hyy
+            j33 -= wxx * hyz
+            if interior:
+                dx_ds = nodes[k] if part == 0 else 1.0 - nodes[k]
+                dw_ds = weights[k] if part == 0 else -weights[k]
+                gy = speed * ny
+                gz = speed * nz
+                dgy_dx = hyy * b_y + hyz * b_z  # dn/dx = b
+                dgz_dx = hyz * b_y + hzz * b_z
+                s0 -= dw_ds * gy + w * dgy_dx * dx_ds
+                s1 -= dw_ds * gz + w * dgz_dx * dx_ds
+                s2 += dw_ds * x * gz + w * (gz + x * dgz_dx) * dx_ds
+                s3 -= dw_ds * x * gy + w * (gy + x * dgy_dx) * dx_ds
+    if interior:
+        dot = a_y * b_y + a_z * b_z
+        e0 = -b_y / slope2
+        e1 = -b_z / slope2
+        e2 = -a_y / slope2 + 2.0 * dot * b_y / (slope2 * slope2)
+        e3 = -a_z / slope2 + 2.0 * dot * b_z / (slope2 * slope2)
+        j00 += s0 * e0
+        j01 += s0 * e1
+        j02 += s0 * e2
+        j03 += s0 * e3
+        j10 += s1 * e0
+        j11 += s1 * e1
+        j12 += s1 * e2
+        j13 += s1 * e3
+        j20 += s2 * e0
+        j21 += s2 * e1
+        j22 += s2 * e2
+        j23 += s2 * e3
+        j30 += s3 * e0
+        j31 += s3 * e1
+        j32 += s3 * e2
+        j33 += s3 * e3
+    for i in range(6):
+        for j in range(6):
+            out[i, j] = 0.0
+    k = coefficient
+    # columns: a_y = nu[1], a_z = nu[2], b_y = nu[5], b_z = -nu[4]
+    out[1, 1], out[1, 2], out[1, 5], out[1, 4] = k * j00, k * j01, k * j02, -k * j03
+    out[2, 1], out[2, 2], out[2, 5], out[2, 4] = k * j10, k * j11, k * j12, -k * j13
+    out[4, 1], out[4, 2], out[4, 5], out[4, 4] = k * j20, k * j21, k * j22, -k * j23
+    out[5, 1], out[5, 2], out[5, 5], out[5, 4] = k * j30, k * j31, k * j32, -k * j33
+
+
+@compiled(fastmath=True)
+def hydrostatic_wrench_jacobian(force, moment0, moment1, moment2, out):
+    """``d/de`` of :func:`hydrostatic_wrench` ``(F e, m x e)``: ``[[F I], [[m]]]`` (6, 3) into ``out``.
+
+    Args:
+        force: ``F`` [N].
+        moment0, moment1, moment2: ``m`` in body axes [N m].
+        out: Output (6, 3) [N, N m].
+    """
+    for i in range(6):
+        for j in range(3):
+            out[i, j] = 0.0
+    out[0, 0] = force
+    out[1, 1] = force
+    out[2, 2] = force
+    out[3, 1] = -moment2
+    out[3, 2] = moment1
+    out[4, 0] = moment2
+    out[4, 2] = -moment0
+    out[5, 0] = -moment1
+    out[5, 1] = moment0
+
+
+@compiled(fastmath=True)
+def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_current, d_up, scratch):
+    """Derivatives of :func:`add_body_fluid_bias` for every body, added to the outputs.
+
+    With ``bias_b(nu, v_c, e)`` the fluid part of body ``b``'s left-hand side (see
+    :func:`add_body_fluid_bias`; ``v_c = R^T V_c`` the current and ``e = R^T z`` the up axis in body
+    axes), by the chain rule through ``nu_r = nu - (v_c, 0)`` and ``nu_link = X nu_r``:
+
+    * ``d/dnu = C'(nu_r) + [0, d/domega of M_A (omega x v_c, 0)] - sum_links X^T J_D X``;
+    * ``d/dv_c = -(C'(nu_r) - sum_links X^T J_D X)[:, :3] + M_A[:, :3] [omega]``;
+    * ``d/de = -d(F e, m x e)/de``,
+
+    with ``C'`` from :func:`coriolis_wrench_jacobian` and ``J_D`` the sum of
+    :func:`damping_wrench_jacobian` and :func:`crossflow_wrench_jacobian` (moved to the link frame
+    by ``X_cyl^T J X_cyl``).
+
+    Args:
+        fluid: The vehicle's :class:`FluidModel`.
+        rotation: Body-to-world rotations (nb, 3, 3).
+        twist: Body twists in body axes (nb, 6) [m/s, rad/s].
+        current: Water velocity at each body's probe point, world axes (nb, 3) [m/s].
+        d_twist: Accumulator (nb, 6, 6): ``d bias / d nu``.
+        d_current: Accumulator (nb, 6, 3): ``d bias / d v_c`` (current in body axes).
+        d_up: Accumulator (nb, 6, 3): ``d bias / d e``.
+        scratch: Work array (5, 6, 6).
+    """
+    nb = twist.shape[0]
+    jac = scratch[0]
+    link_jac = scratch[1]
+    tmp = scratch[2]
+    cur = scratch[3]
+    rel = scratch[4, 0]
+    link_twist = scratch[4, 1]
+    cyl_twist = scratch[4, 2]
+    for b in range(nb):
+        rot = rotation[b]
+        c0, c1, c2 = current[b, 0], current[b, 1], current[b, 2]
+        vc0 = rot[0, 0] * c0 + rot[1, 0] * c1 + rot[2, 0] * c2
+        vc1 = rot[0, 1] * c0 + rot[1, 1] * c1 + rot[2, 1] * c2
+        vc2 = rot[0, 2] * c0 + rot[1, 2] * c1 + rot[2, 2] * c2
+        for i in range(6):
+            rel[i] = twist[b, i]
+        rel[0] -= vc0
+        rel[1] -= vc1
+        rel[2] -= vc2
+        added = fluid.added_mass[b]
+        coriolis_wrench_jacobian(added, rel, jac)
+        for i in range(6):
+            for j in range(6):
+                d_twist[b, i, j] += jac[i, j]
+            for j in range(3):
+                d_current[b, i, j] -= jac[i, j]
+        current_acceleration_wrench_jacobian(
+            added, twist[b, 3], twist[b, 4], twist[b, 5], vc0, vc1, vc2, cur[:, :3], cur[:, 3:]
+        )
+        for i in range(6):
+            for j in range(3):
+                d_twist[b, i, 3 + j] += cur[i, j]
+                d_current[b, i, j] += cur[i, 3 + j]
+        h = fluid.hydrostatics[b]
+        hydrostatic_wrench_jacobian(h[0], h[1], h[2], h[3], tmp[:, :3])
+        for i in range(6):
+            for j in range(3):
+                d_up[b, i, j] -= tmp[i, j]
+    for k in range(fluid.link_body.shape[0]):
+        b = fluid.link_body[k]
+        rot = rotation[b]
+        c0, c1, c2 = current[b, 0], current[b, 1], current[b, 2]
+        for i in range(6):
+            rel[i] = twist[b, i]
+        rel[0] -= rot[0, 0] * c0 + rot[1, 0] * c1 + rot[2, 0] * c2
+        rel[1] -= rot[0, 1] * c0 + rot[1, 1] * c1 + rot[2, 1] * c2
+        rel[2] -= rot[0, 2] * c0 + rot[1, 2] * c1 + rot[2, 2] * c2
+        x_link = fluid.link_from_body[k]
+        if fluid.link_is_body[k]:
+            for i in range(6):
+                link_twist[i] = rel[i]
+        else:
+            for i in range(6):
+                s = 0.0
+                for j in range(6):
+                    s += x_link[i, j] * rel[j]
+                link_twist[i] = s
+        damping_wrench_jacobian(
+            fluid.linear_damping[k], fluid.quadratic_damping[k], link_twist, link_jac
+        )
+        if fluid.has_crossflow[k]:
+            x_cyl = fluid.cylinder_from_link[k]
+            if fluid.cylinder_is_link[k]:
+                for i in range(6):
+                    cyl_twist[i] = link_twist[i]
+            else:
+                for i in range(6):
+                    s = 0.0
+                    for j in range(6):
+                        s += x_cyl[i, j] * link_twist[j]
+                    cyl_twist[i] = s
+            crossflow_wrench_jacobian(
+                cyl_twist,
+                fluid.cylinder_length[k],
+                fluid.strip_coefficient[k],
+                fluid.gauss_nodes,
+                fluid.gauss_weights,
+                jac,
+            )
+            if fluid.cylinder_is_link[k]:
+                for i in range(6):
+                    for j in range(6):
+                        link_jac[i, j] += jac[i, j]
+            else:  # link_jac += X_cyl^T jac X_cyl
+                for i in range(6):
+                    for j in range(6):
+                        s = 0.0
+                        for m in range(6):
+                            s += jac[i, m] * x_cyl[m, j]
+                        tmp[i, j] = s
+                for i in range(6):
+                    for j in range(6):
+                        s = 0.0
+                        for m in range(6):
+                            s += x_cyl[m, i] * tmp[m, j]
+                        link_jac[i, j] += s
+        # the link's damping acts on X nu_r: d_twist -= X^T link_jac X, d_current += its [:, :3]
+        if fluid.link_is_body[k]:
+            for i in range(6):
+                for j in range(6):
+                    d_twist[b, i, j] -= link_jac[i, j]
+                for j in range(3):
+                    d_current[b, i, j] += link_jac[i, j]
+            continue
+        for i in range(6):
+            for j in range(6):
+                s = 0.0
+                for m in range(6):
+                    s += link_jac[i, m] * x_link[m, j]
+                tmp[i, j] = s
+        for i in range(6):
+            for j in range(6):
+                s = 0.0
+                for m in range(6):
+                    s += x_link[m, i] * tmp[m, j]
+                d_twist[b, i, j] -= s
+                if j < 3:
+                    d_current[b, i, j] += s

@@ -126,3 +126,20 @@ def test_pinocchio_path_runs_blas_on_one_thread_for_large_models():
     with single_threaded_blas(SINGLE_THREAD_BLAS_FROM_NV - 1):
         small = [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
     assert small == before
+
+
+def test_derivative_section_measures_ratios_and_prints_them():
+    """The derivatives' section of ``aiauv bench`` (issue 16): a short run gives positive times,
+    the ratios to one evaluation and the targets, and the table prints them."""
+    pytest.importorskip("numba")
+    import aiauv_pin
+    from aiauv_pin.bench_derivatives import TARGETS, derivative_timings, format_rows
+
+    results = derivative_timings(aiauv_pin.load_vehicle(), quick=True, rounds=1)
+    assert results["targets"] == TARGETS
+    for name in ("all_jacobians", "rk4_transition", "euler_transition"):
+        assert results[f"{name}_us"] > 0.0
+        ratio = results[f"ratio_{name}_to_evaluation"]
+        assert ratio == pytest.approx(results[f"{name}_us"] / results["evaluation_us"])
+    text = "\n".join(format_rows(results))
+    assert "target <= 8x" in text and "target <= 40x" in text
