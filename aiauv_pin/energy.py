@@ -3,7 +3,7 @@
 Pure post-processing of a trajectory; every power formula of the project lives here.
 
 Thruster (momentum theory, ideal actuator disk at zero advance speed; e.g. Fossen 2021, Sec. 6.7, or
-any propeller text such as Carlton, *Marine Propellers and Propulsion*, 4th ed., 2019, Ch. 5):
+any propeller text such as Carlton, *Marine Propellers and Propulsion*, 4th ed., 2019, Ch. 5)::
 
     P_ideal = |T|^{3/2} / sqrt(2 rho A)   [W],     P_el = P_ideal / eta
 
@@ -14,7 +14,7 @@ the longitudinal ones at speed; the same formula is used for every controller, s
 two controllers on the same vehicle does not depend on this choice for the tunnel thrusters.
 
 Joint motor (DC motor with gear ratio ``N`` and torque constant ``k_t``; the motor current is
-``i = tau / (k_t N)``):
+``i = tau / (k_t N)``)::
 
     P_joint = max(tau q_dot, 0) + R (tau / (k_t N))^2   [W]
 

@@ -619,6 +619,24 @@ def damping_wrench_jacobian(linear, quadratic, twist, out):
 
 
 @compiled(fastmath=True)
+def forward_speed_damping_wrench_jacobian(forward, twist, out):
+    """``d/dnu_r`` of :func:`forward_speed_damping_wrench`: ``-u_r D_F - (D_F nu_r) e_1^T`` (6, 6)
+    into ``out`` (``e_1`` picks the surge component).
+
+    Args:
+        forward: ``D_F`` (6, 6).
+        twist: ``nu_r`` (6,) [m/s, rad/s].
+        out: Output (6, 6) [N s/m, N s, N m s].
+    """
+    u = twist[0]
+    for i in range(6):
+        row = _row_dot(forward, i, twist)
+        for j in range(6):
+            out[i, j] = -u * forward[i, j]
+        out[i, 0] -= row
+
+
+@compiled(fastmath=True)
 def crossflow_wrench_jacobian(velocity, length, coefficient, nodes, weights, out):
     """``d/dnu`` of :func:`crossflow_wrench` (6, 6) into ``out``: exact for its quadrature.
 
@@ -770,8 +788,8 @@ def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_curren
     * ``d/de = -d(F e, m x e)/de``,
 
     with ``C'`` from :func:`coriolis_wrench_jacobian` and ``J_D`` the sum of
-    :func:`damping_wrench_jacobian` and :func:`crossflow_wrench_jacobian` (moved to the link frame
-    by ``X_cyl^T J X_cyl``).
+    :func:`damping_wrench_jacobian`, :func:`forward_speed_damping_wrench_jacobian` and
+    :func:`crossflow_wrench_jacobian` (moved to the link frame by ``X_cyl^T J X_cyl``).
 
     Args:
         fluid: The vehicle's :class:`FluidModel`.
@@ -843,6 +861,11 @@ def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_curren
         damping_wrench_jacobian(
             fluid.linear_damping[k], fluid.quadratic_damping[k], link_twist, link_jac
         )
+        if fluid.has_forward_speed_damping[k]:
+            forward_speed_damping_wrench_jacobian(fluid.forward_speed_damping[k], link_twist, jac)
+            for i in range(6):
+                for j in range(6):
+                    link_jac[i, j] += jac[i, j]
         if fluid.has_crossflow[k]:
             x_cyl = fluid.cylinder_from_link[k]
             if fluid.cylinder_is_link[k]:

@@ -91,6 +91,15 @@ def test_damping_wrench_jacobian(rng, diagonal):
         assert_close_relative(exact, approx, 1e-8, "damping")
 
 
+def test_forward_speed_damping_wrench_jacobian(rng):
+    for _ in range(5):
+        forward, twist = rng.normal(size=(6, 6)), rng.normal(size=6)
+        exact = np.zeros((6, 6))
+        laws.forward_speed_damping_wrench_jacobian(forward, twist, exact)
+        approx = _central(lambda x, d=forward: laws.forward_speed_damping_wrench(d, x), twist)
+        assert_close_relative(exact, approx, 1e-8, "forward-speed damping")
+
+
 @pytest.mark.parametrize("case", ["split inside", "split at an end", "pure translation"])
 def test_crossflow_wrench_jacobian_is_the_quadrature_derivative(rng, case):
     nodes, weights = gauss_legendre_unit(laws.CROSSFLOW_NODES)
@@ -145,6 +154,14 @@ def _load(name: str, folder) -> aiauv_pin.Vehicle:
         return aiauv_pin.load_vehicle(aiauv_pin.bundled_urdf(name))
     if name == "single_body":
         text = single_body_urdf()[0]
+    elif name == "single_body_forward_speed":  # with UUV Simulator's surge-proportional damping
+        a = np.random.default_rng(5).normal(size=(6, 6))
+        forward = " ".join(repr(float(x)) for x in np.ravel(a @ a.T))
+        text = single_body_urdf()[0].replace(
+            "</quadratic_damping>",
+            f"</quadratic_damping><linear_damping_forward_speed>{forward}"
+            "</linear_damping_forward_speed>",
+        )
     else:
         n, seed = (int(x) for x in name.removeprefix("generated_").split("_"))
         text = build_urdf(spec_from_dict(_generated_table(n, seed)))
@@ -153,7 +170,14 @@ def _load(name: str, folder) -> aiauv_pin.Vehicle:
     return aiauv_pin.load_vehicle(path)
 
 
-VEHICLES = ["uniform", "stabilised", "single_body", "generated_4_3", "generated_7_11"]
+VEHICLES = [
+    "uniform",
+    "stabilised",
+    "single_body",
+    "single_body_forward_speed",
+    "generated_4_3",
+    "generated_7_11",
+]
 
 
 @pytest.fixture(scope="module", params=VEHICLES)
