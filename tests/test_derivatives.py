@@ -265,6 +265,8 @@ def _random_fluid_model(rng, nb: int = 2) -> laws.FluidModel:
         linear_damping=rng.normal(size=(nl, 6, 6)),
         quadratic_damping=rng.normal(size=(nl, 6, 6)),
         quadratic_is_diagonal=np.zeros(nl, dtype=np.int64),
+        forward_speed_damping=rng.normal(size=(nl, 6, 6)),
+        has_forward_speed_damping=np.ones(nl, dtype=np.int64),
         has_crossflow=np.ones(nl, dtype=np.int64),
         cylinder_from_link=np.array(
             [motion_transform(rotation(), rng.normal(size=3)) for _ in range(nl)]
