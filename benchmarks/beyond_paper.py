@@ -42,9 +42,11 @@ OUT = HERE / "beyond_paper.json"
 JOINT_LIMIT_DEG = 65.0
 CASES = ("uniform", "stabilised")
 #: The extensions of each comparison (scenario-file ``[controller]`` keys).
-#: Curved paths, by case: the turn-rate feedforward and integral LOS (sigma = 1); the
-#: roll-stabilised vehicle also with the hydrostatic compensation at K_m = 10 N m/rad (the best of
-#: a few tried: sigma 1-2, K_m none, 7, 10, 15; see the README).
+#: Curved paths, by case: the turn-rate feedforward and integral LOS (sigma = 1, the paper's
+#: k_e = u_d / 10); the roll-stabilised vehicle as ``examples/helix_stabilised.toml``: also the
+#: hydrostatic compensation at K_m = 10 N m/rad, with k_e = 0.1 1/s (lookahead 5 m), k_p = 4 (the
+#: compensation, fed by the actual restoring moment, softens the pointing loop) and sigma = 0.5
+#: (see the README).
 CURVED = {
     "uniform": {
         "turn_feedforward": True,
@@ -52,14 +54,18 @@ CURVED = {
         "los_integral_gain": 1.0,
     },
     "stabilised": {
+        "k_e": 0.1,
+        "k_p": 4.0,
         "turn_feedforward": True,
         "current_compensation": "integral_los",
-        "los_integral_gain": 1.0,
+        "los_integral_gain": 0.5,
         "hydrostatic_compensation": True,
         "turn_moment_gain": 10.0,
     },
 }
 ILOS = {"current_compensation": "integral_los"}
+#: Integral LOS with the lookahead halved (k_e = 0.1 1/s, 5 m): twice as fast, same damping.
+ILOS_FAST = {"current_compensation": "integral_los", "k_e": 0.1}
 HYDROSTATIC = {"hydrostatic_compensation": True}
 #: Item 4: the turn feedforward with the base-angle gains placed on the identified turn model.
 TURN_GAINS = {"turn_feedforward": True, "k_p": 4.0, "k_d": 6.0}
@@ -211,7 +217,11 @@ def main(argv=None) -> None:
     if "currents" in parts:
         for example in ("current_across.toml", "current_45deg.toml"):
             for case in CASES:
-                for label, keys in (("paper", {}), ("integral_los", ILOS)):
+                for label, keys in (
+                    ("paper", {}),
+                    ("integral_los", ILOS),
+                    ("integral_los_k_e_0.1", ILOS_FAST),
+                ):
                     result = run(vehicles, case, d, keys, example=example)
                     record("currents", f"{example[:-5]}/{case}/{label}", figures(result))
     if "hydrostatic" in parts:
