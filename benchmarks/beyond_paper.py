@@ -6,7 +6,7 @@ Runs the paper's vehicle (both cases) for 300 s on
   with the paper's law and with the curvature (turn-rate) feedforward plus integral LOS;
 * the paper's x-axis in a 0.2 m/s current across the path (``examples/current_across.toml``) and
   one at 45 degrees in the y-z plane (``examples/current_45deg.toml``), with and without the integral
-  LOS;
+  LOS, and with the controller of the curved paths;
 * the paper's scenario (start ``(0, 2, 2)`` m) with and without the hydrostatic compensation (and a
   sweep of its gain), and with the turn feedforward and gains chosen on the identified turn model;
 
@@ -64,8 +64,6 @@ CURVED = {
     },
 }
 ILOS = {"current_compensation": "integral_los"}
-#: Integral LOS with the lookahead halved (k_e = 0.1 1/s, 5 m): twice as fast, same damping.
-ILOS_FAST = {"current_compensation": "integral_los", "k_e": 0.1}
 HYDROSTATIC = {"hydrostatic_compensation": True}
 #: Item 4: the turn feedforward with the base-angle gains placed on the identified turn model.
 TURN_GAINS = {"turn_feedforward": True, "k_p": 4.0, "k_d": 6.0}
@@ -220,7 +218,7 @@ def main(argv=None) -> None:
                 for label, keys in (
                     ("paper", {}),
                     ("integral_los", ILOS),
-                    ("integral_los_k_e_0.1", ILOS_FAST),
+                    ("curved_path_controller", CURVED[case]),
                 ):
                     result = run(vehicles, case, d, keys, example=example)
                     record("currents", f"{example[:-5]}/{case}/{label}", figures(result))
