@@ -657,7 +657,8 @@ def path_following_command(
     Beyond the paper, switched on in ``gains`` (all off: the paper's law, to the last bit):
 
     * ``integral_los``: the guidance acts on ``e_i + sigma z_i`` (:func:`integral_los_bias`), which
-      removes the steady cross-track offset of a constant current.
+      removes the steady cross-track offset of a constant current; on a path with torsion ``z``
+      turns with the curvature direction (:func:`normal_plane_turn_rate`).
     * ``turn_feedforward``: the base angles hold the reference turn rate through the identified
       turn dynamics of the body, ``T d(omega)/dt + omega = G q_0`` per axis (end-effector angular
       velocity ``omega`` about its y and z axes, base angle ``q_0``; identified by step responses,
