@@ -6,7 +6,7 @@ Runs the paper's vehicle (both cases) for 300 s on
   with the paper's law and with the curvature (turn-rate) feedforward plus integral LOS;
 * the paper's x-axis in a 0.2 m/s current across the path (``examples/current_across.toml``) and
   one at 45 degrees in the y-z plane (``examples/current_45deg.toml``), with and without the integral
-  LOS;
+  LOS, and with the controller of the curved paths;
 * the paper's scenario (start ``(0, 2, 2)`` m) with and without the hydrostatic compensation (and a
   sweep of its gain), and with the turn feedforward and gains chosen on the identified turn model;
 
@@ -42,9 +42,11 @@ OUT = HERE / "beyond_paper.json"
 JOINT_LIMIT_DEG = 65.0
 CASES = ("uniform", "stabilised")
 #: The extensions of each comparison (scenario-file ``[controller]`` keys).
-#: Curved paths, by case: the turn-rate feedforward and integral LOS (sigma = 1); the
-#: roll-stabilised vehicle also with the hydrostatic compensation at K_m = 10 N m/rad (the best of
-#: a few tried: sigma 1-2, K_m none, 7, 10, 15; see the README).
+#: Curved paths, by case: the turn-rate feedforward and integral LOS (sigma = 1, the paper's
+#: k_e = u_d / 10); the roll-stabilised vehicle as ``examples/helix_stabilised.toml``: also the
+#: hydrostatic compensation at K_m = 10 N m/rad, with k_e = 0.1 1/s (lookahead 5 m), k_p = 4 (the
+#: compensation, fed by the actual restoring moment, softens the pointing loop) and sigma = 0.5
+#: (see the README).
 CURVED = {
     "uniform": {
         "turn_feedforward": True,
@@ -52,14 +54,28 @@ CURVED = {
         "los_integral_gain": 1.0,
     },
     "stabilised": {
+        "k_e": 0.1,
+        "k_p": 4.0,
         "turn_feedforward": True,
         "current_compensation": "integral_los",
-        "los_integral_gain": 1.0,
+        "los_integral_gain": 0.5,
         "hydrostatic_compensation": True,
         "turn_moment_gain": 10.0,
     },
 }
 ILOS = {"current_compensation": "integral_los"}
+#: Currents, roll-stabilised vehicle (``examples/current_across_stabilised.toml``): integral LOS
+#: (sigma = 0.5, the paper's k_e) with the hydrostatic compensation (K_m = 10 N m/rad, k_p = 4) and
+#: the uniform vehicle's k_d = 19 instead of 12, which leaves a yaw oscillation of ~46 s period
+#: ringing across the path (see the README).
+CURRENT_STABILISED = {
+    "k_p": 4.0,
+    "k_d": 19.0,
+    "current_compensation": "integral_los",
+    "los_integral_gain": 0.5,
+    "hydrostatic_compensation": True,
+    "turn_moment_gain": 10.0,
+}
 HYDROSTATIC = {"hydrostatic_compensation": True}
 #: Item 4: the turn feedforward with the base-angle gains placed on the identified turn model.
 TURN_GAINS = {"turn_feedforward": True, "k_p": 4.0, "k_d": 6.0}
@@ -211,7 +227,14 @@ def main(argv=None) -> None:
     if "currents" in parts:
         for example in ("current_across.toml", "current_45deg.toml"):
             for case in CASES:
-                for label, keys in (("paper", {}), ("integral_los", ILOS)):
+                variants = [
+                    ("paper", {}),
+                    ("integral_los", ILOS),
+                    ("curved_path_controller", CURVED[case]),
+                ]
+                if case == "stabilised":
+                    variants.append(("ilos_hydrostatic_k_d_19", CURRENT_STABILISED))
+                for label, keys in variants:
                     result = run(vehicles, case, d, keys, example=example)
                     record("currents", f"{example[:-5]}/{case}/{label}", figures(result))
     if "hydrostatic" in parts:

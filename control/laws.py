@@ -220,7 +220,31 @@ def _ilos_rate(e, z, lookahead, sigma):
 
 
 @compiled
-def integral_los_bias(state, t, errors, u_d, k_y, k_z, sigma):
+def normal_plane_turn_rate(path_point, p_dot, e1, e2):
+    """Rate at which the path's curvature direction turns about ``T`` in ``(N1, N2)`` [rad/s].
+
+    With ``kappa = k1 N1 + k2 N2`` in the rotation-minimising frame, its angle
+    ``phi = atan2(k2, k1)`` advances at ``phi' = (k1 k2' - k2 k1') / (k1^2 + k2^2)`` per metre,
+    which is the path's torsion (the rotation-minimising frame does not turn about ``T``, the Frenet
+    frame turns at the torsion; Bishop 1975, "There is more than one way to frame a curve", Amer.
+    Math. Monthly 82(3)); times ``s_dot = T . p_dot / (1 - k1 e1 - k2 e2)`` (see
+    :func:`biased_los_guidance`). Zero on straight segments and on plane curves; ``0.0975 1/m``
+    curvature and ``0.0155 1/m`` torsion on the 10 m, 10 m-per-turn helix.
+    """
+    k1, k2 = path_point.curvature1, path_point.curvature2
+    kk = k1 * k1 + k2 * k2
+    if kk == 0.0:
+        return 0.0
+    torsion = (k1 * path_point.curvature2_rate - k2 * path_point.curvature1_rate) / kk
+    if torsion == 0.0:
+        return 0.0
+    t = path_point.tangent
+    s_dot = (t[0] * p_dot[0] + t[1] * p_dot[1] + t[2] * p_dot[2]) / (1.0 - k1 * e1 - k2 * e2)
+    return torsion * s_dot
+
+
+@compiled
+def integral_los_bias(state, t, errors, u_d, k_y, k_z, sigma, frame_rate=0.0):
     """Integral LOS bias ``b_i = sigma z_i`` and its time derivatives at time ``t``; advances ``state``.
 
     Integral line-of-sight guidance of Borhaug, Pavlov and Pettersen (2008, "Integral LOS control for
@@ -236,11 +260,25 @@ def integral_los_bias(state, t, errors, u_d, k_y, k_z, sigma):
     (anti-windup by construction). ``z`` advances by its previous rate held over the elapsed time
     (zero-order hold, like :func:`surge_pi`).
 
+    On a path with torsion (a helix) the offset the vehicle needs in a steady turn (the head's
+    sideslip and angle of attack, set by the curvature) is steady in the Frenet frame, which turns
+    about ``T`` at ``frame_rate`` (:func:`normal_plane_turn_rate`) relative to ``(N1, N2)``. An
+    integrator fixed in ``(N1, N2)`` can follow that turning bias only with a steady error
+    ``e = |b| frame_rate Delta / sigma`` (2.3 cm on the helix at ``sigma = 1``, ``Delta = 5 m``). So
+    ``z`` turns with the curvature direction:
+
+        z_dot = (Delta_1 e_1 / (...), Delta_2 e_2 / (...)) + frame_rate (-z_2, z_1),
+
+    exact for a constant bias in the Frenet frame; on straight segments and plane curves
+    ``frame_rate = 0`` and this is Borhaug's law. In ``b_ddot`` the frame rate is held constant.
+
     Args:
         state: :class:`GuidanceState` (advanced).
         t: Time [s].
         errors: ``(e_1, e_2, e_1_dot, e_2_dot)`` of :func:`cross_track_errors`.
         u_d: Desired speed [m/s]; k_y, k_z: cross-track gains [1/s]; sigma: integral gain [-] (> 0).
+        frame_rate: Turn rate of the curvature direction about ``T`` [rad/s]
+            (:func:`normal_plane_turn_rate`; 0 on a line).
 
     Returns:
         ``(b_1, b_2, b_1_dot, b_2_dot, b_1_ddot, b_2_ddot)`` [m], [m/s], [m/s^2] for
@@ -251,12 +289,14 @@ def integral_los_bias(state, t, errors, u_d, k_y, k_z, sigma):
         state.integral[0] += state.rate[0] * h
         state.integral[1] += state.rate[1] * h
     out = np.zeros(6)
+    # turning of the integrator with the curvature direction: frame_rate (-z_2, z_1)
+    turn = (-frame_rate * state.integral[1], frame_rate * state.integral[0])
     for i in range(2):
         gain = k_y if i == 0 else k_z
         lookahead = u_d / gain
         e, e_dot = errors[i], errors[2 + i]
         z = state.integral[i]
-        z_dot = _ilos_rate(e, z, lookahead, sigma)
+        z_dot = _ilos_rate(e, z, lookahead, sigma) + turn[i]
         g = e + sigma * z
         den = g * g + lookahead * lookahead
         # d/dt [Delta e / den] = Delta (e_dot den - e 2 g (e_dot + sigma z_dot)) / den^2
@@ -265,6 +305,10 @@ def integral_los_bias(state, t, errors, u_d, k_y, k_z, sigma):
         out[i] = sigma * z
         out[2 + i] = sigma * z_dot
         out[4 + i] = sigma * z_ddot
+    if frame_rate != 0.0:
+        # d/dt of frame_rate (-z_2, z_1) with frame_rate held: frame_rate (-z_2_dot, z_1_dot)
+        out[4] -= frame_rate * out[3]
+        out[5] += frame_rate * out[2]
     state.has_previous[0] = 1.0
     state.time[0] = t
     return out[0], out[1], out[2], out[3], out[4], out[5]
@@ -613,7 +657,8 @@ def path_following_command(
     Beyond the paper, switched on in ``gains`` (all off: the paper's law, to the last bit):
 
     * ``integral_los``: the guidance acts on ``e_i + sigma z_i`` (:func:`integral_los_bias`), which
-      removes the steady cross-track offset of a constant current.
+      removes the steady cross-track offset of a constant current; on a path with torsion ``z``
+      turns with the curvature direction (:func:`normal_plane_turn_rate`).
     * ``turn_feedforward``: the base angles hold the reference turn rate through the identified
       turn dynamics of the body, ``T d(omega)/dt + omega = G q_0`` per axis (end-effector angular
       velocity ``omega`` about its y and z axes, base angle ``q_0``; identified by step responses,
@@ -655,14 +700,16 @@ def path_following_command(
     point = path_point_of(path_function, path_kind, position, path_parameters)
     bias = _NO_BIAS
     if gains.integral_los:
+        errors = cross_track_errors(point, position, velocity)
         bias = integral_los_bias(  # Borhaug et al. (2008), in 3-D
             guidance_state,
             t,
-            cross_track_errors(point, position, velocity),
+            errors,
             gains.u_d,
             gains.k_y,
             gains.k_z,
             gains.los_integral_gain,
+            normal_plane_turn_rate(point, velocity, errors[0], errors[1]),
         )
     x_ref, x_dot, x_ddot = biased_los_guidance(  # eq. (21)
         point, position, velocity, acceleration, gains.u_d, gains.k_y, gains.k_z, bias

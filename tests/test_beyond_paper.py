@@ -127,6 +127,47 @@ def test_integral_los_follows_borhaug_closed_form():
     assert got[4] == pytest.approx(numeric, rel=1e-6)
 
 
+def test_curvature_direction_turns_at_the_torsion_on_a_helix_and_not_on_plane_paths():
+    # Bishop (1975): in a rotation-minimising frame the curvature vector turns at the torsion
+    helix = HelixPath(centre=(0.0, 0.0, 0.0), axis=(0.0, 0.0, 1.0), radius=10.0, pitch=10.0)
+    p = helix.points_at(np.array([7.0]))[0]
+    point = helix.closest(p)
+    speed = 0.5
+    p_dot = speed * np.array(point.tangent)
+    rate = laws.normal_plane_turn_rate(point, p_dot, 0.0, 0.0)
+    assert abs(rate) == pytest.approx(helix.torsion * speed, rel=1e-9)
+    # and in the sense the (k1, k2) angle advances along the path
+    ahead = helix.closest(helix.points_at(np.array([7.0 + 1e-4]))[0])
+    turned = math.atan2(ahead.curvature2, ahead.curvature1)
+    turned -= math.atan2(point.curvature2, point.curvature1)
+    assert rate / speed == pytest.approx(turned / 1e-4, rel=1e-5)
+    circle = HelixPath(centre=(0.0, 0.0, 0.0), axis=(0.0, 0.0, 1.0), radius=10.0, pitch=0.0)
+    line = LinePath(point=(0.0, 0.0, 0.0), direction=(1.0, 0.0, 0.0))
+    for path in (circle, line):
+        q = np.array([3.0, 9.0, 0.5])
+        assert laws.normal_plane_turn_rate(path.closest(q), p_dot, 0.1, 0.2) == 0.0
+
+
+def test_integral_los_integrator_turns_with_the_frame_rate_on_the_path():
+    # on the path (e = 0) Borhaug's rate vanishes and z only turns: z_dot = w (-z_2, z_1)
+    z, w, sigma = np.array([0.4, -0.3]), 0.01, 0.8
+    state = laws.GuidanceState(z.copy(), np.zeros(1), np.zeros(1), np.zeros(2))
+    got = laws.integral_los_bias(state, 0.0, (0.0, 0.0, 0.0, 0.0), 0.5, 0.1, 0.1, sigma, w)
+    np.testing.assert_allclose(got[2:4], sigma * w * np.array([-z[1], z[0]]), rtol=1e-14)
+    np.testing.assert_allclose(got[4:6], -sigma * w * w * z, rtol=1e-14)
+    for k in range(1, 1001):  # 10 s in steps of 10 ms: a turn by w * 10 s = 0.1 rad
+        laws.integral_los_bias(state, 0.01 * k, (0.0, 0.0, 0.0, 0.0), 0.5, 0.1, 0.1, sigma, w)
+    c, s_ = math.cos(0.1), math.sin(0.1)
+    np.testing.assert_allclose(
+        state.integral, [c * z[0] - s_ * z[1], s_ * z[0] + c * z[1]], atol=3e-4
+    )
+    # without a frame rate the integrator stays put (Borhaug's law as before)
+    state = laws.GuidanceState(z.copy(), np.zeros(1), np.zeros(1), np.zeros(2))
+    for k in range(3):
+        laws.integral_los_bias(state, 0.01 * k, (0.0, 0.0, 0.0, 0.0), 0.5, 0.1, 0.1, sigma)
+    np.testing.assert_array_equal(state.integral, z)
+
+
 @pytest.mark.parametrize("case", ["uniform", "stabilised"])
 def test_restoring_moment_about_the_end_effector_closed_form(case):
     # straight vehicle pitched nose-up by theta: the CG (h = r/2 below each link's axis in the
