@@ -8,8 +8,11 @@ Each function here is the only implementation of its law in the project. They ar
 interpreted when numba is missing.
 
 * :func:`los_guidance` - path-parametrised line-of-sight guidance (eq. 21 on any path) with exact
-  first and second time derivatives of the reference direction; :func:`integral_los_bias` - its
-  integral form against currents (Borhaug et al. 2008);
+  first and second time derivatives of the reference direction; :func:`biased_los_guidance` and
+  :func:`integral_los_bias` - its integral form against currents (Borhaug et al. 2008), with the
+  integrator turning with the curvature direction on a twisted path
+  (:func:`normal_plane_turn_rate`); :func:`restoring_moment_in_frame` - the restoring moment used by
+  the hydrostatic compensation;
 * :func:`reduced_attitude_law` - the reduced-attitude law of eq. (9) (and eq. 23 for ``J = I``,
   ``m = 0``) with the ``"paper"`` or ``"exact"`` feedforward (findings 1 and 2 of PAPER_DATA.md);
 * :func:`joint_reference` - eq. (22); :func:`joint_pd_torque` - eq. (24);
