@@ -307,7 +307,12 @@ def _mass_matrix(bodies, D):
 
 @compiled(fastmath=True)
 def _invert_spd(a, low, out):
-    """``out = a^-1`` for a symmetric positive-definite ``a`` (Cholesky ``a = L L^T``)."""
+    """``out = a^-1`` for a symmetric positive-definite ``a``: ``a = L L^T``, ``a^-1 = L^-T L^-1``.
+
+    ``low`` ends holding ``L^-1`` in its lower triangle (inverted in place, columns right to left
+    as LAPACK's ``dtrtri``: ``L^-1[j+1:, j] = -L^-1[j+1:, j+1:] L[j+1:, j] / L[j, j]``); only the
+    upper triangle of ``a^-1`` is summed, then mirrored (about n^3/2 products in all).
+    """
     n = a.shape[0]
     for j in range(n):
         s = a[j, j]
@@ -315,23 +320,27 @@ def _invert_spd(a, low, out):
             s -= low[j, k] * low[j, k]
         d = math.sqrt(s) if s > 0.0 else math.nan
         low[j, j] = d
+        r = 1.0 / d
         for i in range(j + 1, n):
             s = a[i, j]
             for k in range(j):
                 s -= low[i, k] * low[j, k]
-            low[i, j] = s / d
-    # out = L^-T L^-1, column by column
-    for c in range(n):
-        for i in range(n):  # forward: L y = e_c (y in out[:, c])
-            s = 1.0 if i == c else 0.0
-            for k in range(c, i):
-                s -= low[i, k] * out[k, c]
-            out[i, c] = s / low[i, i] if i >= c else 0.0
-        for i in range(n - 1, -1, -1):  # backward: L^T x = y
-            s = out[i, c]
-            for k in range(i + 1, n):
-                s -= low[k, i] * out[k, c]
-            out[i, c] = s / low[i, i]
+            low[i, j] = s * r
+    for j in range(n - 1, -1, -1):
+        r = 1.0 / low[j, j]
+        low[j, j] = r
+        for i in range(n - 1, j, -1):  # rows below j still hold L in column j above row i
+            s = 0.0
+            for k in range(j + 1, i + 1):
+                s += low[i, k] * low[k, j]
+            low[i, j] = -s * r
+    for i in range(n):
+        for j in range(i, n):
+            s = 0.0
+            for k in range(j, n):
+                s += low[k, i] * low[k, j]
+            out[i, j] = s
+            out[j, i] = s
 
 
 @compiled(fastmath=True)
