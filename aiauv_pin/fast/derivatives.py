@@ -78,6 +78,11 @@ class DerivativeWorkspace(NamedTuple):
     d_id_dcurrent: np.ndarray  # (nv, 3)
     external: np.ndarray  # (nb, 6) thruster wrenches on each body, body axes
     thrust_matrix: np.ndarray  # (nv, m) B(q)
+    # scratch of aiauv_pin.fast.transition.transition_into, nz = 2 nv + m + nv - 6 tangent columns
+    step_tangents: np.ndarray  # (11, nv, nz) d_acc (4), d_rate (3), d tau, d xi, dq_s, dv_s
+    step_vectors: np.ndarray  # (9, nv) stage accelerations (4), rates (3), tau, xi
+    step_matrices: np.ndarray  # (5, nv, nv) da_dq, da_dv, M^-1, G, spare
+    step_blocks: np.ndarray  # (4, 6, 6) free-flyer blocks of integrate and of the tangent rate
 
 
 def new_derivative_workspace(model, nv: int) -> DerivativeWorkspace:
@@ -121,6 +126,10 @@ def new_derivative_workspace(model, nv: int) -> DerivativeWorkspace:
         np.zeros((nv, 3)),
         np.zeros((nb, 6)),
         np.zeros((nv, model.thrusters.body.shape[0])),
+        np.zeros((11, nv, 2 * nv + model.thrusters.body.shape[0] + nv - 6)),
+        np.zeros((9, nv)),
+        np.zeros((5, nv, nv)),
+        np.zeros((4, 6, 6)),
     )
 
 
@@ -298,7 +307,12 @@ def _mass_matrix(bodies, D):
 
 @compiled(fastmath=True)
 def _invert_spd(a, low, out):
-    """``out = a^-1`` for a symmetric positive-definite ``a`` (Cholesky ``a = L L^T``)."""
+    """``out = a^-1`` for a symmetric positive-definite ``a``: ``a = L L^T``, ``a^-1 = L^-T L^-1``.
+
+    ``low`` ends holding ``L^-1`` in its lower triangle (inverted in place, columns right to left
+    as LAPACK's ``dtrtri``: ``L^-1[j+1:, j] = -L^-1[j+1:, j+1:] L[j+1:, j] / L[j, j]``); only the
+    upper triangle of ``a^-1`` is summed, then mirrored (about n^3/2 products in all).
+    """
     n = a.shape[0]
     for j in range(n):
         s = a[j, j]
@@ -306,23 +320,27 @@ def _invert_spd(a, low, out):
             s -= low[j, k] * low[j, k]
         d = math.sqrt(s) if s > 0.0 else math.nan
         low[j, j] = d
+        r = 1.0 / d
         for i in range(j + 1, n):
             s = a[i, j]
             for k in range(j):
                 s -= low[i, k] * low[j, k]
-            low[i, j] = s / d
-    # out = L^-T L^-1, column by column
-    for c in range(n):
-        for i in range(n):  # forward: L y = e_c (y in out[:, c])
-            s = 1.0 if i == c else 0.0
-            for k in range(c, i):
-                s -= low[i, k] * out[k, c]
-            out[i, c] = s / low[i, i] if i >= c else 0.0
-        for i in range(n - 1, -1, -1):  # backward: L^T x = y
-            s = out[i, c]
-            for k in range(i + 1, n):
-                s -= low[k, i] * out[k, c]
-            out[i, c] = s / low[i, i]
+            low[i, j] = s * r
+    for j in range(n - 1, -1, -1):
+        r = 1.0 / low[j, j]
+        low[j, j] = r
+        for i in range(n - 1, j, -1):  # rows below j still hold L in column j above row i
+            s = 0.0
+            for k in range(j + 1, i + 1):
+                s += low[i, k] * low[k, j]
+            low[i, j] = -s * r
+    for i in range(n):
+        for j in range(i, n):
+            s = 0.0
+            for k in range(j, n):
+                s += low[k, i] * low[k, j]
+            out[i, j] = s
+            out[j, i] = s
 
 
 @compiled(fastmath=True)
@@ -533,8 +551,10 @@ def acceleration_derivatives_into(
         da_dq: Output (nv, nv): with respect to ``dq`` in ``q (+) dq`` [1/s^2].
         da_dv: Output (nv, nv) [1/s].
         da_dtau: Output (nv, nv): ``M^-1``.
-        da_dcurrent: Output (nv, 3): with respect to the uniform current, world axes [1/s].
-        da_dthrust: Output (nv, m): ``M^-1 B(q)``.
+        da_dcurrent: Output (nv, 3): with respect to the uniform current, world axes [1/s]; an
+            (nv, 0) array skips the current's directions.
+        da_dthrust: Output (nv, m): ``M^-1 B(q)``; an (nv, 0) array skips ``B(q)`` (then
+            ``D.thrust_matrix`` is left as it was).
     """
     bodies = model.bodies
     nb = bodies.parent.shape[0]
@@ -566,7 +586,8 @@ def acceleration_derivatives_into(
         _times_skew(D.d_current[b], vc0, vc1, vc2, D.d_rotation[b], True)
     _mass_matrix(bodies, D)
     _invert_spd(D.mass, D.cholesky, D.mass_inverse)
-    _thrust_matrix(model, D)
+    if da_dthrust.shape[1] > 0:
+        _thrust_matrix(model, D)
     for b in range(nb):
         for i in range(6):
             D.external[b, i] = 0.0
@@ -593,19 +614,21 @@ def acceleration_derivatives_into(
         else:
             _tangent(bodies, W, D, CONFIGURATION, b, component, v, D.d_id_dq[:, k])
         _tangent(bodies, W, D, VELOCITY, b, component, v, D.d_id_dv[:, k])
-    for k in range(3):
+    n_current = da_dcurrent.shape[1]  # 3, or 0 to skip the current's directions
+    for k in range(n_current):
         _tangent(bodies, W, D, CURRENT, 0, k, v, D.d_id_dcurrent[:, k])
     for i in range(nv):
+        # row i of -M^-1 dID/dq and -M^-1 dID/dv, rows of dID accumulated (contiguous inner loop)
         for j in range(nv):
             da_dtau[i, j] = minv[i, j]
-            s_q = 0.0
-            s_v = 0.0
-            for k in range(nv):
-                s_q += minv[i, k] * D.d_id_dq[k, j]
-                s_v += minv[i, k] * D.d_id_dv[k, j]
-            da_dq[i, j] = -s_q
-            da_dv[i, j] = -s_v
-        for j in range(3):
+            da_dq[i, j] = 0.0
+            da_dv[i, j] = 0.0
+        for k in range(nv):
+            m_ik = -minv[i, k]
+            for j in range(nv):
+                da_dq[i, j] += m_ik * D.d_id_dq[k, j]
+                da_dv[i, j] += m_ik * D.d_id_dv[k, j]
+        for j in range(n_current):
             s = 0.0
             for k in range(nv):
                 s += minv[i, k] * D.d_id_dcurrent[k, j]

@@ -336,16 +336,23 @@ def _configuration_tangent(xi, d_xi, nv, out, d_conf, d_inc):
 
 @compiled(fastmath=True)
 def _acceleration_tangent(
-    model, env, t, q, v, tau, W, D, dq_s, dv_s, input_force, out, dv_out, scratch, no_thrust
+    model, env, t, q, v, tau, W, D, dq_s, dv_s, input_force, out, dv_out, scratch, first
 ):
     """Stage acceleration (into ``dv_out``) and its tangents ``A_q dq_s + A_v dv_s + M^-1 d tau``.
 
-    ``input_force`` (the tangent of the held generalised force) is zero in the columns of ``dv``.
+    ``input_force`` is the tangent of the held generalised force, ``[G, 0, B, S]`` by column blocks
+    (``dq``, ``dv``, thrusts, joint torques); only its ``G`` and ``B`` blocks are read, the zero
+    block and the joint selection ``S`` (``M^-1 S`` = the joint columns of ``M^-1``) are used by
+    structure. ``first``: the stage at the start of the step, where ``dq_s = [I 0 0]`` and ``dv_s =
+    [0 I 0]`` (then not read), so ``out = [A_q + M^-1 G, A_v, M^-1 B, M^-1 S]``.
+    ``scratch`` (>= 3, nv, nv) holds ``A_q, A_v, M^-1``.
     """
     nv = v.shape[0]
     nz = out.shape[1]
-    da_dq, da_dv, minv, da_dc = scratch[0], scratch[1], scratch[2], scratch[3][:, :3]
-    no_thrust_jacobian = scratch[3][:, 3:3]  # (nv, 0)
+    first_torque = nz - (nv - 6)
+    da_dq, da_dv, minv = scratch[0], scratch[1], scratch[2]
+    no_current = scratch[2][:, 0:0]  # (nv, 0): the current's directions are not needed
+    no_thrust = dv_out[0:0]
     acceleration_derivatives_into(
         model,
         env,
@@ -360,30 +367,57 @@ def _acceleration_tangent(
         da_dq,
         da_dv,
         minv,
-        da_dc,
-        no_thrust_jacobian,
+        no_current,
+        no_current,
     )
     for i in range(nv):
-        for c in range(nz):
-            out[i, c] = 0.0
-        for j in range(nv):
-            a_q = da_dq[i, j]
-            a_v = da_dv[i, j]
-            m_ij = minv[i, j]
+        row = out[i]
+        if first:
             for c in range(nv):
-                out[i, c] += a_q * dq_s[j, c] + a_v * dv_s[j, c] + m_ij * input_force[j, c]
-            for c in range(nv, 2 * nv):
-                out[i, c] += a_q * dq_s[j, c] + a_v * dv_s[j, c]
+                row[c] = da_dq[i, c]
+                row[nv + c] = da_dv[i, c]
             for c in range(2 * nv, nz):
-                out[i, c] += a_q * dq_s[j, c] + a_v * dv_s[j, c] + m_ij * input_force[j, c]
+                row[c] = 0.0
+        else:
+            for c in range(nz):
+                row[c] = 0.0
+            for j in range(nv):
+                a_q = da_dq[i, j]
+                a_v = da_dv[i, j]
+                dq_j = dq_s[j]
+                dv_j = dv_s[j]
+                for c in range(nz):
+                    row[c] += a_q * dq_j[c] + a_v * dv_j[c]
+        for j in range(nv):
+            m_ij = minv[i, j]
+            force_j = input_force[j]
+            for c in range(nv):
+                row[c] += m_ij * force_j[c]
+            for c in range(2 * nv, first_torque):
+                row[c] += m_ij * force_j[c]
+        for c in range(first_torque, nz):
+            row[c] += minv[i, 6 + c - first_torque]
 
 
 @compiled(fastmath=True)
-def _axpy(alpha, x, y, out):
-    """``out = y + alpha x`` (2-D)."""
-    for i in range(out.shape[0]):
-        for c in range(out.shape[1]):
-            out[i, c] = y[i, c] + alpha * x[i, c]
+def _rate_tangent(d_rate_xi, d_rate_v, d_xi, d_v, out):
+    """``out = d k`` of a stage rate ``k = J_r(xi)^-1 v`` (free flyer) and ``k = v`` (joints)."""
+    nv = out.shape[0]
+    nz = out.shape[1]
+    for i in range(6):
+        row = out[i]
+        for c in range(nz):
+            row[c] = 0.0
+        for j in range(6):
+            a = d_rate_xi[i, j]
+            b = d_rate_v[i, j]
+            xi_j = d_xi[j]
+            v_j = d_v[j]
+            for c in range(nz):
+                row[c] += a * xi_j[c] + b * v_j[c]
+    for i in range(6, nv):
+        for c in range(nz):
+            out[i, c] = d_v[i, c]
 
 
 @compiled(fastmath=True)
@@ -398,103 +432,89 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
         thrusts: Thruster forces (m,) [N]; joint torques are part of ``tau0`` (their derivative
             is the identity on the joint rows).
         dt: Step [s]; method: :data:`aiauv_pin.fast.kernels.RK4` or ``EULER``.
-        W, D: Kernel and derivative workspaces.
+        W, D: Kernel and derivative workspaces (``D.step_*`` hold the step's tangents).
         x_out: Output: ``(q_next (nq,), v_next (nv,))`` as a tuple of arrays.
         A: Output (2 nv, 2 nv): ``d(dq', dv') / d(dq, dv)``.
         B: Output (2 nv, m + nj): ``d(dq', dv') / d(thrusts, joint torques)``.
+
+    The tangents of the initial state, ``dq = [I 0 0]`` and ``dv = [0 I 0]`` (columns ``dq, dv,
+    du``), enter by structure (unit entries added at ``(i, nv + i)``), never as matrices.
     """
     nv = v.shape[0]
-    nq = q.shape[0]
     m = thrusts.shape[0]
     nj = nv - 6
     nz = 2 * nv + m + nj
     q_next, v_next = x_out
+    tangents = D.step_tangents
+    d_acc = tangents[0:4]
+    d_rate = tangents[4:7]  # k2, k3, k4
+    force_tangent = tangents[7]  # d tau = [G, 0, B, S]
+    d_xi = tangents[8]
+    d_q_stage = tangents[9]
+    d_v_stage = tangents[10]
+    vectors = D.step_vectors
+    acc = vectors[0:4]
+    rate = vectors[4:7]
+    tau = vectors[7]
+    xi = vectors[8]
+    scratch = D.step_matrices
+    g = scratch[3]
+    d_conf, d_inc, d_rate_xi, d_rate_v = (
+        D.step_blocks[0],
+        D.step_blocks[1],
+        D.step_blocks[2],
+        D.step_blocks[3],
+    )
     # held generalised force and its tangent
-    scratch = np.empty((4, nv, nv))
     thrust_matrix_at(model, q, W, D)
     bmat = D.thrust_matrix
-    tau = np.empty(nv)
     for i in range(nv):
         s = tau0[i]
         for k in range(m):
             s += bmat[i, k] * thrusts[k]
         tau[i] = s
-    force_tangent = np.zeros((nv, nz))  # d tau = [G, 0, B, S]
-    g = np.empty((nv, nv))
     thrust_force_derivative(model, D, thrusts, g)
     for i in range(nv):
         for j in range(nv):
             force_tangent[i, j] = g[i, j]
+            force_tangent[i, nv + j] = 0.0
         for k in range(m):
             force_tangent[i, 2 * nv + k] = bmat[i, k]
-    for k in range(nj):
-        force_tangent[6 + k, 2 * nv + m + k] = 1.0
-    dq0 = np.zeros((nv, nz))
-    dv0 = np.zeros((nv, nz))
-    for i in range(nv):
-        dq0[i, i] = 1.0
-        dv0[i, nv + i] = 1.0
-    d_conf = np.empty((6, 6))
-    d_inc = np.empty((6, 6))
-    d_rate_xi = np.empty((6, 6))
-    d_rate_v = np.empty((6, 6))
-    acc = np.empty((4, nv))
-    d_acc = np.empty((4, nv, nz))
-    xi = np.empty(nv)
-    d_xi = np.empty((nv, nz))
-    q_stage = np.empty(nq)
+        for k in range(nj):
+            force_tangent[i, 2 * nv + m + k] = 1.0 if i == 6 + k else 0.0
+    q_stage = np.empty(q.shape[0])
     v_stage = np.empty(nv)
-    d_q_stage = np.empty((nv, nz))
-    d_v_stage = np.empty((nv, nz))
-    no_thrust = np.zeros(0)
+    _acceleration_tangent(
+        model,
+        env,
+        t,
+        q,
+        v,
+        tau,
+        W,
+        D,
+        d_q_stage,
+        d_v_stage,
+        force_tangent,
+        d_acc[0],
+        acc[0],
+        scratch,
+        True,
+    )
     if method == EULER:
-        _acceleration_tangent(
-            model,
-            env,
-            t,
-            q,
-            v,
-            tau,
-            W,
-            D,
-            dq0,
-            dv0,
-            force_tangent,
-            d_acc[0],
-            acc[0],
-            scratch,
-            no_thrust,
-        )
         for i in range(nv):
             v_next[i] = v[i] + dt * acc[0, i]
             xi[i] = dt * v_next[i]
-        _axpy(dt, d_acc[0], dv0, d_v_stage)
         for i in range(nv):
+            for c in range(nz):
+                d_v_stage[i, c] = dt * d_acc[0, i, c]
+            d_v_stage[i, nv + i] += 1.0
             for c in range(nz):
                 d_xi[i, c] = dt * d_v_stage[i, c]
         integrate(q, xi, q_next)
         _configuration_tangent(xi, d_xi, nv, d_q_stage, d_conf, d_inc)
     else:
         half = 0.5 * dt
-        rate = np.empty((3, nv))  # k2, k3, k4
-        d_rate = np.empty((3, nv, nz))
-        _acceleration_tangent(
-            model,
-            env,
-            t,
-            q,
-            v,
-            tau,
-            W,
-            D,
-            dq0,
-            dv0,
-            force_tangent,
-            d_acc[0],
-            acc[0],
-            scratch,
-            no_thrust,
-        )
         for stage in range(1, 4):
             factor = half if stage < 3 else dt
             stage_time = t + factor
@@ -504,11 +524,17 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
                 else:
                     xi[i] = factor * rate[stage - 2, i]
                 v_stage[i] = v[i] + factor * acc[stage - 1, i]
-            source = dv0 if stage == 1 else d_rate[stage - 2]
             for i in range(nv):
+                if stage == 1:  # d xi = factor dv
+                    for c in range(nz):
+                        d_xi[i, c] = 0.0
+                    d_xi[i, nv + i] = factor
+                else:
+                    for c in range(nz):
+                        d_xi[i, c] = factor * d_rate[stage - 2, i, c]
                 for c in range(nz):
-                    d_xi[i, c] = factor * source[i, c]
-            _axpy(factor, d_acc[stage - 1], dv0, d_v_stage)
+                    d_v_stage[i, c] = factor * d_acc[stage - 1, i, c]
+                d_v_stage[i, nv + i] += 1.0
             integrate(q, xi, q_stage)
             _configuration_tangent(xi, d_xi, nv, d_q_stage, d_conf, d_inc)
             _acceleration_tangent(
@@ -526,12 +552,11 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
                 d_acc[stage],
                 acc[stage],
                 scratch,
-                no_thrust,
+                False,
             )
             tangent_rate(xi, v_stage, rate[stage - 1])
             rate_jacobians(xi, v_stage, d_rate_xi, d_rate_v)
-            d_rate[stage - 1, :, :] = d_v_stage
-            d_rate[stage - 1, :6, :] = d_rate_xi @ d_xi[:6] + d_rate_v @ d_v_stage[:6]
+            _rate_tangent(d_rate_xi, d_rate_v, d_xi, d_v_stage, d_rate[stage - 1])
         sixth = dt / 6.0
         for i in range(nv):
             xi[i] = sixth * (v[i] + 2.0 * rate[0, i] + 2.0 * rate[1, i] + rate[2, i])
@@ -539,11 +564,13 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
         for i in range(nv):
             for c in range(nz):
                 d_xi[i, c] = sixth * (
-                    dv0[i, c] + 2.0 * d_rate[0, i, c] + 2.0 * d_rate[1, i, c] + d_rate[2, i, c]
+                    2.0 * d_rate[0, i, c] + 2.0 * d_rate[1, i, c] + d_rate[2, i, c]
                 )
-                d_v_stage[i, c] = dv0[i, c] + sixth * (
+                d_v_stage[i, c] = sixth * (
                     d_acc[0, i, c] + 2.0 * d_acc[1, i, c] + 2.0 * d_acc[2, i, c] + d_acc[3, i, c]
                 )
+            d_xi[i, nv + i] += sixth
+            d_v_stage[i, nv + i] += 1.0
         integrate(q, xi, q_next)
         _configuration_tangent(xi, d_xi, nv, d_q_stage, d_conf, d_inc)
     for i in range(nv):
