@@ -43,7 +43,7 @@ import numpy as np
 from hydro.jit import compiled
 from hydro.laws import body_fluid_bias_jacobians, coriolis_wrench_jacobian
 
-from .kernels import body_bias, kinematics, sample_current
+from .kernels import _motion_transform, _xT_add, body_bias, kinematics, sample_current
 
 #: Kinds of tangent direction.
 CONFIGURATION, VELOCITY, CURRENT = 0, 1, 2
@@ -190,41 +190,6 @@ def _to_child(xl, m, out):
         r0, r1, r2 = xl[0, i], xl[1, i], xl[2, i]
         out[i] = r0 * a0 + r1 * a1 + r2 * a2
         out[3 + i] = r0 * w0 + r1 * w1 + r2 * w2
-
-
-@compiled(fastmath=True)
-def _to_parent_add(xl, f, out):
-    """``out += X^T f = (R f, p x R f + R n)`` (Featherstone 2008, eq. (2.25))."""
-    p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
-    f0 = xl[0, 0] * f[0] + xl[0, 1] * f[1] + xl[0, 2] * f[2]
-    f1 = xl[1, 0] * f[0] + xl[1, 1] * f[1] + xl[1, 2] * f[2]
-    f2 = xl[2, 0] * f[0] + xl[2, 1] * f[1] + xl[2, 2] * f[2]
-    out[0] += f0
-    out[1] += f1
-    out[2] += f2
-    out[3] += xl[0, 0] * f[3] + xl[0, 1] * f[4] + xl[0, 2] * f[5] + p1 * f2 - p2 * f1
-    out[4] += xl[1, 0] * f[3] + xl[1, 1] * f[4] + xl[1, 2] * f[5] + p2 * f0 - p0 * f2
-    out[5] += xl[2, 0] * f[3] + xl[2, 1] * f[4] + xl[2, 2] * f[5] + p0 * f1 - p1 * f0
-
-
-@compiled(fastmath=True)
-def _motion_transform_from_placement(xl, out):
-    """``X = [[R^T, -R^T [p]], [0, R^T]]`` of a placement (rows 0-2 ``R``, row 3 ``p``)."""
-    p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
-    for i in range(3):
-        r0, r1, r2 = xl[0, i], xl[1, i], xl[2, i]
-        out[i, 0] = r0
-        out[i, 1] = r1
-        out[i, 2] = r2
-        out[i + 3, 3] = r0
-        out[i + 3, 4] = r1
-        out[i + 3, 5] = r2
-        out[i + 3, 0] = 0.0
-        out[i + 3, 1] = 0.0
-        out[i + 3, 2] = 0.0
-        out[i, 3] = -(r1 * p2 - r2 * p1)
-        out[i, 4] = -(r2 * p0 - r0 * p2)
-        out[i, 5] = -(r0 * p1 - r1 * p0)
 
 
 @compiled(fastmath=True)
@@ -379,7 +344,7 @@ def thrust_matrix_at(model, q, W, D):
     """``B(q)`` into ``D.thrust_matrix`` and the placements into ``D.xform`` (kinematics at ``q``)."""
     kinematics(model.bodies, q, W.zero_velocity, W)
     for b in range(model.bodies.parent.shape[0]):
-        _motion_transform_from_placement(W.placement[b], D.xform[b])
+        _motion_transform(W.placement[b, :3], W.placement[b, 3], D.xform[b])
     _thrust_matrix(model, D)
 
 
@@ -416,7 +381,7 @@ def _forces(bodies, W, D, qdd):
             for i in range(6):
                 s += bodies.axis[b, i] * force[b, i]
             D.bias[iv] = s
-            _to_parent_add(D.placement[b], force[b], force[bodies.parent[b]])
+            _xT_add(D.placement[b], force[b], force[bodies.parent[b]])
 
 
 @compiled(fastmath=True)
@@ -527,7 +492,7 @@ def _tangent(bodies, W, D, kind, root, component, v, out_col):
         out_col[iv] = s
         if b == root and kind == CONFIGURATION:
             _add_cross_force(bodies.axis[b], D.force[b], dforce[b])
-        _to_parent_add(D.placement[b], dforce[b], dforce[bodies.parent[b]])
+        _xT_add(D.placement[b], dforce[b], dforce[bodies.parent[b]])
 
 
 @compiled(fastmath=True)
@@ -563,7 +528,7 @@ def acceleration_derivatives_into(
     sample_current(model, env, t, W)
     body_bias(model, W)
     for b in range(nb):
-        _motion_transform_from_placement(W.placement[b], D.xform[b])
+        _motion_transform(W.placement[b, :3], W.placement[b, 3], D.xform[b])
         for i in range(4):
             for j in range(3):
                 D.placement[b, i, j] = W.placement[b, i, j]
