@@ -701,9 +701,9 @@ def path_following_command(
         out: :class:`CommandBuffers`.
     """
     point = path_point_of(path_function, path_kind, position, path_parameters)
+    errors = cross_track_errors(point, position, velocity)
     bias = _NO_BIAS
     if gains.integral_los:
-        errors = cross_track_errors(point, position, velocity)
         bias = integral_los_bias(  # Borhaug et al. (2008), in 3-D
             guidance_state,
             t,
@@ -767,10 +767,7 @@ def path_following_command(
         out.x_ref[i] = x_ref[i]
         out.x_ref_dot[i] = x_dot[i]
         out.x_ref_ddot[i] = x_ddot[i]
-    c = point.point
-    d0, d1, d2 = position[0] - c[0], position[1] - c[1], position[2] - c[2]
-    n1, n2 = point.normal1, point.normal2
-    out.cross_track[0] = n1[0] * d0 + n1[1] * d1 + n1[2] * d2
-    out.cross_track[1] = n2[0] * d0 + n2[1] * d1 + n2[2] * d2
+    out.cross_track[0] = errors[0]
+    out.cross_track[1] = errors[1]
     out.scalars[0] = command.phi_tilde
     out.scalars[1] = point.s

@@ -35,7 +35,7 @@ import numpy as np
 from control.paths import path_point_of
 from hydro.jit import compiled
 
-from .laws import los_guidance, reduced_attitude_law, surge_pi
+from .laws import cross_track_errors, los_guidance, reduced_attitude_law, surge_pi
 
 #: Plane codes of :func:`tunnel_allocation`: not a tunnel thruster, yaw (side force along body y,
 #: moment about body z), pitch (force along body z, moment about body y).
@@ -237,11 +237,9 @@ def thruster_turning_command(
     )
     for i in range(3):
         out.x_ref[i] = x_ref[i]
-    c = point.point
-    d0, d1, d2 = position[0] - c[0], position[1] - c[1], position[2] - c[2]
-    n1, n2 = point.normal1, point.normal2
-    out.cross_track[0] = n1[0] * d0 + n1[1] * d1 + n1[2] * d2
-    out.cross_track[1] = n2[0] * d0 + n2[1] * d1 + n2[2] * d2
+    errors = cross_track_errors(point, position, velocity)
+    out.cross_track[0] = errors[0]
+    out.cross_track[1] = errors[1]
     out.scalars[0] = command.phi_tilde
     out.scalars[1] = point.s
     out.scalars[2] = scale
