@@ -48,6 +48,32 @@ SINGLE_BODY = dict(
 )
 
 
+def generated_vehicle_table(n_modules: int, seed: int, side_thruster: bool = False) -> dict:
+    """Vehicle-spec table of a random chain of ``n_modules`` cylinders (lengths, radii, masses, low
+    centres of gravity, joint axes drawn from ``seed``), with longitudinal thrusters on the end
+    modules and, with ``side_thruster``, an oblique one on module 1."""
+    rng = np.random.default_rng(seed)
+    modules = []
+    for i in range(n_modules):
+        length = float(rng.uniform(0.1, 0.8))
+        radius = float(rng.uniform(0.03, 0.12))
+        module = {
+            "name": f"m{i}",
+            "length": length,
+            "radius": radius,
+            "mass": float(rng.uniform(0.5, 20.0)),
+            "cg_offset": [0.0, 0.0, float(-rng.uniform(0.0, 0.5) * radius)],
+        }
+        if i < n_modules - 1:
+            module["joint"] = "xyz"[int(rng.integers(3))]
+        if i in (0, n_modules - 1):
+            module["thruster"] = [{"name": f"t{i}", "x": length / 2, "direction": [1.0, 0.0, 0.0]}]
+        if side_thruster and i == 1:
+            module["thruster"] = [{"name": "t_side", "x": length / 3, "direction": [0.0, 3.0, 4.0]}]
+        modules.append(module)
+    return {"name": f"generated_{n_modules}", "module": modules}
+
+
 def _single_body_matrices(rng_seed: int = 7):
     rng = np.random.default_rng(rng_seed)
     a = rng.normal(size=(6, 6))

@@ -15,7 +15,7 @@ import sys
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import random_state, single_body_urdf
+from conftest import generated_vehicle_table, random_state, single_body_urdf
 
 import aiauv_pin
 from aiauv_pin import consistency
@@ -34,29 +34,6 @@ TOL = dict(rtol=1e-9, atol=1e-9)
 CURRENTS = [None, np.array([0.3, -0.2, 0.15])]
 
 
-def _generated_table(n_modules: int, seed: int) -> dict:
-    rng = np.random.default_rng(seed)
-    modules = []
-    for i in range(n_modules):
-        length = float(rng.uniform(0.1, 0.8))
-        radius = float(rng.uniform(0.03, 0.12))
-        module = {
-            "name": f"m{i}",
-            "length": length,
-            "radius": radius,
-            "mass": float(rng.uniform(0.5, 20.0)),
-            "cg_offset": [0.0, 0.0, float(-rng.uniform(0.0, 0.5) * radius)],
-        }
-        if i < n_modules - 1:
-            module["joint"] = "xyz"[int(rng.integers(3))]
-        if i in (0, n_modules - 1):
-            module["thruster"] = [{"name": f"t{i}", "x": length / 2, "direction": [1.0, 0.0, 0.0]}]
-        if i == 1:
-            module["thruster"] = [{"name": "t_side", "x": length / 3, "direction": [0.0, 3.0, 4.0]}]
-        modules.append(module)
-    return {"name": f"generated_{n_modules}", "module": modules}
-
-
 def _load(name: str, tmp_path_factory, **options) -> Vehicle:
     if name in ("uniform", "stabilised"):
         return aiauv_pin.load_vehicle(aiauv_pin.bundled_urdf(name), **options)
@@ -65,7 +42,7 @@ def _load(name: str, tmp_path_factory, **options) -> Vehicle:
         text = single_body_urdf()[0]
     else:
         n = int(name.removeprefix("generated_"))
-        text = build_urdf(spec_from_dict(_generated_table(n, seed=n)))
+        text = build_urdf(spec_from_dict(generated_vehicle_table(n, seed=n, side_thruster=True)))
     path = folder / f"{name}.urdf"
     path.write_text(text)
     return aiauv_pin.load_vehicle(path, **options)
