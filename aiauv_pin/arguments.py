@@ -26,7 +26,7 @@ from .errors import ArgumentError
 #: (round-off of an integrator, a hand-typed ``0.7071``) are normalised away.
 QUATERNION_TOLERANCE = 1e-6
 #: Deviations below this are left as is (bit-identical results for unit quaternions).
-_NORMALISE_ABOVE = 1e-14
+EXACT_QUATERNION_DEVIATION = 1e-14
 
 
 def float_array(value, name: str, shape: tuple[int, ...]) -> np.ndarray:
@@ -78,7 +78,7 @@ def configuration(value, nq: int, name: str = "q") -> np.ndarray:
             f"{name}[3:7] (base quaternion x, y, z, w) must have unit norm (within "
             f"{QUATERNION_TOLERANCE:g}), got norm {norm:.6g}"
         )
-    if deviation > _NORMALISE_ABOVE:
+    if deviation > EXACT_QUATERNION_DEVIATION:
         q = q.copy()
         q[3:7] /= norm
     return q

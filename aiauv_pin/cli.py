@@ -143,9 +143,10 @@ def _run_simulate(args) -> int:
     path = scenario.vehicle if scenario.vehicle is not None else loading.bundled_urdf(scenario.case)
     from .compilation import announce_compilation, warm_up
 
-    compiling = announce_compilation()
     compile_start = time.perf_counter()
     vehicle = loading.load_vehicle(path, **_description_options(args))
+    # announced once the vehicle passed the validation gate: a refused file gets its one line only
+    compiling = announce_compilation()
     if vehicle.fallback_reason is not None:
         print(
             f"aiauv: warning: compiled backend unavailable ({vehicle.fallback_reason}); "

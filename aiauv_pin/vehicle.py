@@ -42,7 +42,14 @@ from hydro.laws import CROSSFLOW_NODES, FluidModel, add_body_fluid_bias
 from hydro.spatial import motion_transform
 from hydro.spec import HydroSpec
 
-from .arguments import configuration, finite_time, float_array, optional_current
+from .arguments import (
+    EXACT_QUATERNION_DEVIATION,
+    QUATERNION_TOLERANCE,
+    configuration,
+    finite_time,
+    float_array,
+    optional_current,
+)
 from .errors import ArgumentError
 from .fast.records import Model, Thrusters, rigid_bodies, unsupported_reason
 
@@ -495,6 +502,14 @@ class Vehicle:
         Returns:
             ``dv`` (nv,), the time derivative of ``v``'s coordinates (Fossen's ``nu_dot`` for the base).
         """
+        if self._fast is not None and current is None:
+            # the arguments checked in the compiled call itself (the checks below cost more than
+            # an evaluation); anything it does not take goes on to the checks, which name it
+            out = self._fast.checked_acceleration(
+                q, v, tau, t, QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION
+            )
+            if out is not None:
+                return out
         q, v, tau = self._q(q), self._v(v), self._v(tau, "tau")
         current = optional_current(current)
         t = finite_time(t)

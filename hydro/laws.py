@@ -345,7 +345,7 @@ def hydrostatic_wrench(force, moment0, moment1, moment2, up0, up1, up2):
 
 
 # ---------------------------------------------------------------------- composition per body
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch):
     """Add every fluid term of every body to ``bias`` (left-hand side, body axes, about the origin).
 
@@ -372,7 +372,26 @@ def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch
     link_twist = scratch[0]
     cylinder_twist = scratch[1]
     link_wrench = scratch[2]
+    # every record field read once, outside the loops (each read of a field is a counted reference)
     added, hydrostatics = fluid.added_mass, fluid.hydrostatics
+    link_body, link_from_body, link_is_body = (
+        fluid.link_body,
+        fluid.link_from_body,
+        fluid.link_is_body,
+    )
+    linear, quadratic, quadratic_is_diagonal = (
+        fluid.linear_damping,
+        fluid.quadratic_damping,
+        fluid.quadratic_is_diagonal,
+    )
+    forward, has_forward = fluid.forward_speed_damping, fluid.has_forward_speed_damping
+    has_crossflow, cylinder_from_link, cylinder_is_link = (
+        fluid.has_crossflow,
+        fluid.cylinder_from_link,
+        fluid.cylinder_is_link,
+    )
+    cylinder_length, strip_coefficient = fluid.cylinder_length, fluid.strip_coefficient
+    nodes, weights = fluid.gauss_nodes, fluid.gauss_weights
     for b in range(nb):
         # body by body in scalars, indexing the stacked arrays directly (no views)
         c0, c1, c2 = current[b, 0], current[b, 1], current[b, 2]
@@ -412,62 +431,52 @@ def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch
             w = current_acceleration_wrench(added[b], r3, r4, r5, vc0, vc1, vc2)
             for i in range(6):
                 bias[b, i] += w[i]
-    for k in range(fluid.link_body.shape[0]):
-        b = fluid.link_body[k]
-        x_link = fluid.link_from_body[k]
-        if fluid.link_is_body[k]:
+    for k in range(link_body.shape[0]):
+        b = link_body[k]
+        is_body = link_is_body[k]
+        if is_body:
             for i in range(6):
                 link_twist[i] = relative[b, i]
         else:
             for i in range(6):
                 s = 0.0
                 for j in range(6):
-                    s += x_link[i, j] * relative[b, j]
+                    s += link_from_body[k, i, j] * relative[b, j]
                 link_twist[i] = s
-        w = damping_wrench(
-            fluid.linear_damping[k],
-            fluid.quadratic_damping[k],
-            fluid.quadratic_is_diagonal[k],
-            link_twist,
-        )
+        w = damping_wrench(linear[k], quadratic[k], quadratic_is_diagonal[k], link_twist)
         for i in range(6):
             link_wrench[i] = w[i]
-        if fluid.has_forward_speed_damping[k]:
-            w = forward_speed_damping_wrench(fluid.forward_speed_damping[k], link_twist)
+        if has_forward[k]:
+            w = forward_speed_damping_wrench(forward[k], link_twist)
             for i in range(6):
                 link_wrench[i] += w[i]
-        if fluid.has_crossflow[k]:
-            length = fluid.cylinder_length[k]
-            coefficient = fluid.strip_coefficient[k]
-            if fluid.cylinder_is_link[k]:
-                w = crossflow_wrench(
-                    link_twist, length, coefficient, fluid.gauss_nodes, fluid.gauss_weights
-                )
+        if has_crossflow[k]:
+            length = cylinder_length[k]
+            coefficient = strip_coefficient[k]
+            if cylinder_is_link[k]:
+                w = crossflow_wrench(link_twist, length, coefficient, nodes, weights)
                 for i in range(6):
                     link_wrench[i] += w[i]
             else:
-                x_cyl = fluid.cylinder_from_link[k]
                 for i in range(6):
                     s = 0.0
                     for j in range(6):
-                        s += x_cyl[i, j] * link_twist[j]
+                        s += cylinder_from_link[k, i, j] * link_twist[j]
                     cylinder_twist[i] = s
-                w = crossflow_wrench(
-                    cylinder_twist, length, coefficient, fluid.gauss_nodes, fluid.gauss_weights
-                )
+                w = crossflow_wrench(cylinder_twist, length, coefficient, nodes, weights)
                 for i in range(6):  # back to the link frame: X^T w
                     s = 0.0
                     for j in range(6):
-                        s += x_cyl[j, i] * w[j]
+                        s += cylinder_from_link[k, j, i] * w[j]
                     link_wrench[i] += s
-        if fluid.link_is_body[k]:
+        if is_body:
             for i in range(6):
                 bias[b, i] -= link_wrench[i]
         else:
             for i in range(6):
                 s = 0.0
                 for j in range(6):
-                    s += x_link[j, i] * link_wrench[j]
+                    s += link_from_body[k, j, i] * link_wrench[j]
                 bias[b, i] -= s
 
 

@@ -147,6 +147,41 @@ def test_nearly_unit_quaternion_is_normalised_identically_on_both_backends(vehic
     np.testing.assert_allclose(results[0], results[1], rtol=1e-8, atol=1e-8)
 
 
+def test_checked_fast_path_matches_the_separate_checks_bit_for_bit(vehicles, rng):
+    """``Vehicle.acceleration`` checks plain arrays inside its compiled call (issue 15); the result
+    must be exactly the one of the Python checks followed by the unchecked compiled evaluation,
+    also when the quaternion is normalised, and for inputs the fast path does not take."""
+    from aiauv_pin.arguments import configuration
+
+    vehicle = vehicles[0]
+    if vehicle.fast is None:
+        pytest.skip("compiled backend unavailable")
+    q = vehicle.neutral_configuration()
+    q[7:] = rng.uniform(-0.5, 0.5, vehicle.nv - 6)
+    q[3:7] = np.array([0.1, 0.2, 0.3, 0.9]) / np.linalg.norm([0.1, 0.2, 0.3, 0.9])
+    v, tau = rng.normal(size=vehicle.nv) * 0.3, rng.normal(size=vehicle.nv)
+    for quaternion_scale in (1.0, 1.0 + 0.5 * QUATERNION_TOLERANCE):
+        state = q.copy()
+        state[3:7] *= quaternion_scale
+        expected = vehicle.fast.acceleration(configuration(state, vehicle.nq), v, tau)
+        assert np.array_equal(vehicle.acceleration(state, v, tau), expected)
+        assert np.array_equal(vehicle.acceleration(state, v, tau, t=0), expected)
+        # not taken by the fast path: a list, a read-only array, a strided view
+        assert np.array_equal(vehicle.acceleration(list(state), v, tau), expected)
+        read_only = tau.copy()
+        read_only.flags.writeable = False
+        assert np.array_equal(vehicle.acceleration(state, v, read_only), expected)
+        strided = np.repeat(v, 2)[::2]
+        assert np.array_equal(vehicle.acceleration(state, strided, tau), expected)
+    for t in (float("nan"), float("inf")):
+        with pytest.raises(ArgumentError, match="finite time"):
+            vehicle.acceleration(q, v, tau, t=t)
+    assert np.array_equal(
+        vehicle.acceleration(q, v, np.zeros(vehicle.nv, dtype=int)),
+        vehicle.fast.acceleration(q, v, np.zeros(vehicle.nv)),
+    )
+
+
 def test_an_array_ending_at_an_unreadable_page_is_refused_not_read(vehicles):
     import ctypes
     import mmap

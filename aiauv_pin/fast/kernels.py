@@ -106,7 +106,7 @@ def _motion_transform(rot, trans, out):
         out[i, 5] = -(r0 * py - r1 * px)
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _xT_add(xl, f, dst):
     """``dst += X^T f``: a child-frame force vector in the parent frame, ``(R f, p x R f + R n)``."""
     p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
@@ -121,7 +121,7 @@ def _xT_add(xl, f, dst):
     dst[5] += xl[2, 0] * f[3] + xl[2, 1] * f[4] + xl[2, 2] * f[5] + p0 * f1 - p1 * f0
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _solve_spd6(a, b, out, low, y):
     """Solve ``a x = b`` for a symmetric positive-definite 6x6 ``a`` (Cholesky)."""
     for j in range(6):
@@ -148,7 +148,7 @@ def _solve_spd6(a, b, out, low, y):
 
 
 # ---------------------------------------------------------------------- kinematics
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def kinematics(bodies, q, v, W):
     """Body poses in the world, placements in the parent, twists and ``v x S qd`` into ``W``.
 
@@ -289,39 +289,62 @@ def kinematics(bodies, q, v, W):
         bias_acc[b, 5] = w0 * m4 - w1 * m3
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def sample_current(model, env, t, W):
     """Water velocity at every body's probe point at time ``t`` into ``W.current`` (after kinematics)."""
-    probe = model.fluid.current_probe
-    for b in range(W.current.shape[0]):
-        rot = W.rotation[b]
-        x = (
-            W.position[b, 0]
-            + rot[0, 0] * probe[b, 0]
-            + rot[0, 1] * probe[b, 1]
-            + rot[0, 2] * probe[b, 2]
-        )
-        y = (
-            W.position[b, 1]
-            + rot[1, 0] * probe[b, 0]
-            + rot[1, 1] * probe[b, 1]
-            + rot[1, 2] * probe[b, 2]
-        )
-        z = (
-            W.position[b, 2]
-            + rot[2, 0] * probe[b, 0]
-            + rot[2, 1] * probe[b, 1]
-            + rot[2, 2] * probe[b, 2]
-        )
-        c = current_velocity(
-            env.current_function, env.current_kind, t, x, y, z, env.current_parameters
-        )
-        W.current[b, 0] = c[0]
-        W.current[b, 1] = c[1]
-        W.current[b, 2] = c[2]
+    current_at_probes(
+        env.current_function,
+        env.current_kind,
+        env.current_parameters,
+        t,
+        model.fluid.current_probe,
+        W.rotation,
+        W.position,
+        W.current,
+    )
 
 
 @compiled(fastmath=True)
+def current_at_probes(function, kind, parameters, t, probe, rotation, position, water):
+    """``water[b]``: the current at body ``b``'s probe point ``p_b + R_b c_b`` at time ``t`` [m/s].
+
+    Reference-counted (unlike the kernels around it) because it calls a user's current function,
+    which may return an array of its own.
+    """
+    for b in range(water.shape[0]):
+        p0, p1, p2 = probe[b, 0], probe[b, 1], probe[b, 2]
+        x = (
+            position[b, 0]
+            + rotation[b, 0, 0] * p0
+            + rotation[b, 0, 1] * p1
+            + rotation[b, 0, 2] * p2
+        )
+        y = (
+            position[b, 1]
+            + rotation[b, 1, 0] * p0
+            + rotation[b, 1, 1] * p1
+            + rotation[b, 1, 2] * p2
+        )
+        z = (
+            position[b, 2]
+            + rotation[b, 2, 0] * p0
+            + rotation[b, 2, 1] * p1
+            + rotation[b, 2, 2] * p2
+        )
+        c = current_velocity(function, kind, t, x, y, z, parameters)
+        water[b, 0] = c[0]
+        water[b, 1] = c[1]
+        water[b, 2] = c[2]
+
+
+@compiled(fastmath=True)
+def add_disturbance(function, kind, t, q, v, parameters, tau):
+    """:func:`aiauv_pin.disturbances.apply_disturbance` (reference-counted: it may call a user's
+    function)."""
+    apply_disturbance(function, kind, t, q, v, parameters, tau)
+
+
+@compiled(fastmath=True, borrows_only=True)
 def body_bias(model, W):
     """Velocity- and state-dependent part of each body's equation ``f = I a + p`` (left-hand side).
 
@@ -403,7 +426,7 @@ def _rotate_full(
     )
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _add_child_inertia(xform, art, child, parent):
     """``art[parent] += X^T I^a X`` for the symmetric ``I^a = art[child] = [[A, B], [B^T, C]]``.
 
@@ -544,7 +567,7 @@ def _add_child_inertia(xform, art, child, parent):
     art[parent, 5, 5] += d22
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def articulated_into(model, servo, q, v, tau, W, out):
     """ABA passes 2 and 3 (Featherstone 2008, Table 7.1) with general 6x6 body inertias.
 
@@ -576,6 +599,7 @@ def articulated_into(model, servo, q, v, tau, W, out):
         bodies.axis,
     )
     inertia, bias, rot = bodies.inertia, W.bias, W.rotation
+    references, stiffness, damping = servo.references, servo.stiffness, servo.damping
     for b in range(nb):
         for i in range(6):
             pa[b, i] = bias[b, i]
@@ -630,10 +654,10 @@ def articulated_into(model, servo, q, v, tau, W, out):
             tau_b += joint_pd_torque(
                 q[7 + joint],
                 v[6 + joint],
-                servo.references[joint],
+                references[joint],
                 g,
-                servo.stiffness[joint],
-                servo.damping[joint],
+                stiffness[joint],
+                damping[joint],
             )
         di = 1.0 / d
         us = tau_b - sp
@@ -718,7 +742,7 @@ def articulated_into(model, servo, q, v, tau, W, out):
         acc[b, 5] = a5 + s[b, 5] * qdd
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _add_child_force(xform, child, f0, f1, f2, n0, n1, n2, dst, parent):
     """``dst[parent] += X^T (f, n)``: a child-frame force in the parent frame, ``(R f, p x R f + R n)``."""
     p0, p1, p2 = xform[child, 3, 0], xform[child, 3, 1], xform[child, 3, 2]
@@ -751,7 +775,7 @@ def _add_child_force(xform, child, f0, f1, f2, n0, n1, n2, dst, parent):
     )
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def generalized_force(bodies, xform, body_wrench, out, tmp):
     """Generalised force ``sum_b J_b^T w_b`` of body wrenches (body frames); consumes them."""
     for b in range(bodies.parent.shape[0] - 1, -1, -1):
@@ -769,7 +793,7 @@ def generalized_force(bodies, xform, body_wrench, out, tmp):
             _xT_add(xform[b], body_wrench[b], body_wrench[parent])
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def restoring_into(model, W, out):
     """``g(q)`` (left-hand side: weight minus buoyancy, generalised) after :func:`kinematics`.
 
@@ -785,7 +809,7 @@ def restoring_into(model, W, out):
     generalized_force(model.bodies, W.placement, wrench, out, W.v6[0])
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def thrust_into(model, W, thrusts, out):
     """``out = B(q) thrusts`` (the paper's eq. (20)) after :func:`kinematics` [N, N m]."""
     wrench = W.relative
@@ -846,7 +870,7 @@ def new_workspace(model, nq: int, nv: int) -> Workspace:
 
 
 # ---------------------------------------------------------------------- forward dynamics
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def acceleration_into(model, env, servo, t, q, v, tau, W, out):
     """Forward dynamics ``dv`` of ``M(q) dv + bias(q, v) = tau + servo + disturbance`` into ``out``."""
     kinematics(model.bodies, q, v, W)
@@ -855,14 +879,14 @@ def acceleration_into(model, env, servo, t, q, v, tau, W, out):
     tau_all = W.tau_total
     for i in range(tau.shape[0]):
         tau_all[i] = tau[i]
-    apply_disturbance(
+    add_disturbance(
         env.disturbance_function, env.disturbance_kind, t, q, v, env.disturbance_parameters, tau_all
     )
     articulated_into(model, servo, q, v, tau_all, W, out)
 
 
 # ------------------------------------------------------------------ SE(3) x R^n group operations
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def integrate(q, xi, out):
     """``out = q * exp(xi)``: free flyer by the exact SE(3) exponential, joints by addition.
 
@@ -919,7 +943,7 @@ def _cross(a0, a1, a2, b0, b1, b2):
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def tangent_rate(xi, vel, out):
     """``out = J_r(xi)^-1 vel``: the rate of ``xi`` for ``integrate(q0, xi)`` moving with ``vel``.
 
@@ -996,7 +1020,7 @@ def tangent_rate(xi, vel, out):
 
 
 # ---------------------------------------------------------------------- integrators
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def rk4_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
     """One Runge-Kutta-Munthe-Kaas step of order 4 (as :func:`aiauv_pin.integrators.rk4_step`).
 
@@ -1032,7 +1056,7 @@ def rk4_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
     integrate(q, xi, q_out)
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def euler_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
     """Semi-implicit Euler: ``v += dt f(q, v)``, then ``q = q * exp(dt v)``."""
     a = W.acc1
@@ -1044,7 +1068,7 @@ def euler_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
     integrate(q, xi, q_out)
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def step_into(model, env, servo, t, q, v, tau, dt, method, W, q_out, v_out):
     """One step of ``method`` (:data:`RK4` or :data:`EULER`) into ``q_out, v_out``."""
     if method == RK4:
@@ -1065,7 +1089,7 @@ def is_finite_state(q, v):
     return True
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def run_steps(model, env, servo, t0, q, v, tau, dt, n_steps, method, W):
     """Advance ``(q, v)`` in place by ``n_steps`` steps from time ``t0`` with ``tau`` held.
 
@@ -1073,16 +1097,19 @@ def run_steps(model, env, servo, t0, q, v, tau, dt, n_steps, method, W):
         The number of steps completed; fewer than ``n_steps`` if the state became non-finite (then
         ``q, v`` hold the last finite state).
     """
+    q_next, v_next = W.q_next, W.v_next
     for k in range(n_steps):
-        step_into(model, env, servo, t0 + k * dt, q, v, tau, dt, method, W, W.q_next, W.v_next)
-        if not is_finite_state(W.q_next, W.v_next):
+        step_into(model, env, servo, t0 + k * dt, q, v, tau, dt, method, W, q_next, v_next)
+        if not is_finite_state(q_next, v_next):
             return k
-        q[:] = W.q_next
-        v[:] = W.v_next
+        for i in range(q.shape[0]):
+            q[i] = q_next[i]
+        for i in range(v.shape[0]):
+            v[i] = v_next[i]
     return n_steps
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def time_accelerations(model, env, servo, q, v, tau, repeats, W, out):
     """Evaluate the dynamics ``repeats`` times in compiled code (benchmarking)."""
     for _ in range(repeats):

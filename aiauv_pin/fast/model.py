@@ -15,7 +15,7 @@ from hydro.currents import Current, as_current
 from ..disturbances import Disturbance
 from ..errors import ArgumentError
 from . import kernels
-from .handle import acceleration_of, new_handle, step_of
+from .handle import STATE_OK, acceleration_of, checked_acceleration_of, new_handle, step_of
 from .records import Environment, Servo
 
 #: ``(method name -> code)`` understood by :func:`kernels.step_into` and :func:`kernels.run_steps`.
@@ -40,6 +40,19 @@ def environment(current=None, disturbance: Disturbance | None = None) -> Environ
         push.user_function,
         push.kind_code,
         push.parameters,
+    )
+
+
+_FLOAT64 = np.dtype(np.float64)
+
+
+def _plain(array, size: int) -> bool:
+    """Whether ``array`` is a float64 vector of ``size`` that compiled code may take as it is."""
+    return (
+        type(array) is np.ndarray
+        and array.dtype is _FLOAT64
+        and array.shape == (size,)
+        and array.flags.carray
     )
 
 
@@ -131,7 +144,7 @@ class FastModel:
     def handle(self):
         """The :class:`aiauv_pin.fast.handle.Handle` of this model's records (made on first use)."""
         if self._handle is None:
-            self._handle = new_handle(self.model, self.workspace)
+            self._handle = new_handle(self.model, self.workspace, self.still_water, self.no_servo)
         return self._handle
 
     def acceleration(
@@ -150,6 +163,32 @@ class FastModel:
                 self.model, env, servo, float(t), q, v, tau, self.workspace, out
             )
         return out
+
+    def checked_acceleration(
+        self, q, v, tau, t, tolerance: float, exact_below: float
+    ) -> np.ndarray | None:
+        """``dv`` in still water, the state checked in the same compiled call, or ``None``.
+
+        The fast path of :meth:`aiauv_pin.Vehicle.acceleration`: only plain arrays (float64,
+        C-contiguous, aligned, writeable, of the right shapes) and a float or integer ``t`` take
+        it. ``None`` means "not taken": the arguments were of another kind or the compiled check
+        (:func:`aiauv_pin.fast.handle.state_verdict`) refused them, and the caller's own checks
+        then name the problem.
+        """
+        nq, nv = self.nq, self.nv
+        if not (_plain(q, nq) and _plain(v, nv) and _plain(tau, nv) and type(t) in (float, int)):
+            return None
+        out = np.empty(nv)
+        arguments = (self.handle, float(t), q, v, tau, tolerance, exact_below, out)
+        entry = self._entries.get(checked_acceleration_of)
+        if entry is None:
+            verdict = checked_acceleration_of(*arguments)
+            self._entries[checked_acceleration_of] = _entry_point(
+                checked_acceleration_of, arguments
+            )
+        else:
+            verdict = entry(*arguments)
+        return out if verdict == STATE_OK else None
 
     def restoring_forces(self, q) -> np.ndarray:
         """``g(q)`` (nv,) on the left-hand side, as :meth:`aiauv_pin.Vehicle.restoring_forces`."""
