@@ -535,7 +535,7 @@ def add_lagged_added_mass_bias(added_mass, relative, previous_relative, filtered
 # called by every backend's derivative code (aiauv_pin.fast.derivatives and the Pinocchio path of
 # aiauv_pin.derivatives). Each is the exact derivative of what its law computes (tests/test_laws.py
 # checks each against central differences of the law).
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def coriolis_wrench_jacobian(inertia, twist, out):
     """``d/dnu [nu x* (M nu)]`` (6, 6) into ``out``: the derivative of :func:`coriolis_wrench`.
 
@@ -583,7 +583,7 @@ def coriolis_wrench_jacobian(inertia, twist, out):
     out[5, 4] -= n0
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def current_acceleration_wrench_jacobian(
     added_mass, omega0, omega1, omega2, vc0, vc1, vc2, by_omega, by_current
 ):
@@ -609,7 +609,7 @@ def current_acceleration_wrench_jacobian(
         by_current[i, 2] = m0 * omega1 - m1 * omega0
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def damping_wrench_jacobian(linear, quadratic, twist, out):
     """``d/dnu_r`` of :func:`damping_wrench`: ``-D_L - D_Q diag(2 |nu_r|)`` (6, 6) into ``out``.
 
@@ -627,7 +627,7 @@ def damping_wrench_jacobian(linear, quadratic, twist, out):
             out[i, j] = -linear[i, j] - quadratic[i, j] * s
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def forward_speed_damping_wrench_jacobian(forward, twist, out):
     """``d/dnu_r`` of :func:`forward_speed_damping_wrench`: ``-u_r D_F - (D_F nu_r) e_1^T`` (6, 6)
     into ``out`` (``e_1`` picks the surge component).
@@ -645,7 +645,7 @@ def forward_speed_damping_wrench_jacobian(forward, twist, out):
         out[i, 0] -= row
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def crossflow_wrench_jacobian(velocity, length, coefficient, nodes, weights, out):
     """``d/dnu`` of :func:`crossflow_wrench` (6, 6) into ``out``: exact for its quadrature.
 
@@ -761,7 +761,7 @@ def crossflow_wrench_jacobian(velocity, length, coefficient, nodes, weights, out
     out[5, 1], out[5, 2], out[5, 5], out[5, 4] = k * j30, k * j31, k * j32, -k * j33
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def hydrostatic_wrench_jacobian(force, moment0, moment1, moment2, out):
     """``d/de`` of :func:`hydrostatic_wrench` ``(F e, m x e)``: ``[[F I], [[m]]]`` (6, 3) into ``out``.
 
@@ -784,7 +784,7 @@ def hydrostatic_wrench_jacobian(force, moment0, moment1, moment2, out):
     out[5, 1] = moment0
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_current, d_up, scratch):
     """Derivatives of :func:`add_body_fluid_bias` for every body, added to the outputs.
 

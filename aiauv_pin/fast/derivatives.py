@@ -83,6 +83,11 @@ class DerivativeWorkspace(NamedTuple):
     step_vectors: np.ndarray  # (9, nv) stage accelerations (4), rates (3), tau, xi
     step_matrices: np.ndarray  # (5, nv, nv) da_dq, da_dv, M^-1, G, spare
     step_blocks: np.ndarray  # (4, 6, 6) free-flyer blocks of integrate and of the tangent rate
+    transition_scratch: np.ndarray  # (8, 7) work vectors of the transition's free-flyer blocks
+    transition_matrices: np.ndarray  # (2, 6, 6) work matrices of the same
+    subtree_thrust: np.ndarray  # (nb, 6) thrust wrench of each subtree, body axes
+    q_stage: np.ndarray  # (nq,) a stage's configuration
+    v_stage: np.ndarray  # (nv,) a stage's velocity
 
 
 def new_derivative_workspace(model, nv: int) -> DerivativeWorkspace:
@@ -130,11 +135,16 @@ def new_derivative_workspace(model, nv: int) -> DerivativeWorkspace:
         np.zeros((9, nv)),
         np.zeros((5, nv, nv)),
         np.zeros((4, 6, 6)),
+        np.zeros((8, 7)),
+        np.zeros((2, 6, 6)),
+        np.zeros((nb, 6)),
+        np.zeros(nv + 1),
+        np.zeros(nv),
     )
 
 
 # ---------------------------------------------------------------------- spatial helpers
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _cross_motion(a, b, out):
     """``out = a x b`` for motion vectors (Featherstone 2008, eq. (2.31))."""
     v0, v1, v2, w0, w1, w2 = a[0], a[1], a[2], a[3], a[4], a[5]
@@ -146,7 +156,7 @@ def _cross_motion(a, b, out):
     out[5] = w0 * b[4] - w1 * b[3]
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _add_cross_force(a, f, out):
     """``out += a x* f`` for a motion ``a`` and a force ``f`` (Featherstone 2008, eq. (2.32))."""
     v0, v1, v2, w0, w1, w2 = a[0], a[1], a[2], a[3], a[4], a[5]
@@ -158,7 +168,7 @@ def _add_cross_force(a, f, out):
     out[5] += v0 * f[1] - v1 * f[0] + w0 * f[4] - w1 * f[3]
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _apply(x, m, out):
     """``out = X m`` (6x6 times 6)."""
     for i in range(6):
@@ -168,7 +178,7 @@ def _apply(x, m, out):
         out[i] = s
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _apply_transpose_add(x, f, out):
     """``out += X^T f``."""
     for i in range(6):
@@ -178,7 +188,7 @@ def _apply_transpose_add(x, f, out):
         out[i] += s
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _to_child(xl, m, out):
     """``out = X m = (R^T (v - p x w), R^T w)`` for the placement ``xl`` (rows 0-2 ``R``, row 3 ``p``)."""
     p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
@@ -192,7 +202,7 @@ def _to_child(xl, m, out):
         out[3 + i] = r0 * w0 + r1 * w1 + r2 * w2
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _times_skew(g, a0, a1, a2, out, add):
     """``out (+)= G [a]`` for a (6, 3) ``G`` (``[a] b = a x b``)."""
     for i in range(6):
@@ -210,7 +220,7 @@ def _times_skew(g, a0, a1, a2, out, add):
 
 
 # ---------------------------------------------------------------------- mass matrix
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _mass_matrix(bodies, D):
     """``M(q)`` by the composite-rigid-body algorithm (Featherstone 2008, Table 6.2), 6x6 inertias."""
     nb = bodies.parent.shape[0]
@@ -270,7 +280,7 @@ def _mass_matrix(bodies, D):
                 mass[col, row] = s
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _invert_spd(a, low, out):
     """``out = a^-1`` for a symmetric positive-definite ``a``: ``a = L L^T``, ``a^-1 = L^-T L^-1``.
 
@@ -308,7 +318,7 @@ def _invert_spd(a, low, out):
             out[j, i] = s
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _thrust_matrix(model, D):
     """``B(q)`` (nv, m): each thruster's unit wrench sent up the tree (``sum_b J_b^T w``)."""
     bodies = model.bodies
@@ -339,7 +349,7 @@ def _thrust_matrix(model, D):
             c = bodies.parent[c]
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def thrust_matrix_at(model, q, W, D):
     """``B(q)`` into ``D.thrust_matrix`` and the placements into ``D.xform`` (kinematics at ``q``)."""
     kinematics(model.bodies, q, W.zero_velocity, W)
@@ -349,7 +359,7 @@ def thrust_matrix_at(model, q, W, D):
 
 
 # ---------------------------------------------------------------------- passes
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _forces(bodies, W, D, qdd):
     """Body accelerations and forces ``F_b`` of the RNEA at ``qdd``, accumulated to the root.
 
@@ -384,7 +394,7 @@ def _forces(bodies, W, D, qdd):
             _xT_add(D.placement[b], force[b], force[bodies.parent[b]])
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _tangent(bodies, W, D, kind, root, component, v, out_col):
     """``d ID / d x`` along one direction into ``out_col`` (nv,); see the module docstring.
 
@@ -495,7 +505,7 @@ def _tangent(bodies, W, D, kind, root, component, v, out_col):
         _xT_add(D.placement[b], dforce[b], dforce[bodies.parent[b]])
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def acceleration_derivatives_into(
     model, env, t, q, v, tau, thrusts, W, D, dv, da_dq, da_dv, da_dtau, da_dcurrent, da_dthrust
 ):

@@ -29,12 +29,12 @@ from .rotations import quaternion_rotation
 
 
 # ---------------------------------------------------------------------- 3-vectors as tuples
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _cr(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _dcr(a, da, b, db):
     """Tangent of ``a x b``."""
     x = _cr(da, b)
@@ -42,7 +42,7 @@ def _dcr(a, da, b, db):
     return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _comb(s0, a, s1, b, s2, c):
     return (
         s0 * a[0] + s1 * b[0] + s2 * c[0],
@@ -51,7 +51,7 @@ def _comb(s0, a, s1, b, s2, c):
     )
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _coefficients(t2):
     """``(c1, c2, c3, d)`` of :func:`aiauv_pin.fast.kernels.tangent_rate` and their ``d/d t2``."""
     if math.sqrt(t2) < 0.1:
@@ -83,7 +83,7 @@ def _coefficients(t2):
     return c1, c2, c3, d, g1 / (2.0 * t), g2 / (2.0 * t), g3 / (2.0 * t), gd / (2.0 * t)
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def tangent_rate_tangent(xi, dxi, vel, dvel, out):
     """Directional derivative of :func:`aiauv_pin.fast.kernels.tangent_rate` (free-flyer part).
 
@@ -117,15 +117,13 @@ def tangent_rate_tangent(xi, dxi, vel, dvel, out):
     rppa, drppa = _cr(r, ppa), _dcr(r, dr, ppa, dppa)
     prppa, dprppa = _cr(p, rppa), _dcr(p, dp, rppa, drppa)
     pprpa, dpprpa = _cr(p, prpa), _dcr(p, dp, prpa, dprpa)
-    dq = [0.0, 0.0, 0.0]
-    for i in range(3):
-        s1 = pra[i] + rpa[i] + prpa[i]
-        s2 = ppra[i] + rppa[i] - 3.0 * prpa[i]
-        s3 = prppa[i] + pprpa[i]
-        ds1 = dpra[i] + drpa[i] + dprpa[i]
-        ds2 = dppra[i] + drppa[i] - 3.0 * dprpa[i]
-        ds3 = dprppa[i] + dpprpa[i]
-        dq[i] = 0.5 * dra[i] + dc1 * s1 + c1 * ds1 + dc2 * s2 + c2 * ds2 + dc3 * s3 + c3 * ds3
+    values = (pra, rpa, prpa, ppra, rppa, prppa, pprpa)
+    tangents = (dpra, drpa, dprpa, dppra, drppa, dprppa, dpprpa)
+    dq = (
+        _q_row_tangent(0, dra, c1, c2, c3, dc1, dc2, dc3, values, tangents),
+        _q_row_tangent(1, dra, c1, c2, c3, dc1, dc2, dc3, values, tangents),
+        _q_row_tangent(2, dra, c1, c2, c3, dc1, dc2, dc3, values, tangents),
+    )
     q0 = tangent_rate_q(r, p, a, c1, c2, c3)
     l = (vel[0] - q0[0], vel[1] - q0[1], vel[2] - q0[2])
     dl = (dvel[0] - dq[0], dvel[1] - dq[1], dvel[2] - dq[2])
@@ -138,7 +136,7 @@ def tangent_rate_tangent(xi, dxi, vel, dvel, out):
         out[3 + i] = da[i]
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def tangent_rate_q(r, p, a, c1, c2, c3):
     """``Q a`` of :func:`aiauv_pin.fast.kernels.tangent_rate` (value only)."""
     pa = _cr(p, a)
@@ -151,30 +149,61 @@ def tangent_rate_q(r, p, a, c1, c2, c3):
     rppa = _cr(r, ppa)
     prppa = _cr(p, rppa)
     pprpa = _cr(p, prpa)
-    out = [0.0, 0.0, 0.0]
-    for i in range(3):
-        out[i] = (
-            0.5 * ra[i]
-            + c1 * (pra[i] + rpa[i] + prpa[i])
-            + c2 * (ppra[i] + rppa[i] - 3.0 * prpa[i])
-            + c3 * (prppa[i] + pprpa[i])
-        )
-    return out
+    values = (pra, rpa, prpa, ppra, rppa, prppa, pprpa)
+    return (
+        _q_row(0, ra, c1, c2, c3, values),
+        _q_row(1, ra, c1, c2, c3, values),
+        _q_row(2, ra, c1, c2, c3, values),
+    )
+
+
+@compiled(fastmath=True)
+def _q_row(i, ra, c1, c2, c3, values):
+    """Row ``i`` of :func:`tangent_rate_q` from the cross products
+    ``values = (p(ra), r(pa), p(r(pa)), p(p(ra)), r(p(pa)), p(r(p(pa))), p(p(r(pa))))``."""
+    pra, rpa, prpa, ppra, rppa, prppa, pprpa = values
+    return (
+        0.5 * ra[i]
+        + c1 * (pra[i] + rpa[i] + prpa[i])
+        + c2 * (ppra[i] + rppa[i] - 3.0 * prpa[i])
+        + c3 * (prppa[i] + pprpa[i])
+    )
+
+
+@compiled(fastmath=True)
+def _q_row_tangent(i, dra, c1, c2, c3, dc1, dc2, dc3, values, tangents):
+    """Row ``i`` of the tangent of :func:`tangent_rate_q` (``values`` as in :func:`_q_row`,
+    ``tangents`` their tangents)."""
+    pra, rpa, prpa, ppra, rppa, prppa, pprpa = values
+    dpra, drpa, dprpa, dppra, drppa, dprppa, dpprpa = tangents
+    s1 = pra[i] + rpa[i] + prpa[i]
+    s2 = ppra[i] + rppa[i] - 3.0 * prpa[i]
+    s3 = prppa[i] + pprpa[i]
+    ds1 = dpra[i] + drpa[i] + dprpa[i]
+    ds2 = dppra[i] + drppa[i] - 3.0 * dprpa[i]
+    ds3 = dprppa[i] + dpprpa[i]
+    return 0.5 * dra[i] + dc1 * s1 + c1 * ds1 + dc2 * s2 + c2 * ds2 + dc3 * s3 + c3 * ds3
 
 
 # ---------------------------------------------------------------------- integrate's derivatives
-@compiled(fastmath=True)
-def integrate_jacobians(xi, d_configuration, d_increment):
+@compiled(fastmath=True, borrows_only=True)
+def integrate_jacobians(xi, d_configuration, d_increment, scratch, scratch_matrix):
     """Free-flyer blocks (6, 6) of ``d(q (+) xi)/d q`` (= ``Ad(exp(-xi))``) and ``d/d xi`` (= ``J_r(xi)``).
 
     ``Ad(exp(-xi))`` is the motion transform ``[[R^T, -R^T [p]], [0, R^T]]`` of ``exp(xi) = (R, p)``;
     ``J_r(xi)`` is the inverse of the matrix of :func:`aiauv_pin.fast.kernels.tangent_rate`, block
-    upper triangular, so inverted by its 3x3 diagonal block.
+    upper triangular, so inverted by its 3x3 diagonal block. ``scratch`` (>= 5, 7) and
+    ``scratch_matrix`` (2, 6, 6) are work arrays.
     """
-    identity = np.zeros(7)
+    identity, moved, base = scratch[0], scratch[1], scratch[2]
+    unit, column = scratch[3, :6], scratch[4, :6]
+    inverse, inv = scratch_matrix[0], scratch_matrix[1]
+    for i in range(7):
+        identity[i] = 0.0
     identity[6] = 1.0
-    moved = np.empty(7)
-    integrate(identity, xi[:6].copy(), moved)
+    for i in range(6):
+        base[i] = xi[i]
+    integrate(identity, base[:6], moved)
     rows = quaternion_rotation(moved[3], moved[4], moved[5], moved[6])
     p0, p1, p2 = moved[0], moved[1], moved[2]
     for i in range(6):
@@ -191,13 +220,11 @@ def integrate_jacobians(xi, d_configuration, d_increment):
         d_configuration[i, 3] = -(r1 * p2 - r2 * p1)
         d_configuration[i, 4] = -(r2 * p0 - r0 * p2)
         d_configuration[i, 5] = -(r0 * p1 - r1 * p0)
-    inverse = np.empty((6, 6))
-    unit = np.zeros(6)
-    column = np.empty(6)
-    base = xi[:6].copy()
+    for i in range(6):
+        unit[i] = 0.0
     for j in range(6):
         unit[j] = 1.0
-        tangent_rate(base, unit, column)
+        tangent_rate(base[:6], unit, column)
         unit[j] = 0.0
         for i in range(6):
             inverse[i, j] = column[i]
@@ -209,7 +236,6 @@ def integrate_jacobians(xi, d_configuration, d_increment):
     c01 = a02 * a21 - a01 * a22
     c02 = a01 * a12 - a02 * a11
     det = a00 * c00 + a10 * c01 + a20 * c02
-    inv = np.empty((3, 3))
     inv[0, 0], inv[0, 1], inv[0, 2] = c00 / det, c01 / det, c02 / det
     inv[1, 0] = (a12 * a20 - a10 * a22) / det
     inv[1, 1] = (a00 * a22 - a02 * a20) / det
@@ -235,14 +261,19 @@ def integrate_jacobians(xi, d_configuration, d_increment):
             d_increment[i, 3 + j] = -s
 
 
-@compiled(fastmath=True)
-def rate_jacobians(xi, vel, d_increment, d_velocity):
-    """Free-flyer blocks (6, 6) of ``k = J_r(xi)^-1 vel``: ``dk/dxi`` and ``dk/dvel = J_r(xi)^-1``."""
-    unit = np.zeros(6)
-    zero = np.zeros(6)
-    column = np.empty(6)
-    base = xi[:6].copy()
-    velocity = vel[:6].copy()
+@compiled(fastmath=True, borrows_only=True)
+def rate_jacobians(xi, vel, d_increment, d_velocity, scratch):
+    """Free-flyer blocks (6, 6) of ``k = J_r(xi)^-1 vel``: ``dk/dxi`` and ``dk/dvel = J_r(xi)^-1``.
+
+    ``scratch`` (>= 7, 7) is a work array.
+    """
+    base, unit, column = scratch[2, :6], scratch[3, :6], scratch[4, :6]
+    zero, velocity = scratch[5, :6], scratch[6, :6]
+    for i in range(6):
+        base[i] = xi[i]
+        velocity[i] = vel[i]
+        unit[i] = 0.0
+        zero[i] = 0.0
     for j in range(6):
         unit[j] = 1.0
         tangent_rate_tangent(base, unit, velocity, zero, column)
@@ -254,7 +285,7 @@ def rate_jacobians(xi, vel, d_increment, d_velocity):
         unit[j] = 0.0
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def thrust_force_derivative(model, D, thrusts, out):
     """``G = d(B(q) thrusts)/dq`` (nv, nv), tangent space, after a derivative evaluation at ``q``.
 
@@ -266,7 +297,10 @@ def thrust_force_derivative(model, D, thrusts, out):
     bodies = model.bodies
     nb = bodies.parent.shape[0]
     nv = out.shape[0]
-    force = np.zeros((nb, 6))
+    force = D.subtree_thrust
+    for b in range(nb):
+        for i in range(6):
+            force[b, i] = 0.0
     for k in range(thrusts.shape[0]):
         b = model.thrusters.body[k]
         for i in range(6):
@@ -282,8 +316,7 @@ def thrust_force_derivative(model, D, thrusts, out):
     for i in range(nv):
         for j in range(nv):
             out[i, j] = 0.0
-    wrench = np.empty(6)
-    up = np.empty(6)
+    wrench, up = D.transition_scratch[3, :6], D.transition_scratch[4, :6]
     for b in range(1, nb):
         col = bodies.v_index[b]
         s_axis = bodies.axis[b]
@@ -318,10 +351,10 @@ def thrust_force_derivative(model, D, thrusts, out):
 
 
 # ---------------------------------------------------------------------- the step
-@compiled(fastmath=True)
-def _configuration_tangent(xi, d_xi, nv, out, d_conf, d_inc):
+@compiled(fastmath=True, borrows_only=True)
+def _configuration_tangent(xi, d_xi, nv, out, d_conf, d_inc, scratch, scratch_matrix):
     """``out = d(q (+) xi)`` for tangents ``[I 0 0]`` of ``q`` and ``d_xi`` (nv, nz)."""
-    integrate_jacobians(xi, d_conf, d_inc)
+    integrate_jacobians(xi, d_conf, d_inc, scratch, scratch_matrix)
     nz = out.shape[1]
     for i in range(6):
         for c in range(nz):
@@ -334,7 +367,7 @@ def _configuration_tangent(xi, d_xi, nv, out, d_conf, d_inc):
             out[i, c] = d_xi[i, c] + (1.0 if c == i else 0.0)
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _acceleration_tangent(
     model, env, t, q, v, tau, W, D, dq_s, dv_s, input_force, out, dv_out, scratch, first
 ):
@@ -399,7 +432,7 @@ def _acceleration_tangent(
             row[c] += minv[i, 6 + c - first_torque]
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def _rate_tangent(d_rate_xi, d_rate_v, d_xi, d_v, out):
     """``out = d k`` of a stage rate ``k = J_r(xi)^-1 v`` (free flyer) and ``k = v`` (joints)."""
     nv = out.shape[0]
@@ -420,7 +453,7 @@ def _rate_tangent(d_rate_xi, d_rate_v, d_xi, d_v, out):
             out[i, c] = d_v[i, c]
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out, A, B):
     """One step of ``method`` and its transition Jacobians ``A`` (2nv, 2nv) and ``B`` (2nv, m + nj).
 
@@ -482,8 +515,7 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
             force_tangent[i, 2 * nv + k] = bmat[i, k]
         for k in range(nj):
             force_tangent[i, 2 * nv + m + k] = 1.0 if i == 6 + k else 0.0
-    q_stage = np.empty(q.shape[0])
-    v_stage = np.empty(nv)
+    q_stage, v_stage = D.q_stage, D.v_stage
     _acceleration_tangent(
         model,
         env,
@@ -512,7 +544,9 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
             for c in range(nz):
                 d_xi[i, c] = dt * d_v_stage[i, c]
         integrate(q, xi, q_next)
-        _configuration_tangent(xi, d_xi, nv, d_q_stage, d_conf, d_inc)
+        _configuration_tangent(
+            xi, d_xi, nv, d_q_stage, d_conf, d_inc, D.transition_scratch, D.transition_matrices
+        )
     else:
         half = 0.5 * dt
         for stage in range(1, 4):
@@ -536,7 +570,9 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
                     d_v_stage[i, c] = factor * d_acc[stage - 1, i, c]
                 d_v_stage[i, nv + i] += 1.0
             integrate(q, xi, q_stage)
-            _configuration_tangent(xi, d_xi, nv, d_q_stage, d_conf, d_inc)
+            _configuration_tangent(
+                xi, d_xi, nv, d_q_stage, d_conf, d_inc, D.transition_scratch, D.transition_matrices
+            )
             _acceleration_tangent(
                 model,
                 env,
@@ -555,7 +591,7 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
                 False,
             )
             tangent_rate(xi, v_stage, rate[stage - 1])
-            rate_jacobians(xi, v_stage, d_rate_xi, d_rate_v)
+            rate_jacobians(xi, v_stage, d_rate_xi, d_rate_v, D.transition_scratch)
             _rate_tangent(d_rate_xi, d_rate_v, d_xi, d_v_stage, d_rate[stage - 1])
         sixth = dt / 6.0
         for i in range(nv):
@@ -572,7 +608,9 @@ def transition_into(model, env, t, q, v, tau0, thrusts, dt, method, W, D, x_out,
             d_xi[i, nv + i] += sixth
             d_v_stage[i, nv + i] += 1.0
         integrate(q, xi, q_next)
-        _configuration_tangent(xi, d_xi, nv, d_q_stage, d_conf, d_inc)
+        _configuration_tangent(
+            xi, d_xi, nv, d_q_stage, d_conf, d_inc, D.transition_scratch, D.transition_matrices
+        )
     for i in range(nv):
         for j in range(2 * nv):
             A[i, j] = d_q_stage[i, j]
@@ -611,7 +649,7 @@ def time_acceleration_derivatives(model, env, q, v, tau, repeats, W, D, outputs)
         )
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, borrows_only=True)
 def time_transitions(model, env, q, v, tau0, thrusts, dt, method, repeats, W, D, x_out, A, B):
     """Evaluate :func:`transition_into` ``repeats`` times in compiled code."""
     for _ in range(repeats):
