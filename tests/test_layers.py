@@ -111,3 +111,28 @@ def test_hydro_and_control_never_import_aiauv_pin_or_pinocchio():
         if name.split(".")[0] in ("hydro", "control"):
             assert not {t for t in graph[name] if t.startswith("aiauv_pin")}, name
             assert not external[name] & {"pinocchio", "pin"}, name
+
+
+def test_a_vehicle_load_reads_each_link_once(monkeypatch):
+    """One URDF reader: the validation walk reads every link for hydro too (no second walk)."""
+    import aiauv_pin
+    import hydro.urdf_block
+    import hydro.uuv_simulator
+    from aiauv_pin import urdf_validation
+
+    read = []
+    original = urdf_validation.read_link
+
+    def counted(element):
+        read.append(element.get("name"))
+        return original(element)
+
+    def second_walk(root):
+        raise AssertionError("the links were walked a second time")
+
+    monkeypatch.setattr(urdf_validation, "read_link", counted)
+    monkeypatch.setattr(hydro.urdf_block, "robot_links", second_walk)
+    monkeypatch.setattr(hydro.uuv_simulator, "robot_links", second_walk)
+    vehicle = aiauv_pin.load_vehicle(backend="pinocchio")
+    assert sorted(read) == sorted(vehicle.urdf_structure.links)  # each link read exactly once
+    assert len(vehicle.hydro.links) == 9
