@@ -208,7 +208,7 @@ def load_vehicle(
                 f"(expected one of {', '.join(SUPPORTED_JOINT_TYPES)})"
             )
     try:
-        hydro = read_hydrodynamics(root)
+        hydro = read_hydrodynamics(root, structure.urdf_links)  # the links read once, above
     except HydroError as exc:
         raise VehicleLoadError(f"{source}: {exc}") from None
     try:
@@ -216,7 +216,7 @@ def load_vehicle(
             check_name(thruster.name, "thruster")
     except VehicleLoadError as exc:
         raise type(exc)(f"{source}: {exc}") from None
-    validate_parameters(structure, hydro, root, str(source))
+    validate_parameters(structure, hydro, str(source))
     model = _build_model(text, source)
     _cross_check(model, structure, source)
     for name in [link.link for link in hydro.links] + [t.link for t in hydro.thrusters]:

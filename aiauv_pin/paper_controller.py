@@ -170,8 +170,8 @@ class VehiclePathFollowing:
             joint_velocities=v[6:].copy(),
             joint_hydrostatic_forces=restoring[6:],
             surge_velocity=float(twist[0]),
-            restoring_moment_in_ee=restoring_moment_in_frame(
-                base_rotation, q[:3], rotation, position, restoring[:6]
+            restoring_moment_in_ee=np.array(
+                restoring_moment_in_frame(base_rotation, q[:3], rotation, position, restoring[:6])
             ),
         )
 

@@ -22,13 +22,14 @@ Every failure raises :class:`UrdfStructureError` with a one-line message naming 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from xml.etree.ElementTree import Element
 
 import numpy as np
 
 from hydro.spec import HydroError
 from hydro.urdf_block import parse_numbers
+from hydro.urdf_xml import UrdfLink, read_link
 
 from .errors import VehicleLoadError
 
@@ -100,6 +101,11 @@ class UrdfStructure:
         inertials: ``{link: UrdfInertial}`` for the links that have one.
         joints: Joints in file order.
         root: Name of the root link.
+        urdf_links: ``{link: hydro.urdf_xml.UrdfLink}``, what the hydrodynamics readers need of
+            each link, read in the same walk (passed on to
+            :func:`hydro.urdf_block.read_hydrodynamics`).
+        geometry_extents: ``{link: largest distance from its origin reached by its visual and
+            collision geometry}`` [m] (:func:`geometry_extent`), read in the same walk.
     """
 
     name: str
@@ -107,6 +113,8 @@ class UrdfStructure:
     inertials: dict[str, UrdfInertial]
     joints: tuple[UrdfJoint, ...]
     root: str
+    urdf_links: dict[str, UrdfLink] = field(default_factory=dict)
+    geometry_extents: dict[str, float] = field(default_factory=dict)
 
 
 def _numbers(text: str | None, count: int, what: str) -> np.ndarray:
@@ -251,6 +259,36 @@ def _joint(element: Element, links: set[str]) -> UrdfJoint:
     )
 
 
+def geometry_extent(link: Element) -> float:
+    """Largest distance from the link origin reached by its visual and collision geometry [m]."""
+    extent = 0.0
+    for kind in ("visual", "collision"):
+        for element in link.findall(kind):
+            origin = element.find("origin")
+            offset = 0.0
+            try:
+                if origin is not None:
+                    offset = float(
+                        np.linalg.norm(np.array(origin.get("xyz", "0 0 0").split(), float))
+                    )
+                geometry = element.find("geometry")
+                shape = next((c for c in geometry if isinstance(c.tag, str)), None)
+                if shape is None:
+                    continue
+                if shape.tag == "box":
+                    size = 0.5 * float(np.linalg.norm(np.array(shape.get("size").split(), float)))
+                elif shape.tag == "cylinder":
+                    size = math.hypot(0.5 * float(shape.get("length")), float(shape.get("radius")))
+                elif shape.tag == "sphere":
+                    size = float(shape.get("radius"))
+                else:
+                    size = 0.0
+            except (TypeError, ValueError, AttributeError):
+                continue
+            extent = max(extent, offset + size)
+    return extent
+
+
 def validate_urdf(root: Element) -> UrdfStructure:
     """Check a parsed ``<robot>`` element against the URDF specification (see the module docstring).
 
@@ -270,7 +308,9 @@ def validate_urdf(root: Element) -> UrdfStructure:
         raise UrdfStructureError("not a URDF: <robot> has no name attribute")
     names: list[str] = []
     inertials: dict[str, UrdfInertial] = {}
-    for link in root.findall("link"):
+    urdf_links: dict[str, UrdfLink] = {}
+    extents: dict[str, float] = {}
+    for link in root.findall("link"):  # the one walk over the links of a vehicle load
         name = link.get("name")
         if not name:
             raise UrdfStructureError("URDF <link> without a name")
@@ -287,6 +327,11 @@ def validate_urdf(root: Element) -> UrdfStructure:
             for element in link.findall(kind):
                 _origin(element, f"{what} <{kind}>")
                 _geometry(element, f"{what} <{kind}>")
+        try:
+            urdf_links[name] = read_link(link)
+        except HydroError as exc:
+            raise UrdfStructureError(str(exc)) from None
+        extents[name] = geometry_extent(link)
     if not names:
         raise UrdfStructureError("not a URDF: <robot> has no <link>")
     link_set = set(names)
@@ -326,4 +371,6 @@ def validate_urdf(root: Element) -> UrdfStructure:
             f"link '{unreached[0]}' is not connected to the root link '{roots[0]}' "
             "(the joints form a cycle)"
         )
-    return UrdfStructure(robot_name, tuple(names), inertials, tuple(joints), roots[0])
+    return UrdfStructure(
+        robot_name, tuple(names), inertials, tuple(joints), roots[0], urdf_links, extents
+    )

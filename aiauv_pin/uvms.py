@@ -130,7 +130,7 @@ def uvms_urdf(
         path = example_robot_urdf(str(arm))
     arm_root = parse_robot(path)
     structure = validate_urdf(arm_root)
-    links = {link.get("name"): link for link in arm_root.findall("link")}
+    links = {name: link.element for name, link in structure.urdf_links.items()}  # read once
     # skip massless anchor links (e.g. "world") fixed to the arm's base
     base = structure.root
     dropped = set()
@@ -142,10 +142,10 @@ def uvms_urdf(
         base = children[0].child
     robot = ET.Element("robot", name=name)
     hull = ET.SubElement(robot, "link", name=HULL_LINK)
-    for element in arm_root.findall("link"):
-        if element.get("name") in dropped:
+    for link_name, element in links.items():
+        if link_name in dropped:
             continue
-        copied = ET.SubElement(robot, "link", name=element.get("name"))
+        copied = ET.SubElement(robot, "link", name=link_name)
         for child in element:
             if child.tag == "inertial":
                 copied.append(copy.deepcopy(child))

@@ -32,7 +32,6 @@ a thrust that accelerates the vehicle implausibly).
 from __future__ import annotations
 
 import math
-from xml.etree.ElementTree import Element
 
 import numpy as np
 
@@ -85,46 +84,10 @@ def _check_psd(matrix: np.ndarray, what: str, where: str) -> None:
         )
 
 
-def _geometry_extent(link: Element) -> float:
-    """Largest distance from the link origin reached by its visual and collision geometry [m]."""
-    extent = 0.0
-    for kind in ("visual", "collision"):
-        for element in link.findall(kind):
-            origin = element.find("origin")
-            offset = 0.0
-            try:
-                if origin is not None:
-                    offset = float(
-                        np.linalg.norm(np.array(origin.get("xyz", "0 0 0").split(), float))
-                    )
-                geometry = element.find("geometry")
-                shape = next((c for c in geometry if isinstance(c.tag, str)), None)
-                if shape is None:
-                    continue
-                if shape.tag == "box":
-                    size = 0.5 * float(np.linalg.norm(np.array(shape.get("size").split(), float)))
-                elif shape.tag == "cylinder":
-                    size = math.hypot(0.5 * float(shape.get("length")), float(shape.get("radius")))
-                elif shape.tag == "sphere":
-                    size = float(shape.get("radius"))
-                else:
-                    size = 0.0
-            except (TypeError, ValueError, AttributeError):
-                continue
-            extent = max(extent, offset + size)
-    return extent
-
-
-def link_sizes(
-    structure: UrdfStructure, root: Element | None, hydro: HydroSpec
-) -> dict[str, float]:
+def link_sizes(structure: UrdfStructure, hydro: HydroSpec) -> dict[str, float]:
     """Extent of each link from its origin [m]: geometry, CG, CB, origins of its child joints."""
     sizes = dict.fromkeys(structure.links, 0.0)
-    if root is not None:
-        for link in root.findall("link"):
-            name = link.get("name")
-            if name in sizes:
-                sizes[name] = _geometry_extent(link)
+    sizes.update(structure.geometry_extents)  # read in the validation walk
     for name, inertial in structure.inertials.items():
         sizes[name] = max(sizes[name], float(np.linalg.norm(inertial.xyz)))
     for joint in structure.joints:
@@ -138,15 +101,12 @@ def link_sizes(
     return sizes
 
 
-def validate_parameters(
-    structure: UrdfStructure, hydro: HydroSpec, root: Element | None = None, where: str = ""
-) -> None:
+def validate_parameters(structure: UrdfStructure, hydro: HydroSpec, where: str = "") -> None:
     """Refuse non-physical or implausible parameters (see the module docstring).
 
     Args:
-        structure: The validated URDF tree.
+        structure: The validated URDF tree (with the links' geometry extents).
         hydro: The hydrodynamic parameters.
-        root: The parsed ``<robot>`` element (for the links' geometry; optional).
         where: Prefix of the error messages (the file).
 
     Raises:
@@ -210,7 +170,7 @@ def validate_parameters(
         _check_psd(link.quadratic_damping, f"{what}: quadratic_damping", where)
         # dissipative in forward motion (u_r > 0), as UUV Simulator's coefficients are meant
         _check_psd(link.forward_speed_damping, f"{what}: linear_damping_forward_speed", where)
-    sizes = link_sizes(structure, root, hydro)
+    sizes = link_sizes(structure, hydro)
     for thruster in hydro.thrusters:
         what = f"thruster '{thruster.name}'"
         if thruster.max_thrust > MAX_THRUST:

@@ -325,25 +325,31 @@ def restoring_moment_in_frame(base_rotation, base_position, rotation, position, 
     side of eq. 19: weight minus buoyancy), a spatial force ``(f, n)`` in the base frame about the
     base origin; the frame has rotation ``R_e`` and position ``p_e`` in the world, the base ``R_b``,
     ``p_b``. Moved to the frame origin: ``n_e = R_e^T (R_b n - (p_e - p_b) x R_b f)`` (for a neutrally
-    buoyant vehicle ``f = 0`` and the moment is the same about every point).
+    buoyant vehicle ``f = 0`` and the moment is the same about every point). ``position`` may be any
+    indexable of three floats (array or tuple).
+
+    Returns:
+        ``(n_e,x, n_e,y, n_e,z)``, a tuple of three floats (no array is allocated) [N m].
     """
-    f = np.empty(3)
-    n = np.empty(3)
-    for i in range(3):
-        f[i] = base_rotation[i, 0] * base_wrench[0] + base_rotation[i, 1] * base_wrench[1]
-        f[i] += base_rotation[i, 2] * base_wrench[2]
-        n[i] = base_rotation[i, 0] * base_wrench[3] + base_rotation[i, 1] * base_wrench[4]
-        n[i] += base_rotation[i, 2] * base_wrench[5]
+    w0, w1, w2 = base_wrench[0], base_wrench[1], base_wrench[2]
+    w3, w4, w5 = base_wrench[3], base_wrench[4], base_wrench[5]
+    f0 = base_rotation[0, 0] * w0 + base_rotation[0, 1] * w1 + base_rotation[0, 2] * w2
+    f1 = base_rotation[1, 0] * w0 + base_rotation[1, 1] * w1 + base_rotation[1, 2] * w2
+    f2 = base_rotation[2, 0] * w0 + base_rotation[2, 1] * w1 + base_rotation[2, 2] * w2
+    n0 = base_rotation[0, 0] * w3 + base_rotation[0, 1] * w4 + base_rotation[0, 2] * w5
+    n1 = base_rotation[1, 0] * w3 + base_rotation[1, 1] * w4 + base_rotation[1, 2] * w5
+    n2 = base_rotation[2, 0] * w3 + base_rotation[2, 1] * w4 + base_rotation[2, 2] * w5
     r0 = position[0] - base_position[0]
     r1 = position[1] - base_position[1]
     r2 = position[2] - base_position[2]
-    n[0] -= r1 * f[2] - r2 * f[1]
-    n[1] -= r2 * f[0] - r0 * f[2]
-    n[2] -= r0 * f[1] - r1 * f[0]
-    out = np.empty(3)
-    for i in range(3):
-        out[i] = rotation[0, i] * n[0] + rotation[1, i] * n[1] + rotation[2, i] * n[2]
-    return out
+    n0 -= r1 * f2 - r2 * f1
+    n1 -= r2 * f0 - r0 * f2
+    n2 -= r0 * f1 - r1 * f0
+    return (
+        rotation[0, 0] * n0 + rotation[1, 0] * n1 + rotation[2, 0] * n2,
+        rotation[0, 1] * n0 + rotation[1, 1] * n1 + rotation[2, 1] * n2,
+        rotation[0, 2] * n0 + rotation[1, 2] * n1 + rotation[2, 2] * n2,
+    )
 
 
 # ---------------------------------------------------------------------- reduced attitude (eq. 9)
@@ -696,8 +702,8 @@ def path_following_command(
         surge_velocity: ``u`` [m/s], end-effector velocity along its own x-axis.
         joint_positions, joint_velocities, joint_hydrostatic_forces: (n,) [rad], [rad/s], [N m].
         restoring_moment: Restoring moment of the whole vehicle about the end-effector, its axes,
-            left-hand side of eq. (19) (3,) [N m] (:func:`restoring_moment_in_frame`; used only with
-            ``gains.hydrostatic_compensation``).
+            left-hand side of eq. (19), three floats (array or tuple) [N m]
+            (:func:`restoring_moment_in_frame`; used only with ``gains.hydrostatic_compensation``).
         out: :class:`CommandBuffers`.
     """
     point = path_point_of(path_function, path_kind, position, path_parameters)

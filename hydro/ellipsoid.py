@@ -49,7 +49,7 @@ from scipy.special import elliprd
 
 from hydro.spatial import motion_transform
 from hydro.spec import HydroError
-from hydro.urdf_block import parse_scalar, parse_vector, rpy_matrix
+from hydro.urdf_xml import parse_scalar, parse_vector, rpy_matrix
 
 #: Bluff-body drag coefficient of an ellipsoid link [-] (Hoerner 1965, Ch. 3).
 DRAG_COEFFICIENT = 1.0

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Mapping
 from dataclasses import fields
 from xml.etree.ElementTree import Element
 
@@ -228,11 +229,16 @@ def _hydrodynamics_block(root: Element) -> Element | None:
     return blocks[0] if blocks else None
 
 
-def read_hydrodynamics(source: str | os.PathLike | Element) -> HydroSpec:
+def read_hydrodynamics(
+    source: str | os.PathLike | Element, links: Mapping[str, UrdfLink] | None = None
+) -> HydroSpec:
     """Read a URDF's ``<hydrodynamics>`` block (and any UUV Simulator blocks).
 
     Args:
         source: URDF path, text or parsed ``<robot>`` element (see :func:`parse_robot`).
+        links: The robot's links as :func:`robot_links` reads them, if already read (a vehicle
+            load passes those of its validation walk, so the links are walked once); ``None``
+            reads them here.
 
     Returns:
         The vehicle's hydrodynamic parameters; ``HydroSpec()`` without links if the file has neither
@@ -242,7 +248,8 @@ def read_hydrodynamics(source: str | os.PathLike | Element) -> HydroSpec:
         HydroError: Any malformed or non-physical input; the message is one line.
     """
     root = parse_robot(source)
-    links = robot_links(root)
+    if links is None:
+        links = robot_links(root)
     block = _hydrodynamics_block(root)
     uuv_density = uuv_simulator.uuv_fluid_density(root)
 

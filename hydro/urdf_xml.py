@@ -3,7 +3,8 @@
 The plain-XML layer under :mod:`hydro.urdf_block` (our ``<hydrodynamics>`` block),
 :mod:`hydro.uuv_simulator` (UUV Simulator's blocks) and :mod:`aiauv_pin.urdf_validation`: URDFs are
 parsed with DTDs and entities refused (defusedxml), every number is checked, and
-:func:`robot_links` walks the ``<link>`` elements once for all of them. See :mod:`hydro.urdf_block`
+:func:`read_link` reads each ``<link>`` element for all of them (:func:`robot_links` walks them
+once; a vehicle load gets the same records from its validation walk). See :mod:`hydro.urdf_block`
 for the cylinder-frame convention of :func:`cylinder_frame`.
 """
 
@@ -11,7 +12,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree.ElementTree import Element, ParseError
 
@@ -198,12 +199,15 @@ class UrdfLink:
         mass: ``<inertial><mass value>`` [kg], or ``None`` without an inertial.
         inertial_origin: Centre of mass in the link frame [m] (zeros without an inertial).
         cylinder: The link's first collision (else visual) cylinder, or ``None``.
+        element: The ``<link>`` element itself, for readers that need more of it (UUV Simulator's
+            blocks, :mod:`aiauv_pin.uvms`) without walking the links again.
     """
 
     name: str
     mass: float | None
     inertial_origin: np.ndarray
     cylinder: CylinderGeometry | None
+    element: Element | None = field(default=None, repr=False, compare=False)
 
 
 def _minimal_rotation_from_x(axis: np.ndarray) -> np.ndarray:
@@ -274,24 +278,34 @@ def _link_cylinder(link: Element, name: str) -> CylinderGeometry | None:
     return None
 
 
+def read_link(link: Element) -> UrdfLink:
+    """What the hydrodynamics readers need from one ``<link>`` element (see :class:`UrdfLink`)."""
+    name = link.get("name")
+    if not name:
+        raise HydroError("URDF <link> without a name")
+    mass = None
+    inertial_origin = np.zeros(3)
+    inertial = link.find("inertial")
+    if inertial is not None:
+        mass_element = inertial.find("mass")
+        if mass_element is not None:
+            mass = parse_scalar(mass_element.get("value"), f"link '{name}' mass")
+        inertial_origin, _ = _origin(inertial, f"link '{name}' inertial")
+    return UrdfLink(name, mass, inertial_origin, _link_cylinder(link, name), link)
+
+
 def robot_links(root: Element) -> dict[str, UrdfLink]:
-    """The ``<link>`` elements of a ``<robot>``, by name."""
+    """The ``<link>`` elements of a ``<robot>``, by name (one walk; :func:`read_link` each).
+
+    :func:`aiauv_pin.urdf_validation.validate_urdf` builds the same records in its own walk, so a
+    vehicle load reads the links once and hands them to :func:`hydro.urdf_block.read_hydrodynamics`.
+    """
     links: dict[str, UrdfLink] = {}
-    for link in root.findall("link"):
-        name = link.get("name")
-        if not name:
-            raise HydroError("URDF <link> without a name")
-        if name in links:
-            raise HydroError(f"URDF link '{name}' defined twice")
-        mass = None
-        inertial_origin = np.zeros(3)
-        inertial = link.find("inertial")
-        if inertial is not None:
-            mass_element = inertial.find("mass")
-            if mass_element is not None:
-                mass = parse_scalar(mass_element.get("value"), f"link '{name}' mass")
-            inertial_origin, _ = _origin(inertial, f"link '{name}' inertial")
-        links[name] = UrdfLink(name, mass, inertial_origin, _link_cylinder(link, name))
+    for element in root.findall("link"):
+        link = read_link(element)
+        if link.name in links:
+            raise HydroError(f"URDF link '{link.name}' defined twice")
+        links[link.name] = link
     return links
 
 

@@ -533,7 +533,6 @@ def uuv_links(
     Returns:
         One ``fossen`` :class:`LinkHydrodynamics` per UUV Simulator link, in file order.
     """
-    link_elements = {element.get("name"): element for element in root.findall("link")}
     result: list[LinkHydrodynamics] = []
     seen: set[str] = set()
     for plugin in uuv_plugins(root):
@@ -548,7 +547,7 @@ def uuv_links(
                 continue
             if name not in links:
                 raise HydroError(f"UUV Simulator link '{name}' is not a <link> of the robot")
-            result.append(_uuv_link(element, links[name], link_elements[name], fluid_density))
+            result.append(_uuv_link(element, links[name], links[name].element, fluid_density))
     return result
 
 

@@ -137,7 +137,7 @@ def test_inclined_line_converges_like_the_x_axis():
     result = run_scenario(aiauv_pin.load_vehicle(), dataclasses.replace(scenario, duration=200.0))
     summary = aiauv_pin.scenario.summary(result)
     assert summary["final"]["cross_track_error"] < 0.01
-    assert summary["settling_time"]["cross_track_5cm"] < 150.0  # the x-axis case: ~107 s
+    assert summary["settling_time"]["cross_track_5cm"] < 150.0  # 112.3 s; the x-axis case 113.1 s
 
 
 # ---------------------------------------------------------------------- currents

@@ -41,9 +41,16 @@ from typing import NamedTuple
 import numpy as np
 
 from hydro.jit import compiled
-from hydro.laws import body_fluid_bias_jacobians, coriolis_wrench_jacobian
+from hydro.laws import body_fluid_bias_jacobians, coriolis_of_momentum, coriolis_wrench_jacobian
 
-from .kernels import _motion_transform, _xT_add, body_bias, kinematics, sample_current
+from .kernels import (
+    _matvec6,
+    _motion_transform,
+    _xT_add,
+    body_bias,
+    kinematics,
+    sample_current,
+)
 
 #: Kinds of tangent direction.
 CONFIGURATION, VELOCITY, CURRENT = 0, 1, 2
@@ -158,24 +165,11 @@ def _cross_motion(a, b, out):
 
 @compiled(fastmath=True, borrows_only=True)
 def _add_cross_force(a, f, out):
-    """``out += a x* f`` for a motion ``a`` and a force ``f`` (Featherstone 2008, eq. (2.32))."""
-    v0, v1, v2, w0, w1, w2 = a[0], a[1], a[2], a[3], a[4], a[5]
-    out[0] += w1 * f[2] - w2 * f[1]
-    out[1] += w2 * f[0] - w0 * f[2]
-    out[2] += w0 * f[1] - w1 * f[0]
-    out[3] += v1 * f[2] - v2 * f[1] + w1 * f[5] - w2 * f[4]
-    out[4] += v2 * f[0] - v0 * f[2] + w2 * f[3] - w0 * f[5]
-    out[5] += v0 * f[1] - v1 * f[0] + w0 * f[4] - w1 * f[3]
-
-
-@compiled(fastmath=True, borrows_only=True)
-def _apply(x, m, out):
-    """``out = X m`` (6x6 times 6)."""
+    """``out += a x* f`` for a motion ``a`` and a force ``f`` (Featherstone 2008, eq. (2.32)); the
+    product is :func:`hydro.laws.coriolis_of_momentum`."""
+    w = coriolis_of_momentum(a[0], a[1], a[2], a[3], a[4], a[5], f[0], f[1], f[2], f[3], f[4], f[5])
     for i in range(6):
-        s = 0.0
-        for j in range(6):
-            s += x[i, j] * m[j]
-        out[i] = s
+        out[i] += w[i]
 
 
 @compiled(fastmath=True, borrows_only=True)
@@ -254,7 +248,7 @@ def _mass_matrix(bodies, D):
     for b in range(1, nb):
         col = bodies.v_index[b]
         s_axis = bodies.axis[b]
-        _apply(comp[b], s_axis, force)
+        _matvec6(comp[b], s_axis, force)
         s = 0.0
         for i in range(6):
             s += s_axis[i] * force[i]
@@ -378,7 +372,7 @@ def _forces(bodies, W, D, qdd):
             _to_child(D.placement[b], acc[parent], acc[b])
             for i in range(6):
                 acc[b, i] += bodies.axis[b, i] * qdd[iv] + W.bias_acceleration[b, i]
-        _apply(bodies.inertia[b], acc[b], force[b])
+        _matvec6(bodies.inertia[b], acc[b], force[b])
         for i in range(6):
             force[b, i] += W.bias[b, i] - D.external[b, i]
     for b in range(nb - 1, -1, -1):

@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from control.laws import SurgeState, joint_pd_torque
+from control.laws import SurgeState, joint_pd_torque, restoring_moment_in_frame
 from control.thruster_turning import TurningBuffers, TurningGains, thruster_turning_command
 from hydro.jit import compiled
 
@@ -74,8 +74,10 @@ def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
     """The thruster-turning baseline on the vehicle: measure, law, ``tau = B(q) thrusts``.
 
     The known moment of eq. (1) is the hydrostatic one: the base part of ``-g(q)`` (a wrench at the
-    base origin, base axes) moved to the vehicle's centre, ``n_c = n_o - c x f``, and turned into
-    end-effector axes. The logged joint torque is the servo's eq. (24) at this sample.
+    base origin, base axes) moved to the vehicle's centre ``p_b + R_b c`` and turned into
+    end-effector axes, by :func:`control.laws.restoring_moment_in_frame` (which gives the moment of
+    ``g``, the left-hand side: hence the sign). The logged joint torque is the servo's eq. (24) at
+    this sample.
     """
     W = workspace
     P = parameters
@@ -91,19 +93,17 @@ def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
         state.velocity_history,
     )
     g = W.restoring
-    # acting hydrostatic wrench at the base origin (base axes): -g; moment about the centre
-    c = P.centre_in_base
-    f0, f1, f2 = -g[0], -g[1], -g[2]
-    n0 = -g[3] - (c[1] * f2 - c[2] * f1)
-    n1 = -g[4] - (c[2] * f0 - c[0] * f2)
-    n2 = -g[5] - (c[0] * f1 - c[1] * f0)
-    # into end-effector axes: R_ee^T R_base n
-    Rb = W.rotation[0]
-    nw0 = Rb[0, 0] * n0 + Rb[0, 1] * n1 + Rb[0, 2] * n2
-    nw1 = Rb[1, 0] * n0 + Rb[1, 1] * n1 + Rb[1, 2] * n2
-    nw2 = Rb[2, 0] * n0 + Rb[2, 1] * n1 + Rb[2, 2] * n2
-    m_y = R[0, 1] * nw0 + R[1, 1] * nw1 + R[2, 1] * nw2
-    m_z = R[0, 2] * nw0 + R[1, 2] * nw1 + R[2, 2] * nw2
+    # the law gives the moment of g (left-hand side) about the centre, in end-effector axes; the
+    # acting moment is its negative. Only the lever p_c - p_b = R_b c enters, so positions are
+    # taken from the base origin (no rounding from large world coordinates).
+    Rb, c = W.rotation[0], P.centre_in_base
+    lever = (
+        Rb[0, 0] * c[0] + Rb[0, 1] * c[1] + Rb[0, 2] * c[2],
+        Rb[1, 0] * c[0] + Rb[1, 1] * c[1] + Rb[1, 2] * c[2],
+        Rb[2, 0] * c[0] + Rb[2, 1] * c[1] + Rb[2, 2] * c[2],
+    )
+    moment = restoring_moment_in_frame(Rb, (0.0, 0.0, 0.0), R, lever, g)
+    m_y, m_z = -moment[1], -moment[2]
     out = state.command
     thruster_turning_command(
         P.gains,

@@ -23,7 +23,12 @@ import numpy as np
 
 from hydro.jit import compiled
 
-from .derivatives import acceleration_derivatives_into, thrust_matrix_at
+from .derivatives import (
+    _add_cross_force,
+    _apply_transpose_add,
+    acceleration_derivatives_into,
+    thrust_matrix_at,
+)
 from .kernels import EULER, integrate, tangent_rate
 from .rotations import quaternion_rotation
 
@@ -307,12 +312,7 @@ def thrust_force_derivative(model, D, thrusts, out):
             force[b, i] += model.thrusters.unit_wrench[k, i] * thrusts[k]
     for b in range(nb - 1, 0, -1):
         parent = bodies.parent[b]
-        x = D.xform[b]
-        for i in range(6):
-            s = 0.0
-            for j in range(6):
-                s += x[j, i] * force[b, j]
-            force[parent, i] += s
+        _apply_transpose_add(D.xform[b], force[b], force[parent])
     for i in range(nv):
         for j in range(nv):
             out[i, j] = 0.0
@@ -320,23 +320,15 @@ def thrust_force_derivative(model, D, thrusts, out):
     for b in range(1, nb):
         col = bodies.v_index[b]
         s_axis = bodies.axis[b]
-        v0, v1, v2, w0, w1, w2 = s_axis[0], s_axis[1], s_axis[2], s_axis[3], s_axis[4], s_axis[5]
-        f = force[b]
         # S x* F; S^T (S x* F) = 0, so body b's own entry is 0
-        wrench[0] = w1 * f[2] - w2 * f[1]
-        wrench[1] = w2 * f[0] - w0 * f[2]
-        wrench[2] = w0 * f[1] - w1 * f[0]
-        wrench[3] = v1 * f[2] - v2 * f[1] + w1 * f[5] - w2 * f[4]
-        wrench[4] = v2 * f[0] - v0 * f[2] + w2 * f[3] - w0 * f[5]
-        wrench[5] = v0 * f[1] - v1 * f[0] + w0 * f[4] - w1 * f[3]
+        for i in range(6):
+            wrench[i] = 0.0
+        _add_cross_force(s_axis, force[b], wrench)
         c = b
         while c > 0:
-            x = D.xform[c]
             for i in range(6):
-                s = 0.0
-                for j in range(6):
-                    s += x[j, i] * wrench[j]
-                up[i] = s
+                up[i] = 0.0
+            _apply_transpose_add(D.xform[c], wrench, up)
             for i in range(6):
                 wrench[i] = up[i]
             c = bodies.parent[c]

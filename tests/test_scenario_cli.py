@@ -1,0 +1,106 @@
+"""``aiauv simulate SCENARIO.toml [flags]`` with the scenario file exactly as issue 12 writes it.
+
+The file's text (comments included) is the issue's; the flags ``--current VX VY VZ``,
+``--duration``, ``--dt``, ``--method`` and ``--controller none|paper`` override it; a short run
+writes the path-following figures into ``summary.json`` and the end-effector position into
+``timeseries.csv``.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import pytest
+
+import aiauv_pin
+from aiauv_pin.cli import build_parser, main, scenario_for_args
+from aiauv_pin.cli_types import EXIT_FAILED
+
+#: The scenario file of issue 12, word for word.
+ISSUE_TOML = """\
+case = "uniform"             # bundled vehicle; or vehicle = "my.urdf" (relative to this file)
+duration = 120.0             # [s]
+dt = 0.01                    # [s]
+method = "rk4"               # or "euler"
+[start]
+position = [0.0, 2.0, 2.0]   # end-effector [m], world; vehicle straight, at rest
+heading = [1.0, 0.0, 0.0]    # direction the vehicle points at the start (default: along the path)
+[path]
+type = "line"                # line: point, direction | helix: centre, axis, radius, pitch | waypoints: points
+point = [0.0, 0.0, 0.0]
+direction = [1.0, 0.0, 0.0]
+[current]
+velocity = [0.0, 0.0, 0.0]   # [m/s], world
+[controller]
+type = "paper"               # or "none" (passive, thrusters and joints idle); gains as in sweep specs
+"""
+
+
+def _scenario(argv):
+    return scenario_for_args(build_parser().parse_args(["simulate", *map(str, argv)]))
+
+
+def test_issue_file_as_written_and_every_flag_overrides_it(tmp_path):
+    path = tmp_path / "issue.toml"
+    path.write_text(ISSUE_TOML)
+    scenario = _scenario([path])
+    assert (scenario.case, scenario.duration, scenario.dt, scenario.method) == (
+        "uniform",
+        120.0,
+        0.01,
+        "rk4",
+    )
+    assert scenario.controller == "paper" and scenario.on_x_axis and scenario.water.is_zero
+    assert scenario.start.tolist() == [0.0, 2.0, 2.0]
+    flags = ["--current", 0.1, -0.2, 0.05, "--duration", 3, "--dt", 0.02, "--method", "euler"]
+    changed = _scenario([path, *flags, "--controller", "none"])
+    assert (changed.duration, changed.dt, changed.method, changed.controller) == (
+        3.0,
+        0.02,
+        "euler",
+        "none",
+    )
+    assert changed.water.velocity(0.0, (0.0, 0.0, 0.0)).tolist() == [0.1, -0.2, 0.05]
+    assert _scenario([path, "--controller", "paper"]).controller == "paper"
+
+
+def test_vehicle_is_taken_relative_to_the_file(tmp_path):
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    shutil.copy(aiauv_pin.bundled_urdf("stabilised"), folder / "my.urdf")
+    path = folder / "mine.toml"
+    path.write_text(ISSUE_TOML.replace('case = "uniform"', 'vehicle = "my.urdf"'))
+    assert _scenario([path]).vehicle == str(folder / "my.urdf")
+
+
+@pytest.mark.parametrize(
+    "line, message",
+    [
+        ("duration = -1.0", "duration: must be > 0"),
+        ("method = 4", "method: expected"),
+        ("speed = 1.0", "speed: unknown key"),
+    ],
+)
+def test_bad_issue_file_names_the_key(tmp_path, capfd, line, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(line + "\n" + ISSUE_TOML.split("\n", 4)[4])
+    assert main(["simulate", str(path), "--out", str(tmp_path / "out")]) == EXIT_FAILED
+    err = capfd.readouterr().err.strip()
+    assert err.startswith("aiauv: error:") and message in err and "\n" not in err
+
+
+def test_short_run_writes_the_path_figures(tmp_path, capsys):
+    path = tmp_path / "issue.toml"
+    path.write_text(ISSUE_TOML)
+    out = tmp_path / "run"
+    argv = ["simulate", str(path), "--duration", "0.5", "--dt", "0.05", "--method", "euler"]
+    argv += ["--current", "0", "0.2", "0", "--controller", "none", "--no-html", "--quiet"]
+    assert main([*argv, "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["final"]["cross_track_error"] > 2.0  # passive: still ~2.8 m off the x-axis
+    assert "cross_track_5cm" in summary["settling_time"]  # null: never within 5 cm
+    assert "p_y" in summary["final"] and "p_z" in summary["final"]  # the paper's x-axis
+    header = (out / "timeseries.csv").read_text().splitlines()[0].split(",")
+    assert {"p_x", "p_y", "p_z"} <= set(header)
+    capsys.readouterr()
