@@ -377,17 +377,29 @@ def add_path_errors(vehicle: Vehicle, scenario: Scenario, trajectory: Trajectory
     A passive run (or a user's controller) logs no path quantities; they are computed here from
     the logged configurations (:meth:`Vehicle.frame_placement`, :meth:`control.paths.Path.closest`).
     """
+    from control.laws import path_errors_of_positions
+
     info = trajectory.info
     n = len(trajectory.t)
     if "p" not in info:
         frame = vehicle.frame_id(tip_frame(vehicle))
-        zero = np.zeros(vehicle.nv)
-        info["p"] = np.array([vehicle.frame_motion(q, zero, frame)[1] for q in trajectory.q])
+        if vehicle.fast is not None:
+            info["p"] = vehicle.fast.frame_positions(np.asarray(trajectory.q), frame)
+        else:
+            zero = np.zeros(vehicle.nv)
+            info["p"] = np.array([vehicle.frame_motion(q, zero, frame)[1] for q in trajectory.q])
     if "cross_track" not in info:
         path = scenario.path_to_follow
-        points = [path.closest(p) for p in info["p"]]
-        info["cross_track"] = np.array([path.cross_track_error(p) for p in info["p"]]).reshape(n, 2)
-        info["path_s"] = np.array([point.s for point in points])
+        s, errors = np.empty(n), np.empty((n, 2))
+        path_errors_of_positions(
+            path.user_function,
+            path.kind_code,
+            path.params,
+            np.ascontiguousarray(info["p"], dtype=float).reshape(n, 3),
+            s,
+            errors,
+        )
+        info["cross_track"], info["path_s"] = errors, s
 
 
 def run_paper_scenario(vehicle: Vehicle, scenario: Scenario, **options) -> ScenarioResult:

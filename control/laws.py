@@ -216,6 +216,29 @@ def cross_track_errors(path_point, p, p_dot):
 
 
 @compiled
+def path_errors_of_positions(user, kind, params, positions, s_out, errors_out):
+    """Closest-point parameter ``s`` [m] and cross-track errors ``(e_1, e_2)`` [m] of many positions.
+
+    For a run whose controller logged no path quantities (a passive run, a user's controller):
+    :func:`cross_track_errors` at each of ``positions`` (n, 3) [m] (world), in one compiled call.
+
+    Args:
+        user, kind, params: The path, as :data:`control.paths.path_point_of` takes it.
+        positions: End-effector positions (n, 3) [m].
+        s_out: Output (n,) [m].
+        errors_out: Output (n, 2) [m].
+    """
+    still = (0.0, 0.0, 0.0)
+    for k in range(positions.shape[0]):
+        p = positions[k]
+        point = path_point_of(user, kind, p, params)
+        e = cross_track_errors(point, p, still)
+        s_out[k] = point.s
+        errors_out[k, 0] = e[0]
+        errors_out[k, 1] = e[1]
+
+
+@compiled
 def _ilos_rate(e, z, lookahead, sigma):
     """``z_dot = Delta e / ((e + sigma z)^2 + Delta^2)`` [m/s] (Borhaug et al. 2008, eq. 9)."""
     g = e + sigma * z

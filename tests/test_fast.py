@@ -262,3 +262,25 @@ def test_python_entry_checks_shapes(paper_vehicle):
         fast.acceleration(q, v, np.zeros(paper_vehicle.nv + 1))
     with pytest.raises(aiauv_pin.errors.ArgumentError, match="q and v must have shapes"):
         fast.acceleration(q[:-1], v, np.zeros(paper_vehicle.nv))
+
+
+def test_frame_positions_of_a_run_match_the_pinocchio_frame(paper_vehicle, rng):
+    """``FastModel.frame_positions`` (a logged run's end-effector in one compiled call) against
+    Pinocchio's frame placement, configuration by configuration."""
+    if paper_vehicle.fast is None:
+        pytest.skip("compiled backend unavailable")
+    frame = paper_vehicle.frame_id("end_effector")
+    configurations = []
+    for _ in range(12):
+        q = paper_vehicle.neutral_configuration()
+        q[:3] = rng.normal(size=3)
+        quaternion = rng.normal(size=4)
+        q[3:7] = quaternion / np.linalg.norm(quaternion)
+        q[7:] = rng.uniform(-1.0, 1.0, paper_vehicle.nv - 6)
+        configurations.append(q)
+    positions = paper_vehicle.fast.frame_positions(np.array(configurations), frame)
+    for q, p in zip(configurations, positions, strict=True):
+        expected = paper_vehicle.frame_placement(q, "end_effector").translation
+        np.testing.assert_allclose(p, expected, rtol=0, atol=1e-12)
+    with pytest.raises(ValueError, match="configurations must have shape"):
+        paper_vehicle.fast.frame_positions(np.zeros((3, 4)), frame)

@@ -387,3 +387,18 @@ def test_from_mapping_builds_each_type():
     waypoints = from_mapping({"type": "waypoints", "points": WAYPOINTS, "corner_radius": 2.0})
     assert np.array_equal(waypoints.params, PATHS["waypoints"].params)
     assert from_mapping({"type": "waypoints", "points": WAYPOINTS}).corner_radius == 1.0
+
+
+@pytest.mark.parametrize("name", PATHS)
+def test_path_errors_of_many_positions_match_one_at_a_time(name, rng):
+    """``control.laws.path_errors_of_positions`` (one compiled call for a logged run) gives exactly
+    what :meth:`Path.closest` and :meth:`Path.cross_track_error` give sample by sample."""
+    from control.laws import path_errors_of_positions
+
+    path = PATHS[name]
+    positions = path.points_at(s_grid(path, 40)) + rng.normal(scale=0.7, size=(40, 3))
+    s, errors = np.empty(40), np.empty((40, 2))
+    path_errors_of_positions(path.user_function, path.kind_code, path.params, positions, s, errors)
+    for k, p in enumerate(positions):
+        assert s[k] == path.closest(p).s
+        np.testing.assert_array_equal(errors[k], path.cross_track_error(p))

@@ -1127,6 +1127,21 @@ def frame_kinematics(model, q, v, body, rotation, translation, W):
     return frame_of_body(W, body, rotation, translation)
 
 
+@compiled(fastmath=True, borrows_only=True)
+def frame_positions(model, configurations, body, translation, W, out):
+    """World position [m] of a point fixed to ``body`` at ``translation`` [m] in each of the
+    configurations (n, nq) into ``out`` (n, 3): ``p_b + R_b t`` as :func:`frame_of_body` computes it,
+    for a whole logged run in one call."""
+    rot_w, pos_w, zero = W.rotation, W.position, W.zero_velocity
+    for k in range(configurations.shape[0]):
+        kinematics(model.bodies, configurations[k], zero, W)
+        for i in range(3):
+            acc = pos_w[body, i]
+            for j in range(3):
+                acc += rot_w[body, i, j] * translation[j]
+            out[k, i] = acc
+
+
 @compiled(fastmath=True)
 def frame_of_body(W, body, rotation, translation):
     """Pose and own-axes twist of a frame on ``body``, from the kinematics already in ``W``."""

@@ -215,6 +215,18 @@ class FastModel:
             )
         return self._frames[frame_id]
 
+    def frame_positions(self, configurations, frame_id: int) -> np.ndarray:
+        """World positions [m] (n, 3) of a Pinocchio frame in each of ``configurations`` (n, nq)."""
+        body, _, translation = self.frame(frame_id)
+        configurations = np.ascontiguousarray(configurations, dtype=float)
+        if configurations.ndim != 2 or configurations.shape[1] != self.nq:
+            raise ArgumentError(
+                f"configurations must have shape (n, {self.nq}), got {configurations.shape}"
+            )
+        out = np.empty((configurations.shape[0], 3))
+        kernels.frame_positions(self.model, configurations, body, translation, self.workspace, out)
+        return out
+
     def frame_motion(self, q, v, frame_id: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """World rotation, world position and twist in its own axes of a Pinocchio frame."""
         body, rotation, translation = self.frame(frame_id)
