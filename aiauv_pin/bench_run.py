@@ -195,15 +195,17 @@ def accuracy_per_cost(
     candidates: tuple[tuple[str, float], ...] = (
         ("rk4", 0.02),
         ("rk4", 0.01),
+        ("rk4", 0.008),
         ("rk4", 0.005),
         ("euler", 0.01),
         ("euler", 0.005),
+        ("euler", 0.004),
         ("euler", 0.0025),
         ("euler", 0.001),
     ),
     reference_dt: float = 0.0005,
     repeats: int = 3,
-    grid: float = 0.02,
+    grid: float = 0.04,
 ) -> dict:
     """End-effector error of each (method, step) against RK4 at ``reference_dt`` and at twice it.
 
