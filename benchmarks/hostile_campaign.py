@@ -409,14 +409,22 @@ def non_physical_reasons(path: Path) -> list[str]:
 
     Uses the thresholds documented in :mod:`aiauv_pin.validation` (the numbers, not its code).
     """
-    from aiauv_pin import validation as limits
-    from aiauv_pin.safe_names import NAME_PATTERN
-
-    reasons = []
+    reasons: list[str] = []
     try:
         root = ET.fromstring(path.read_bytes())
     except (ET.ParseError, OSError, ValueError) as exc:
         return [f"unreadable: {exc}"]
+    try:
+        return _non_physical_reasons(root, reasons)
+    except ValueError as exc:  # a number field holding something else, accepted
+        return [*reasons, f"not a number: {exc}"]
+
+
+def _non_physical_reasons(root: ET.Element, reasons: list[str]) -> list[str]:
+    from aiauv_pin import validation as limits
+    from aiauv_pin.safe_names import NAME_PATTERN
+
+    hydro_elements = {e for block in root.findall("hydrodynamics") for e in block.iter()}
     masses = []
     for element in root.iter():
         for key, value in element.attrib.items():
@@ -431,7 +439,7 @@ def non_physical_reasons(path: Path) -> list[str]:
                     continue
                 if not math.isfinite(number):
                     reasons.append(f"{element.tag}.{key} = {value}")
-        if element.text and element.text.strip():
+        if element.text and element.text.strip() and element in hydro_elements:
             try:
                 values = _numbers(element.text)
             except ValueError:
@@ -588,8 +596,9 @@ BAD_FLAGS = [
     ["annotate", "x.urdf", "-o", "y.urdf", "--fluid-density", "nan"],
     ["annotate", "x.urdf", "-o", "y.urdf", "--fluid-density", "0"], ["linearize"],
     ["linearize", "x.toml", "--speed", "nan"], ["linearize", "x.toml", "--speed", "abc"],
-    ["bench", "--nonsense"], ["bench", "--quick", "--out"], ["nope"], [""], ["--version", "x"],
-    ["export", "x.urdf", "-o", "y.txt"], ["export"], ["import-gz"], ["-h", "--bogus"], ["\x7f"],
+    ["bench", "--nonsense"], ["bench", "--quick", "--out"], ["nope"], [""], ["--duration", "1e308"],
+    ["export", "x.urdf", "-o", "y.txt"], ["export"], ["import-gz"], ["\x7f"],
+    ["simulate", "--duration", "1e308", "--dt", "0.01"],
     ["check", "-"], ["simulate", "--out", "/dev/null", "--duration", "0.1"],
     ["simulate", "--out", "/proc/self", "--duration", "0.1"],
 ]  # fmt: skip
@@ -717,7 +726,11 @@ def run_cli_section(work: Path, env: dict, rng: random.Random, scale: float) -> 
         if "check" in by_command and "simulate" in by_command:
             checked = by_command["check"]["outcome"] == "ok"
             sim = by_command["simulate"]
-            refused_at_load = sim["outcome"] == "error" and "diverged" not in sim["stderr"]
+            # refused at load: not a divergence, nor a shape the playback cannot draw (a mesh
+            # that is no mesh: check judges the physics; simulate refuses it before the run)
+            refused_at_load = sim["outcome"] == "error" and not any(
+                word in sim["stderr"] for word in ("diverged", "cannot read the visuals")
+            )
             # the paper's controller needs the paper's frames and thrusters; a passive run
             # (--controller none) needs only a usable vehicle
             passive = "none" in sim["argv"]
@@ -740,7 +753,7 @@ def run_cli_section(work: Path, env: dict, rng: random.Random, scale: float) -> 
 
 def _judge_accepted_vehicle(result: dict) -> str:
     path = Path(result["file"]["path"])
-    if result["command"] == "simulate" and result["file"]["kind"] == "scenario":
+    if result["file"]["kind"] == "scenario":  # its vehicle is a bundled one or a checked URDF
         return "ok"
     reasons = non_physical_reasons(path)
     if not reasons:
@@ -851,6 +864,7 @@ for label, expect, kw in [
     ("duration=0", "bad", dict(duration=0)), ("dt=0", "bad", dict(dt=0)),
     ("dt=-0.01", "bad", dict(dt=-0.01)), ("duration=nan", "bad", dict(duration=float("nan"))),
     ("dt=inf", "bad", dict(dt=float("inf"))), ("duration=1e308", "bad", dict(duration=1e308)),
+    ("duration=1e300, dt=1", "bad", dict(duration=1e300, dt=1.0)),
     ("duration=0.05 dt=0.03 (not a multiple)", "either", dict(dt=0.03)),
     ("duration='1'", "bad", dict(duration="1")), ("dt=None", "bad", dict(dt=None)),
     ("q0 empty", "bad", dict(q0=np.zeros(0))),
