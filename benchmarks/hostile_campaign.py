@@ -24,7 +24,8 @@ it ends in
 Scale (full): >= 700 command-line runs over >= 400 mutated files, every API misuse of issue 11
 points 1 and 9 on both backends (each call in a forked process, so that a SIGSEGV is counted, not
 fatal), 42 kills of ``simulate`` in fresh folders and 12 in a reused one, sweeps killed and resumed.
-About 25-40 min on 2 cores; ``--quick`` (a tenth of the files, a few kills) under 2 min once the
+About 20 min on a shared 2-core machine (19 min on 2026-11-23); ``--quick`` (a twentieth of the
+files, a tenth of the API calls, 3 kills, one sweep kill-and-resume) 95 s once the
 kernels are compiled. Not part of the test suite (CI time); the tests hold a short version of each
 claim (``tests/test_fuzz.py``, ``test_hostile_input.py``, ``test_kill.py``, ``test_reliability.py``).
 """
@@ -1476,7 +1477,7 @@ def run_sweep_section(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="a tenth of the scale (< 2 min)")
+    parser.add_argument("--quick", action="store_true", help="a short version (about 95 s)")
     parser.add_argument("--out", type=Path, default=None, help=f"JSON file ({DEFAULT_OUT.name})")
     parser.add_argument(
         "--sections", default="cli,api,kills,sweeps", help="comma-separated subset to run"
