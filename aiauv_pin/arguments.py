@@ -102,8 +102,8 @@ def finite_time(value) -> float:
     return float(value)
 
 
-def positive_seconds(value, name: str) -> float:
-    """A finite number > 0 (not a bool).
+def positive_seconds(value, name: str, *, allow_infinity: bool = False) -> float:
+    """A finite number > 0 (not a bool); ``inf`` too with ``allow_infinity``.
 
     Raises:
         ArgumentError: One line.
@@ -111,11 +111,13 @@ def positive_seconds(value, name: str) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ArgumentError(f"{name} must be a positive number of seconds, got {value!r:.40}")
     value = float(value)
-    if not (math.isfinite(value) and value > 0.0):
+    if not ((math.isfinite(value) or (allow_infinity and value == math.inf)) and value > 0.0):
         raise ArgumentError(f"{name} must be a positive number of seconds, got {value!r}")
     return value
 
 
+#: Most steps of one run: beyond it a step count is no longer exact in floating point.
+MAX_STEPS = 2**53
 #: Largest relative mismatch between ``duration`` and a whole number of steps ``dt``.
 STEP_TOLERANCE = 1e-6
 
@@ -134,7 +136,13 @@ def check_timing(duration, dt) -> int:
     dt = positive_seconds(dt, "dt")
     if dt > duration * (1.0 + STEP_TOLERANCE):
         raise ArgumentError(f"dt = {dt:g} s must not exceed the duration = {duration:g} s")
-    steps = round(duration / dt)
+    ratio = duration / dt
+    if not ratio <= MAX_STEPS:  # also inf (duration = 1e308): round() would overflow
+        raise ArgumentError(
+            f"duration / dt = {ratio:.3g} steps is more than {MAX_STEPS:.3g}; use a larger dt "
+            "or a shorter duration"
+        )
+    steps = round(ratio)
     if abs(steps * dt - duration) > STEP_TOLERANCE * dt:
         raise ArgumentError(
             f"duration = {duration:g} s is not a whole number of steps dt = {dt:g} s "

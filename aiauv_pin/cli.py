@@ -165,6 +165,15 @@ def _run_simulate(args) -> int:
         name = scenario.case
     out = args.out if args.out is not None else Path("results") / name
     check_output_folder(out)  # refuse a file or a foreign folder before simulating
+    if not args.no_html:  # a shape the playback cannot draw: say so before the run, not after it
+        from .viewer import vehicle_visuals
+
+        try:
+            vehicle_visuals(vehicle)
+        except ValueError as exc:
+            raise AiauvError(
+                f"{' '.join(str(exc).split())}; --no-html runs without the playback"
+            ) from None
     on_log = None
     if args.view:
         from .viewer import live_view

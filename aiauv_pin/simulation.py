@@ -19,12 +19,18 @@ from control.laws import joint_pd_torque
 from hydro.currents import as_current
 from hydro.laws import UUV_SIMULATOR_FILTER
 
-from .arguments import check_timing, configuration, float_array, optional_current
+from .arguments import (
+    check_timing,
+    configuration,
+    float_array,
+    optional_current,
+    positive_seconds,
+)
 from .controllers import CompiledController
 from .disturbances import Disturbance
 from .errors import ArgumentError, SimulationDiverged
 from .integrators import INTEGRATORS
-from .lagged import LaggedAddedMass, check_scheme
+from .lagged import LaggedAddedMass, check_filter, check_scheme
 from .vehicle import Vehicle
 
 #: ``controller(t, q, v) -> tau`` or ``-> (tau, info)``, with ``tau`` the generalised force (nv,) held
@@ -252,6 +258,10 @@ def simulate(
         raise ArgumentError(
             f"servo must have one entry per joint ({model.nv - 6}), got {servo.references.size}"
         )
+    # checked even where unused (exact added mass, a Python controller): a bad value is a mistake
+    lagged_filter = check_filter(lagged_filter)
+    if chunk_seconds is not None:
+        chunk_seconds = positive_seconds(chunk_seconds, "chunk_seconds", allow_infinity=True)
     lag = None
     if check_scheme(added_mass) == "lagged":
         if isinstance(controller, CompiledController):

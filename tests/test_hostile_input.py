@@ -297,3 +297,23 @@ def test_command_line_entry_point_reports_one_line(tmp_path):
     assert process.returncode == 1
     assert process.stderr.count("\n") == 1
     assert "'ghost'" in process.stderr and "Traceback" not in process.stderr
+
+
+def test_a_mesh_the_playback_cannot_read_is_refused_before_the_run(tmp_path, capfd):
+    # found by benchmarks/hostile_campaign.py: the run was simulated, then lost when the playback
+    # failed to read the mesh; now the error comes first, and --no-html runs the same file
+    path = tmp_path / "v.urdf"
+    text = vehicle_urdf().replace(
+        '<link name="b">',
+        '<link name="b">\n    <visual><geometry><mesh filename="/etc/hostname"/></geometry></visual>',
+        1,
+    )
+    path.write_text(text, encoding="utf-8")
+    out = tmp_path / "run"
+    argv = ["simulate", "--vehicle", path, "--controller", "none", "--duration", "0.02"]
+    code, _, err = run_cli(capfd, [*argv, "--out", out, "--quiet"])
+    assert_one_line_error(code, err, "cannot read the visuals", "--no-html")
+    assert not out.exists()
+    code, _, err = run_cli(capfd, [*argv, "--out", out, "--quiet", "--no-html"])
+    assert code == 0, err
+    assert (out / "summary.json").exists()
