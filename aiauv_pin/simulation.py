@@ -144,6 +144,26 @@ def _split(output) -> tuple[np.ndarray, Mapping[str, object]]:
     return np.asarray(output, dtype=float), {}
 
 
+#: Largest log :func:`simulate` allocates [bytes] (times, states and forces; a controller's
+#: diagnostics come on top): a longer run must log less often (``log_every``).
+MAX_LOG_BYTES = 8 * 2**30
+
+
+def check_log_size(n_steps: int, log_every: int, nq: int, nv: int) -> None:
+    """Refuse a run whose log of ``(t, q, v, tau)`` would exceed :data:`MAX_LOG_BYTES`.
+
+    Raises:
+        ArgumentError: One line, with the size and the way out.
+    """
+    rows = n_steps // log_every + 2
+    size = rows * (1 + nq + 2 * nv) * 8
+    if size > MAX_LOG_BYTES:
+        raise ArgumentError(
+            f"the log of {rows:.3g} samples would need {size / 2**30:.3g} GiB (more than "
+            f"{MAX_LOG_BYTES / 2**30:g} GiB); log less often (log_every) or run shorter"
+        )
+
+
 def check_run_arguments(
     duration: float, dt: float, method: str, log_every: int, control_period: float | None
 ) -> tuple[int, int]:
@@ -251,6 +271,7 @@ def simulate(
         duration, dt, method, log_every, control_period
     )
     model = vehicle.model
+    check_log_size(n_steps, log_every, model.nq, model.nv)
     q0 = configuration(q0, model.nq, "q0").copy()
     v0 = float_array(v0, "v0", (model.nv,)).copy()
     current = optional_current(current)

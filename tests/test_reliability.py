@@ -216,6 +216,9 @@ def test_timing_must_be_consistent(paper_vehicle):
             simulate(paper_vehicle, q, v, duration=duration, dt=dt)
     with pytest.raises(ArgumentError, match="shape"):
         simulate(paper_vehicle, q[:3], v, duration=0.1, dt=0.01)
+    # 1e12 steps: a 7 TiB log was numpy's MemoryError before (campaign); refused before allocating
+    with pytest.raises(ArgumentError, match=r"GiB .*log less often"):
+        simulate(paper_vehicle, q, v, duration=1e10, dt=0.01)
 
 
 @pytest.mark.parametrize(
