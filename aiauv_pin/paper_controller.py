@@ -26,6 +26,7 @@ from control.paths import Path
 from control.surge import SurgePIController
 
 from .controllers import CompiledController
+from .errors import ArgumentError
 from .fast.controllers import PaperParameters, PaperState, paper_info_shapes, paper_path_following
 from .simulation import JointServo
 from .vehicle import Vehicle
@@ -123,6 +124,12 @@ class VehiclePathFollowing:
         self.vehicle = vehicle
         self.continuous_joints = bool(continuous_joints)
         self.gains = gains if gains is not None else PathFollowingGains()
+        if isinstance(end_effector, str) and not vehicle.model.existFrame(end_effector):
+            raise ArgumentError(
+                f"the paper's path-following controller steers a frame named {end_effector!r:.80}, "
+                "which this vehicle lacks: add it to the URDF (a fixed joint to the head link) or "
+                "use --controller none"
+            )
         self.frame = vehicle.frame_id(end_effector)
         surge = surge_thruster_indices(vehicle)
         if not surge:

@@ -602,3 +602,31 @@ def test_build_refuses_special_outputs_and_unloadable_urdfs(tmp_path, capfd):
     assert main(["build", str(huge_spec), "-o", str(out)]) == 1
     _one_line_error(capfd)
     assert not out.exists()
+
+
+def test_paper_controller_names_the_frame_a_vehicle_lacks(tmp_path, capfd):
+    """A usable vehicle without an ``end_effector`` frame: the paper's controller says what it
+    needs (the campaign found only "unknown link or frame" before)."""
+    from aiauv_pin.paper_controller import VehiclePathFollowing
+
+    urdf = Path(__file__).parent / "data" / "two_link_hydro.urdf"
+    vehicle = aiauv_pin.load_vehicle(urdf)
+    with pytest.raises(ArgumentError, match="steers a frame named 'end_effector'.*lacks"):
+        VehiclePathFollowing(vehicle)
+    assert (
+        main(
+            [
+                "simulate",
+                "--vehicle",
+                str(urdf),
+                "--duration",
+                "0.1",
+                "--no-html",
+                "--out",
+                str(tmp_path / "run"),
+            ]
+        )
+        != 0
+    )
+    err = capfd.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("aiauv: error:") and "--controller none" in err[-1]
