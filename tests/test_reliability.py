@@ -611,7 +611,7 @@ def test_paper_controller_names_the_frame_a_vehicle_lacks(tmp_path, capfd):
 
     urdf = Path(__file__).parent / "data" / "two_link_hydro.urdf"
     vehicle = aiauv_pin.load_vehicle(urdf)
-    with pytest.raises(ArgumentError, match="steers a frame named 'end_effector'.*lacks"):
+    with pytest.raises(ArgumentError, match=r"steers a frame named 'end_effector'.*lacks"):
         VehiclePathFollowing(vehicle)
     assert (
         main(
