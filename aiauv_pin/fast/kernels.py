@@ -289,6 +289,17 @@ def kinematics(bodies, q, v, W):
         bias_acc[b, 5] = w0 * m4 - w1 * m3
 
 
+@compiled(fastmath=True)
+def point_in_world(rotation, position, b, x, y, z):
+    """World coordinates [m] of the point ``(x, y, z)`` [m] of body ``b``'s frame, ``p_b + R_b r``,
+    from the kinematics in ``rotation`` (nb, 3, 3) and ``position`` (nb, 3)."""
+    return (
+        position[b, 0] + rotation[b, 0, 0] * x + rotation[b, 0, 1] * y + rotation[b, 0, 2] * z,
+        position[b, 1] + rotation[b, 1, 0] * x + rotation[b, 1, 1] * y + rotation[b, 1, 2] * z,
+        position[b, 2] + rotation[b, 2, 0] * x + rotation[b, 2, 1] * y + rotation[b, 2, 2] * z,
+    )
+
+
 @compiled(fastmath=True, borrows_only=True)
 def sample_current(model, env, t, W):
     """Water velocity at every body's probe point at time ``t`` into ``W.current`` (after kinematics)."""
@@ -312,25 +323,7 @@ def current_at_probes(function, kind, parameters, t, probe, rotation, position, 
     which may return an array of its own.
     """
     for b in range(water.shape[0]):
-        p0, p1, p2 = probe[b, 0], probe[b, 1], probe[b, 2]
-        x = (
-            position[b, 0]
-            + rotation[b, 0, 0] * p0
-            + rotation[b, 0, 1] * p1
-            + rotation[b, 0, 2] * p2
-        )
-        y = (
-            position[b, 1]
-            + rotation[b, 1, 0] * p0
-            + rotation[b, 1, 1] * p1
-            + rotation[b, 1, 2] * p2
-        )
-        z = (
-            position[b, 2]
-            + rotation[b, 2, 0] * p0
-            + rotation[b, 2, 1] * p1
-            + rotation[b, 2, 2] * p2
-        )
+        x, y, z = point_in_world(rotation, position, b, probe[b, 0], probe[b, 1], probe[b, 2])
         c = current_velocity(function, kind, t, x, y, z, parameters)
         water[b, 0] = c[0]
         water[b, 1] = c[1]
@@ -1133,26 +1126,22 @@ def frame_positions(model, configurations, body, translation, W, out):
     configurations (n, nq) into ``out`` (n, 3): ``p_b + R_b t`` as :func:`frame_of_body` computes it,
     for a whole logged run in one call."""
     rot_w, pos_w, zero = W.rotation, W.position, W.zero_velocity
+    t0, t1, t2 = translation[0], translation[1], translation[2]
     for k in range(configurations.shape[0]):
         kinematics(model.bodies, configurations[k], zero, W)
-        for i in range(3):
-            acc = pos_w[body, i]
-            for j in range(3):
-                acc += rot_w[body, i, j] * translation[j]
-            out[k, i] = acc
+        out[k, 0], out[k, 1], out[k, 2] = point_in_world(rot_w, pos_w, body, t0, t1, t2)
 
 
 @compiled(fastmath=True)
 def frame_of_body(W, body, rotation, translation):
     """Pose and own-axes twist of a frame on ``body``, from the kinematics already in ``W``."""
-    rot_w, pos_w = W.rotation[body], W.position[body]
+    rot_w = W.rotation[body]
     rot = np.empty((3, 3))
     pos = np.empty(3)
+    pos[0], pos[1], pos[2] = point_in_world(
+        W.rotation, W.position, body, translation[0], translation[1], translation[2]
+    )
     for i in range(3):
-        acc = pos_w[i]
-        for k in range(3):
-            acc += rot_w[i, k] * translation[k]
-        pos[i] = acc
         for j in range(3):
             rot[i, j] = (
                 rot_w[i, 0] * rotation[0, j]

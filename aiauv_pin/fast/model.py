@@ -179,15 +179,10 @@ class FastModel:
         if not (_plain(q, nq) and _plain(v, nv) and _plain(tau, nv) and type(t) in (float, int)):
             return None
         out = np.empty(nv)
-        arguments = (self.handle, float(t), q, v, tau, tolerance, exact_below, out)
-        entry = self._entries.get(checked_acceleration_of)
-        if entry is None:
-            verdict = checked_acceleration_of(*arguments)
-            self._entries[checked_acceleration_of] = _entry_point(
-                checked_acceleration_of, arguments
-            )
-        else:
-            verdict = entry(*arguments)
+        verdict = self._fast_call(
+            checked_acceleration_of,
+            (self.handle, float(t), q, v, tau, tolerance, exact_below, out),
+        )
         return out if verdict == STATE_OK else None
 
     def restoring_forces(self, q) -> np.ndarray:
