@@ -53,6 +53,8 @@ from pathlib import Path
 
 import numpy as np
 
+from aiauv_pin.testing.processes import descendants, wait_gone
+
 ROOT = Path(__file__).resolve().parents[1]
 SEED = 20261123
 DEFAULT_OUT = ROOT / "benchmarks" / "hostile_campaign.json"
@@ -1037,42 +1039,6 @@ def _api_outcome(record: dict) -> str:
 # --- section 3: kills of simulate -------------------------------------------------------------------------
 
 
-def _descendants(pid: int) -> set[int]:
-    parents: dict[int, int] = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
-                parents[int(entry.name)] = int(fields[1])
-            except (OSError, IndexError, ValueError):
-                continue
-    found: set[int] = set()
-    frontier = {pid}
-    while frontier:
-        children = {p for p, parent in parents.items() if parent in frontier} - found
-        found |= children
-        frontier = children
-    return found
-
-
-def _alive(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (OSError, IndexError):
-        return False
-    return state not in ("Z", "X")
-
-
-def _wait_gone(pids: set[int], timeout: float) -> set[int]:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        pids = {pid for pid in pids if _alive(pid)}
-        if not pids:
-            return pids
-        time.sleep(0.1)
-    return {pid for pid in pids if _alive(pid)}
-
-
 def _folder_problems(out: Path, html: bool, duration: float) -> list[str]:
     """What a result folder claims and lacks (empty: a complete run of ``duration``)."""
     from aiauv_pin.outputs import FIGURES
@@ -1138,10 +1104,10 @@ def run_kill_section(
             command, cwd=work, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
         )
         time.sleep(delay)
-        family = _descendants(process.pid)
+        family = descendants(process.pid)
         process.send_signal(signal.SIGKILL)
         process.wait()
-        survivors = _wait_gone(family, 5.0)
+        survivors = wait_gone(family, 5.0)
         for pid in survivors:
             os.kill(pid, signal.SIGKILL)
         return survivors, delay
@@ -1318,11 +1284,11 @@ def run_sweep_section(
             )
             delay = rng.uniform(0.15, 0.9) * full
             time.sleep(delay)
-            family = _descendants(process.pid)
+            family = descendants(process.pid)
             process.send_signal(signal.SIGKILL)
             process.wait()
             tally["sweep kills"] += 1
-            survivors = _wait_gone(family, 10.0)
+            survivors = wait_gone(family, 10.0)
             for pid in survivors:
                 os.kill(pid, signal.SIGKILL)
             if survivors:
@@ -1366,7 +1332,7 @@ def run_sweep_section(
     while not any((out / "runs").glob("*.json")) and time.monotonic() < deadline:
         time.sleep(0.1)
     killed = 0
-    for pid in _descendants(process.pid):
+    for pid in descendants(process.pid):
         try:
             if b"spawn_main" in Path(f"/proc/{pid}/cmdline").read_bytes():
                 os.kill(pid, signal.SIGKILL)
@@ -1412,10 +1378,10 @@ def run_sweep_section(
     tally["concurrent sweeps"] += 1
     if second["outcome"] != "error" or "another sweep" not in second["stderr"]:
         failures.append({"what": "second sweep on the same --out", **second})
-    family = _descendants(first.pid)
+    family = descendants(first.pid)
     first.send_signal(signal.SIGKILL)
     first.wait()
-    for pid in _wait_gone(family, 10.0):
+    for pid in wait_gone(family, 10.0):
         os.kill(pid, signal.SIGKILL)
     # --workers 100000
     result = run_command(

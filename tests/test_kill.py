@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 
 from aiauv_pin.outputs import FIGURES
+from aiauv_pin.testing.processes import descendants, wait_gone
 
 SEED = 20261122
 #: Kills of ``simulate`` (``AIAUV_KILLS`` for a longer campaign) and of the sweep.
@@ -35,43 +36,6 @@ SWEEP_KILLS = int(os.environ.get("AIAUV_SWEEP_KILLS", "1"))
 
 def _aiauv(*args: str) -> list[str]:
     return [sys.executable, "-c", "from aiauv_pin.cli import console_main; console_main()", *args]
-
-
-def _descendants(pid: int) -> set[int]:
-    """Every process whose chain of parents reaches ``pid`` (from /proc)."""
-    parents: dict[int, int] = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
-                parents[int(entry.name)] = int(fields[1])
-            except (OSError, IndexError, ValueError):
-                continue
-    found: set[int] = set()
-    frontier = {pid}
-    while frontier:
-        children = {p for p, parent in parents.items() if parent in frontier} - found
-        found |= children
-        frontier = children
-    return found
-
-
-def _alive(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (OSError, IndexError):
-        return False
-    return state not in ("Z", "X")
-
-
-def _wait_gone(pids: set[int], timeout: float) -> set[int]:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        pids = {pid for pid in pids if _alive(pid)}
-        if not pids:
-            return pids
-        time.sleep(0.1)
-    return {pid for pid in pids if _alive(pid)}
 
 
 def _assert_complete_run(out: Path) -> float:
@@ -110,10 +74,10 @@ def test_killed_simulate_never_leaves_a_folder_claiming_what_it_lacks(tmp_path):
             stderr=subprocess.DEVNULL,
         )
         time.sleep(delay)
-        family = _descendants(process.pid)
+        family = descendants(process.pid)
         process.send_signal(signal.SIGKILL)
         process.wait()
-        assert not _wait_gone(family, 5.0), "a child of the killed simulate survived it"
+        assert not wait_gone(family, 5.0), "a child of the killed simulate survived it"
         if out.exists():
             outcomes.append(_assert_complete_run(out))
         else:
@@ -154,10 +118,10 @@ def test_killed_sweep_resumes_to_exactly_the_full_table(tmp_path):
     for _ in range(SWEEP_KILLS):
         process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         time.sleep(float(rng.uniform(3.0, 8.0)))
-        family = _descendants(process.pid)
+        family = descendants(process.pid)
         process.send_signal(signal.SIGKILL)
         process.wait()
-        survivors = _wait_gone(family, 10.0)
+        survivors = wait_gone(family, 10.0)
         for pid in survivors:  # reported by the assertion below; not left running
             os.kill(pid, signal.SIGKILL)
         assert not survivors, "a worker of the killed sweep survived it"
@@ -218,7 +182,7 @@ def test_runs_of_a_killed_worker_are_run_again_not_lost(tmp_path):
     while not (runs.is_dir() and any(runs.glob("*.json"))) and time.monotonic() < deadline:
         time.sleep(0.1)
     killed = 0
-    for pid in _descendants(process.pid):
+    for pid in descendants(process.pid):
         try:
             command_line = Path(f"/proc/{pid}/cmdline").read_bytes()
         except OSError:
