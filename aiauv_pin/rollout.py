@@ -36,7 +36,7 @@ from .arguments import configuration, float_array
 from .controllers import CompiledController
 from .disturbances import Disturbance
 from .errors import ArgumentError
-from .simulation import JointServo, check_run_arguments
+from .simulation import JointServo, check_log_size, check_run_arguments
 
 __all__ = ["Rollout", "rollout"]
 
@@ -236,6 +236,7 @@ def rollout(
     if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
         raise ArgumentError(f"rollout: threads must be a whole number >= 1, got {threads!r:.40}")
 
+    check_log_size(n_steps, log_every, nq, nv, n_runs)
     width = laws[0].info_width
     n_logs = n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
     log = np.full((n_runs, n_logs, 1 + nq + 2 * nv + width), np.nan)

@@ -149,13 +149,14 @@ def _split(output) -> tuple[np.ndarray, Mapping[str, object]]:
 MAX_LOG_BYTES = 8 * 2**30
 
 
-def check_log_size(n_steps: int, log_every: int, nq: int, nv: int) -> None:
-    """Refuse a run whose log of ``(t, q, v, tau)`` would exceed :data:`MAX_LOG_BYTES`.
+def check_log_size(n_steps: int, log_every: int, nq: int, nv: int, runs: int = 1) -> None:
+    """Refuse runs whose logs of ``(t, q, v, tau)`` would exceed :data:`MAX_LOG_BYTES` together
+    (``runs`` of them: :func:`aiauv_pin.rollout` allocates one per run).
 
     Raises:
         ArgumentError: One line, with the size and the way out.
     """
-    rows = n_steps // log_every + 2
+    rows = runs * (n_steps // log_every + 2)
     size = rows * (1 + nq + 2 * nv) * 8
     if size > MAX_LOG_BYTES:
         raise ArgumentError(

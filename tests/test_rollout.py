@@ -88,6 +88,7 @@ def test_a_diverging_run_stops_alone(vehicle):
         ({"threads": 0}, "threads must be a whole number >= 1"),
         ({"dt": -1.0}, "dt"),
         ({"method": "rk5"}, "unknown method"),
+        ({"duration": 1e8}, r"GiB .*log less often"),  # 2 logs of 1e10 samples, before allocating
     ],
 )
 def test_bad_arguments_get_one_line_errors(vehicle, change, message):
