@@ -27,7 +27,13 @@ from control.surge import SurgePIController
 
 from .controllers import CompiledController
 from .errors import ArgumentError
-from .fast.controllers import PaperParameters, PaperState, paper_info_shapes, paper_path_following
+from .fast.controllers import (
+    PaperParameters,
+    PaperState,
+    new_frame_measurement,
+    paper_info_shapes,
+    paper_path_following,
+)
 from .simulation import JointServo
 from .vehicle import Vehicle
 
@@ -239,13 +245,13 @@ class VehiclePathFollowing:
         )
         state = PaperState(
             surge=new_surge_state(),
-            velocity_history=np.zeros(5),
+            measurement=new_frame_measurement(),
             command=new_command_buffers(controller.n_joints, controller.n_thrusters),
             guidance=new_guidance_state(),
         )
 
         def reset() -> None:
-            for array in (*state.surge, *state.guidance, state.velocity_history):
+            for array in (*state.surge, *state.guidance, *state.measurement):
                 array[:] = 0.0
             self.joint_servo.references[:] = 0.0
 

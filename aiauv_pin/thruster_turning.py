@@ -27,6 +27,7 @@ from control.thruster_turning import (
 )
 
 from .controllers import CompiledController
+from .fast.controllers import new_frame_measurement
 from .fast.thruster_turning import (
     TurningParameters,
     TurningState,
@@ -168,12 +169,12 @@ class VehicleThrusterTurning:
         )
         state = TurningState(
             surge=new_surge_state(),
-            velocity_history=np.zeros(5),
+            measurement=new_frame_measurement(),
             command=new_turning_buffers(len(self.vehicle.hydro.thrusters)),
         )
 
         def reset() -> None:
-            for array in (*state.surge, state.velocity_history):
+            for array in (*state.surge, *state.measurement):
                 array[:] = 0.0
             self.joint_servo.references[:] = 0.0
 

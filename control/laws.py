@@ -38,7 +38,7 @@ ANTIPODAL_TOLERANCE = 1e-12
 
 
 # ---------------------------------------------------------------------- LOS guidance (eq. 21)
-@compiled
+@compiled(borrows_only=True)
 def los_guidance(path_point, p, p_dot, p_ddot, u_d, k_y, k_z):
     """Reference pointing direction ``x_ref = mu / |mu|`` and its exact time derivatives (eq. 21).
 
@@ -50,7 +50,7 @@ def los_guidance(path_point, p, p_dot, p_ddot, u_d, k_y, k_z):
 _NO_BIAS = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
-@compiled
+@compiled(borrows_only=True)
 def biased_los_guidance(path_point, p, p_dot, p_ddot, u_d, k_y, k_z, bias):
     """Reference pointing direction ``x_ref = mu / |mu|`` and its exact time derivatives.
 
@@ -199,7 +199,7 @@ def new_guidance_state() -> GuidanceState:
     return GuidanceState(np.zeros(2), np.zeros(1), np.zeros(1), np.zeros(2))
 
 
-@compiled
+@compiled(borrows_only=True)
 def cross_track_errors(path_point, p, p_dot):
     """``(e_1, e_2, e_1_dot, e_2_dot)``: offsets from the closest path point along ``N1``, ``N2``
     [m] and their rates ``N_i . p_dot`` [m/s] (exact on a line; on a curve the normals' own turning
@@ -245,7 +245,7 @@ def _ilos_rate(e, z, lookahead, sigma):
     return lookahead * e / (g * g + lookahead * lookahead)
 
 
-@compiled
+@compiled(borrows_only=True)
 def normal_plane_turn_rate(path_point, p_dot, e1, e2):
     """Rate at which the path's curvature direction turns about ``T`` in ``(N1, N2)`` [rad/s].
 
@@ -269,7 +269,7 @@ def normal_plane_turn_rate(path_point, p_dot, e1, e2):
     return torsion * s_dot
 
 
-@compiled
+@compiled(borrows_only=True)
 def integral_los_bias(state, t, errors, u_d, k_y, k_z, sigma, frame_rate=0.0):
     """Integral LOS bias ``b_i = sigma z_i`` and its time derivatives at time ``t``; advances ``state``.
 
@@ -314,33 +314,34 @@ def integral_los_bias(state, t, errors, u_d, k_y, k_z, sigma, frame_rate=0.0):
         h = t - state.time[0]
         state.integral[0] += state.rate[0] * h
         state.integral[1] += state.rate[1] * h
-    out = np.zeros(6)
     # turning of the integrator with the curvature direction: frame_rate (-z_2, z_1)
-    turn = (-frame_rate * state.integral[1], frame_rate * state.integral[0])
-    for i in range(2):
-        gain = k_y if i == 0 else k_z
-        lookahead = u_d / gain
-        e, e_dot = errors[i], errors[2 + i]
-        z = state.integral[i]
-        z_dot = _ilos_rate(e, z, lookahead, sigma) + turn[i]
-        g = e + sigma * z
-        den = g * g + lookahead * lookahead
-        # d/dt [Delta e / den] = Delta (e_dot den - e 2 g (e_dot + sigma z_dot)) / den^2
-        z_ddot = lookahead * (e_dot * den - 2.0 * e * g * (e_dot + sigma * z_dot)) / (den * den)
-        state.rate[i] = z_dot
-        out[i] = sigma * z
-        out[2 + i] = sigma * z_dot
-        out[4 + i] = sigma * z_ddot
+    turn_1, turn_2 = -frame_rate * state.integral[1], frame_rate * state.integral[0]
+    b_1, b_1_dot, b_1_ddot = _ilos_axis(state, 0, errors[0], errors[2], u_d / k_y, sigma, turn_1)
+    b_2, b_2_dot, b_2_ddot = _ilos_axis(state, 1, errors[1], errors[3], u_d / k_z, sigma, turn_2)
     if frame_rate != 0.0:
         # d/dt of frame_rate (-z_2, z_1) with frame_rate held: frame_rate (-z_2_dot, z_1_dot)
-        out[4] -= frame_rate * out[3]
-        out[5] += frame_rate * out[2]
+        b_1_ddot -= frame_rate * b_2_dot
+        b_2_ddot += frame_rate * b_1_dot
     state.has_previous[0] = 1.0
     state.time[0] = t
-    return out[0], out[1], out[2], out[3], out[4], out[5]
+    return b_1, b_2, b_1_dot, b_2_dot, b_1_ddot, b_2_ddot
 
 
-@compiled
+@compiled(borrows_only=True)
+def _ilos_axis(state, i, e, e_dot, lookahead, sigma, turn):
+    """One normal ``i`` of :func:`integral_los_bias`: stores ``z_i_dot`` in ``state.rate[i]`` and
+    returns ``(sigma z_i, sigma z_i_dot, sigma z_i_ddot)`` [m], [m/s], [m/s^2]."""
+    z = state.integral[i]
+    z_dot = _ilos_rate(e, z, lookahead, sigma) + turn
+    g = e + sigma * z
+    den = g * g + lookahead * lookahead
+    # d/dt [Delta e / den] = Delta (e_dot den - e 2 g (e_dot + sigma z_dot)) / den^2
+    z_ddot = lookahead * (e_dot * den - 2.0 * e * g * (e_dot + sigma * z_dot)) / (den * den)
+    state.rate[i] = z_dot
+    return sigma * z, sigma * z_dot, sigma * z_ddot
+
+
+@compiled(borrows_only=True)
 def restoring_moment_in_frame(base_rotation, base_position, rotation, position, base_wrench):
     """Moment of the restoring wrench about a frame's origin, in its axes [N m].
 
@@ -457,7 +458,7 @@ class AttitudeCommand(NamedTuple):
     """The same about z [rad/s^2]."""
 
 
-@compiled
+@compiled(borrows_only=True)
 def reduced_attitude_law(R, omega, x_ref, x_dot, x_ddot, J, m_y, m_z, k_p, k_d, exact):
     """The reduced-attitude tracking law of eq. (9), findings 1 and 2 applied.
 
@@ -563,7 +564,7 @@ def new_surge_state() -> SurgeState:
     return SurgeState(*(np.zeros(1) for _ in SurgeState._fields))
 
 
-@compiled
+@compiled(borrows_only=True)
 def surge_pi(state, t, u, k_p, k_i, u_d, max_thrust):
     """Thrust of eq. (25) at time ``t`` [N]; advances ``state``.
 
@@ -655,7 +656,7 @@ def new_command_buffers(n_joints: int, n_thrusters: int) -> CommandBuffers:
 _IDENTITY = np.eye(3)
 
 
-@compiled
+@compiled(borrows_only=True)
 def path_following_command(
     gains,
     path_function,

@@ -75,7 +75,7 @@ def new_turning_buffers(n_thrusters: int) -> TurningBuffers:
     )
 
 
-@compiled
+@compiled(borrows_only=True)
 def tunnel_allocation(moment_y, moment_z, plane, force_coeff, moment_coeff, max_thrust, thrusts):
     """Tunnel thrusts for a pitch moment ``moment_y`` and a yaw moment ``moment_z`` [N m].
 
@@ -134,7 +134,7 @@ def _rodrigues(k0, k1, k2, c, f, y):
     )
 
 
-@compiled
+@compiled(borrows_only=True)
 def sideslip_compensated(velocity, rotation, x_ref, x_dot, x_ddot):
     """``x_ref`` and its derivatives turned by the rotation taking the velocity direction ``w`` to the
     pointing direction ``b`` (the x-axis of ``rotation``), held constant over the sample.
@@ -159,7 +159,7 @@ def sideslip_compensated(velocity, rotation, x_ref, x_dot, x_ddot):
     )
 
 
-@compiled
+@compiled(borrows_only=True)
 def thruster_turning_command(
     gains,
     inertia,

@@ -29,7 +29,7 @@ from control.laws import (
 )
 from hydro.jit import compiled
 
-from .kernels import frame_of_body, kinematics, restoring_into, thrust_into
+from .kernels import frame_of_body_into, kinematics, restoring_into, thrust_into
 
 
 @compiled
@@ -39,24 +39,51 @@ def passive(t, q, v, model, workspace, parameters, state, tau, info):
         tau[i] = 0.0
 
 
-@compiled
-def measure_end_effector(t, q, v, model, W, body, rotation, translation, history):
-    """What the path-following controllers measure at a sample, and ``g(q)`` into ``W.restoring``.
+class FrameMeasurement(NamedTuple):
+    """What a path-following controller measures of its end-effector frame at a sample: buffers
+    that :func:`measure_end_effector` overwrites (:func:`new_frame_measurement` builds them)."""
+
+    rotation: np.ndarray  # (3, 3) frame to world
+    position: np.ndarray  # (3,) world [m]
+    twist: np.ndarray  # (6,) (v, w) in the frame's own axes [m/s, rad/s]
+    velocity: np.ndarray  # (3,) world [m/s]
+    acceleration: np.ndarray  # (3,) world, finite difference over the samples [m/s^2]
+    omega: np.ndarray  # (3,) angular velocity in the frame's own axes [rad/s]
+    history: np.ndarray  # (5,): has previous, time [s], previous world velocity (3) [m/s]
+
+
+def new_frame_measurement() -> FrameMeasurement:
+    """Zeroed :class:`FrameMeasurement` buffers (no previous sample)."""
+    return FrameMeasurement(
+        np.zeros((3, 3)),
+        np.zeros(3),
+        np.zeros(6),
+        np.zeros(3),
+        np.zeros(3),
+        np.zeros(3),
+        np.zeros(5),
+    )
+
+
+@compiled(borrows_only=True)
+def measure_end_effector(t, q, v, model, W, body, rotation, translation, out):
+    """What the path-following controllers measure at a sample into ``out`` (a
+    :class:`FrameMeasurement`), and ``g(q)`` into ``W.restoring``.
 
     The end-effector frame (fixed to ``body`` at ``(rotation, translation)``): its rotation ``R`` to
-    the world, position ``p`` [m], twist in its own axes, world velocity [m/s], angular velocity in
-    its own axes [rad/s], and as acceleration [m/s^2] the difference of the world velocity with
-    the previous sample's over the elapsed time (zero at the first sample or when ``t`` does not
-    advance); ``history`` (5,) holds that previous sample (has one, time, velocity) and is updated.
+    the world, position ``p`` [m], twist in its own axes, world velocity ``R v`` [m/s], angular
+    velocity in its own axes [rad/s], and as acceleration [m/s^2] the difference of the world
+    velocity with the previous sample's over the elapsed time (zero at the first sample or when
+    ``t`` does not advance); ``out.history`` holds that previous sample and is updated.
     """
     kinematics(model.bodies, q, v, W)
-    R, p, twist = frame_of_body(W, body, rotation, translation)
-    velocity = np.empty(3)
-    acceleration = np.zeros(3)
-    omega = np.empty(3)
+    R, twist, history = out.rotation, out.twist, out.history
+    frame_of_body_into(W, body, rotation, translation, R, out.position, twist)
+    velocity, acceleration, omega = out.velocity, out.acceleration, out.omega
     for i in range(3):
         velocity[i] = R[i, 0] * twist[0] + R[i, 1] * twist[1] + R[i, 2] * twist[2]
         omega[i] = twist[3 + i]
+        acceleration[i] = 0.0
     if history[0] != 0.0 and t > history[1]:
         h = t - history[1]
         for i in range(3):
@@ -66,10 +93,9 @@ def measure_end_effector(t, q, v, model, W, body, rotation, translation, history
     for i in range(3):
         history[2 + i] = velocity[i]
     restoring_into(model, W, W.restoring)
-    return R, p, twist, velocity, acceleration, omega
 
 
-@compiled
+@compiled(borrows_only=True)
 def thruster_power_into(model, W, thrusts, info, offset):
     """Mechanical power of each thruster [W] into ``info[offset:offset + m]`` (after kinematics).
 
@@ -106,7 +132,7 @@ class PaperState(NamedTuple):
     """State of :func:`paper_path_following` (arrays updated in place)."""
 
     surge: SurgeState
-    velocity_history: np.ndarray  # (5,): has previous, time [s], previous world velocity (3) [m/s]
+    measurement: FrameMeasurement  # the end-effector at the sample (its history kept)
     command: CommandBuffers
     guidance: GuidanceState  # integral LOS (used when the gains ask for it)
 
@@ -131,7 +157,7 @@ def paper_info_shapes(n_joints: int, n_thrusters: int) -> dict[str, tuple[int, .
     }
 
 
-@compiled
+@compiled(borrows_only=True)
 def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info):
     """The paper's controller on the vehicle: measure, :func:`control.laws.path_following_command`, act.
 
@@ -144,17 +170,11 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
     """
     W = workspace
     P = parameters
-    R, p, twist, velocity, acceleration, omega = measure_end_effector(
-        t,
-        q,
-        v,
-        model,
-        W,
-        P.frame_body,
-        P.frame_rotation,
-        P.frame_translation,
-        state.velocity_history,
+    meas = state.measurement
+    measure_end_effector(
+        t, q, v, model, W, P.frame_body, P.frame_rotation, P.frame_translation, meas
     )
+    R, p, twist = meas.rotation, meas.position, meas.twist
     g = W.restoring
     n = q.shape[0] - 7
     out = state.command
@@ -173,9 +193,9 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
         t,
         R,
         p,
-        velocity,
-        acceleration,
-        omega,
+        meas.velocity,
+        meas.acceleration,
+        meas.omega,
         twist[0],
         q[7:],
         v[6:],

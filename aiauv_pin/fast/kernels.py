@@ -1134,10 +1134,27 @@ def frame_positions(model, configurations, body, translation, W, out):
 
 @compiled(fastmath=True)
 def frame_of_body(W, body, rotation, translation):
-    """Pose and own-axes twist of a frame on ``body``, from the kinematics already in ``W``."""
-    rot_w = W.rotation[body]
+    """Pose and own-axes twist of a frame on ``body``, from the kinematics already in ``W``.
+
+    Returns:
+        New arrays ``(R (3x3), p (3,) [m], twist (6,))`` (:func:`frame_of_body_into` writes them
+        into buffers instead).
+    """
     rot = np.empty((3, 3))
     pos = np.empty(3)
+    frame_twist = np.empty(6)
+    frame_of_body_into(W, body, rotation, translation, rot, pos, frame_twist)
+    return rot, pos, frame_twist
+
+
+@compiled(fastmath=True, borrows_only=True)
+def frame_of_body_into(W, body, rotation, translation, rot, pos, frame_twist):
+    """Pose and own-axes twist of a frame fixed to ``body`` at ``(rotation, translation)``, from the
+    kinematics already in ``W``, into ``rot`` (3, 3) (frame to world), ``pos`` (3,) [m] (world) and
+    ``frame_twist`` (6,) (``(v, w)`` in the frame's axes [m/s, rad/s]): ``R = R_b R_f``,
+    ``p = p_b + R_b t`` and ``twist = X twist_b = (R_f^T (v_b + w_b x t), R_f^T w_b)`` (the motion
+    transform of Featherstone 2008, eq. (2.24), applied without forming it)."""
+    rot_w = W.rotation[body]
     pos[0], pos[1], pos[2] = point_in_world(
         W.rotation, W.position, body, translation[0], translation[1], translation[2]
     )
@@ -1148,11 +1165,15 @@ def frame_of_body(W, body, rotation, translation):
                 + rot_w[i, 1] * rotation[1, j]
                 + rot_w[i, 2] * rotation[2, j]
             )
-    x = W.m66[0]
-    _motion_transform(rotation, translation, x)
-    frame_twist = np.empty(6)
-    _matvec6(x, W.twist[body], frame_twist)
-    return rot, pos, frame_twist
+    t0, t1, t2 = translation[0], translation[1], translation[2]
+    w0, w1, w2 = W.twist[body, 3], W.twist[body, 4], W.twist[body, 5]
+    v0 = W.twist[body, 0] + (w1 * t2 - w2 * t1)
+    v1 = W.twist[body, 1] + (w2 * t0 - w0 * t2)
+    v2 = W.twist[body, 2] + (w0 * t1 - w1 * t0)
+    for i in range(3):
+        r0, r1, r2 = rotation[0, i], rotation[1, i], rotation[2, i]  # row i of R_f^T
+        frame_twist[i] = r0 * v0 + r1 * v1 + r2 * v2
+        frame_twist[3 + i] = r0 * w0 + r1 * w1 + r2 * w2
 
 
 @compiled(fastmath=True)

@@ -17,7 +17,7 @@ from .dispatch import run_controller
 from .kernels import is_finite_state, step_into
 
 
-@compiled
+@compiled(borrows_only=True)
 def run_chunk(
     model,
     env,
@@ -79,8 +79,11 @@ def run_chunk(
         step_into(model, env, servo, t, q, v, tau, dt, method, W, W.q_next, W.v_next)
         if not is_finite_state(W.q_next, W.v_next):
             return log_index, k - k_start
-        q[:] = W.q_next
-        v[:] = W.v_next
+        q_next, v_next = W.q_next, W.v_next
+        for i in range(nq):
+            q[i] = q_next[i]
+        for i in range(nv):
+            v[i] = v_next[i]
         k += 1
 
 
@@ -104,6 +107,7 @@ def is_project_function(function) -> bool:
 def _run_chunk_uncached():
     import numba
 
+    # with reference counting: a user's function may allocate and return arrays of its own
     return numba.njit(nogil=True, error_model="numpy")(run_chunk.py_func)
 
 

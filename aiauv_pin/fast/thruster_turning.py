@@ -16,7 +16,7 @@ from control.laws import SurgeState, joint_pd_torque, restoring_moment_in_frame
 from control.thruster_turning import TurningBuffers, TurningGains, thruster_turning_command
 from hydro.jit import compiled
 
-from .controllers import measure_end_effector, thruster_power_into
+from .controllers import FrameMeasurement, measure_end_effector, thruster_power_into
 from .kernels import thrust_into
 
 
@@ -44,7 +44,7 @@ class TurningState(NamedTuple):
     """State of :func:`thruster_turning` (arrays updated in place)."""
 
     surge: SurgeState
-    velocity_history: np.ndarray  # (5,): has previous, time [s], previous world velocity [m/s]
+    measurement: FrameMeasurement  # the end-effector at the sample (its history kept)
     command: TurningBuffers
 
 
@@ -69,7 +69,7 @@ def turning_info_shapes(n_joints: int, n_thrusters: int) -> dict[str, tuple[int,
     }
 
 
-@compiled
+@compiled(borrows_only=True)
 def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
     """The thruster-turning baseline on the vehicle: measure, law, ``tau = B(q) thrusts``.
 
@@ -81,17 +81,11 @@ def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
     """
     W = workspace
     P = parameters
-    R, p, twist, velocity, acceleration, omega = measure_end_effector(
-        t,
-        q,
-        v,
-        model,
-        W,
-        P.frame_body,
-        P.frame_rotation,
-        P.frame_translation,
-        state.velocity_history,
+    meas = state.measurement
+    measure_end_effector(
+        t, q, v, model, W, P.frame_body, P.frame_rotation, P.frame_translation, meas
     )
+    R, p, twist = meas.rotation, meas.position, meas.twist
     g = W.restoring
     # the law gives the moment of g (left-hand side) about the centre, in end-effector axes; the
     # acting moment is its negative. Only the lever p_c - p_b = R_b c enters, so positions are
@@ -119,9 +113,9 @@ def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
         t,
         R,
         p,
-        velocity,
-        acceleration,
-        omega,
+        meas.velocity,
+        meas.acceleration,
+        meas.omega,
         twist[0],
         m_y,
         m_z,
