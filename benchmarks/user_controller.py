@@ -4,7 +4,7 @@ It is the paper's path following (Section 3 of Wrzos-Kaminska, Pettersen and Gra
 2019) put together the way a user would: a plain ``numba.njit`` function (no on-disk cache, so the
 compiled loop runs it in its uncached copy, :func:`aiauv_pin.fast.loop.loop_for`) that measures the
 end-effector with the public kernels (:func:`aiauv_pin.fast.kernels.kinematics`,
-:func:`~aiauv_pin.fast.kernels.frame_of_body`, :func:`~aiauv_pin.fast.kernels.restoring_into`),
+:func:`~aiauv_pin.fast.kernels.frame_of_body_into`, :func:`~aiauv_pin.fast.kernels.restoring_into`),
 calls the public law :func:`control.laws.path_following_command` (eqs. 21-25) and acts with
 :func:`~aiauv_pin.fast.kernels.thrust_into` (eq. 20). Its parameters and state are the built-in
 controller's records (:meth:`aiauv_pin.paper_controller.VehiclePathFollowing.compiled`), so both
@@ -19,10 +19,9 @@ speed); tests/test_bench.py checks that both give the same trajectory.
 from __future__ import annotations
 
 import numba
-import numpy as np
 
 from aiauv_pin.controllers import CompiledController
-from aiauv_pin.fast.kernels import frame_of_body, kinematics, restoring_into, thrust_into
+from aiauv_pin.fast.kernels import frame_of_body_into, kinematics, restoring_into, thrust_into
 from control.laws import path_following_command
 
 #: The diagnostics :func:`user_path_following` logs, in the order of its info row.
@@ -37,18 +36,27 @@ def user_path_following(t, q, v, model, workspace, parameters, state, tau, info)
     :class:`~aiauv_pin.fast.controllers.PaperState`.
     """
     kinematics(model.bodies, q, v, workspace)
-    R, p, twist = frame_of_body(
-        workspace, parameters.frame_body, parameters.frame_rotation, parameters.frame_translation
+    m = state.measurement  # buffers (FrameMeasurement): nothing is allocated per sample
+    R, p, twist = m.rotation, m.position, m.twist
+    frame_of_body_into(
+        workspace,
+        parameters.frame_body,
+        parameters.frame_rotation,
+        parameters.frame_translation,
+        R,
+        p,
+        twist,
     )
-    velocity = np.empty(3)  # end-effector velocity, world [m/s]
+    velocity, omega, acceleration = m.velocity, m.omega, m.acceleration
     for i in range(3):
-        velocity[i] = R[i, 0] * twist[0] + R[i, 1] * twist[1] + R[i, 2] * twist[2]
-    omega = twist[3:].copy()  # angular velocity, end-effector axes [rad/s]
+        velocity[i] = R[i, 0] * twist[0] + R[i, 1] * twist[1] + R[i, 2] * twist[2]  # world [m/s]
+        omega[i] = twist[3 + i]  # end-effector axes [rad/s]
+        acceleration[i] = 0.0
     # acceleration: finite difference of the velocity since the previous sample (zero at the first)
-    history = state.velocity_history  # has previous, time [s], previous velocity (3) [m/s]
-    acceleration = np.zeros(3)
+    history = m.history  # has previous, time [s], previous velocity (3) [m/s]
     if history[0] != 0.0 and t > history[1]:
-        acceleration[:] = (velocity - history[2:]) / (t - history[1])
+        for i in range(3):
+            acceleration[i] = (velocity[i] - history[2 + i]) / (t - history[1])
     history[0] = 1.0
     history[1] = t
     history[2:] = velocity
@@ -74,7 +82,7 @@ def user_path_following(t, q, v, model, workspace, parameters, state, tau, info)
         q[7:],
         v[6:],
         workspace.restoring[6:],
-        np.zeros(3),  # restoring moment: only the hydrostatic compensation (off here) reads it
+        (0.0, 0.0, 0.0),  # restoring moment: only the hydrostatic compensation (off here) reads it
         out,
     )
     thrust_into(model, workspace, out.thrusts, tau)  # tau = B(q) thrusts, eq. (20)
