@@ -85,8 +85,11 @@ def warm_up(vehicle, scenario) -> None:
     """
     if vehicle.active_backend != "numba":
         return
+    from .arguments import check_timing
     from .errors import SimulationDiverged
     from .scenario import run_paper_scenario
+
+    check_timing(scenario.duration, scenario.dt)  # the whole run's error before the short one runs
 
     short = dataclasses.replace(
         scenario, duration=min(scenario.duration, 2 * scenario.steps_per_control * scenario.dt)

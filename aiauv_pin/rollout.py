@@ -37,6 +37,7 @@ from .controllers import CompiledController
 from .disturbances import Disturbance
 from .errors import ArgumentError
 from .simulation import JointServo, check_log_size, check_run_arguments
+from .step_stability import warn_if_step_near_limit
 
 __all__ = ["Rollout", "rollout"]
 
@@ -231,6 +232,13 @@ def rollout(
                 f"rollout: the servo must have one entry per joint ({nv - 6}), "
                 f"got {own.references.size}"
             )
+    checked = set()
+    for i in range(n_runs):  # each servo once, at the first start it runs from
+        own = laws[i % len(laws)].servo if servo is None else servo
+        if own is not None and id(own) not in checked:
+            checked.add(id(own))
+            start = q_rows[i % len(q_rows)]
+            warn_if_step_near_limit(vehicle, start, own.stiffness, own.damping, method, float(dt))
     if threads is None:
         threads = max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1)
     if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:

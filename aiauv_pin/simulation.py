@@ -31,6 +31,7 @@ from .disturbances import Disturbance
 from .errors import ArgumentError, SimulationDiverged
 from .integrators import INTEGRATORS
 from .lagged import LaggedAddedMass, check_filter, check_scheme
+from .step_stability import warn_if_step_near_limit
 from .vehicle import Vehicle
 
 #: ``controller(t, q, v) -> tau`` or ``-> (tau, info)``, with ``tau`` the generalised force (nv,) held
@@ -291,6 +292,14 @@ def simulate(
                 "added_mass='lagged' runs with a Python controller (or none), not a compiled one"
             )
         lag = LaggedAddedMass(vehicle, lagged_filter)
+    joint_servo = servo
+    if servo is None and isinstance(controller, CompiledController):
+        joint_servo = controller.servo
+    if isinstance(joint_servo, JointServo) and lag is None:
+        # near its stability limit a run stays finite but goes far off: say so before it runs
+        warn_if_step_near_limit(
+            vehicle, q0, joint_servo.stiffness, joint_servo.damping, method, float(dt)
+        )
     if isinstance(controller, CompiledController):
         return _simulate_compiled(
             vehicle,

@@ -1,0 +1,143 @@
+"""The joint servo's largest stable step (aiauv_pin.step_stability): closed forms, the full
+linearisation, and the warning of simulate, rollout and the command line."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from aiauv_pin.step_stability import (
+    STEP_MARGIN,
+    StepNearStabilityLimit,
+    amplification,
+    largest_stable_step,
+    servo_step_limit,
+)
+
+#: Where RK4's stability region meets the negative real axis: the real root of
+#: 1 + z + z^2/2 + z^3/6 + z^4/24 = -1 (Hairer and Wanner 1996, Sec. IV.2, Fig. 2.1).
+RK4_REAL_LIMIT = 2.785293563405282
+
+
+def one_joint(mass: float, stiffness: float, damping: float):
+    return np.array([[1.0 / mass]]), np.array([stiffness]), np.array([damping])
+
+
+@pytest.mark.parametrize(("mass", "stiffness", "damping"), [(0.3, 100.0, 50.0), (2.0, 400.0, 1.0)])
+def test_euler_limit_matches_the_closed_form_of_one_joint(mass, stiffness, damping):
+    # semi-implicit Euler on m x'' + c x' + k x = 0: stable iff 2 h c/m + h^2 k/m < 4 (Jury's test
+    # on trace 2 - h c/m - h^2 k/m and determinant 1 - h c/m of the step's matrix)
+    a, b = stiffness / mass, 2.0 * damping / mass
+    closed_form = (-b + np.sqrt(b * b + 16.0 * a)) / (2.0 * a)
+    limit = largest_stable_step(*one_joint(mass, stiffness, damping), "euler")
+    assert limit == pytest.approx(closed_form, rel=2e-6)
+
+
+def test_rk4_limit_of_an_overdamped_joint_is_the_real_axis_bound():
+    mass, stiffness, damping = 0.3, 100.0, 50.0
+    fastest = np.abs(np.roots([mass, damping, stiffness])).max()
+    limit = largest_stable_step(*one_joint(mass, stiffness, damping), "rk4")
+    assert limit == pytest.approx(RK4_REAL_LIMIT / fastest, rel=2e-6)
+
+
+def test_amplification_is_one_step_of_each_method():
+    rng = np.random.default_rng(3)
+    root = rng.normal(size=(3, 3))
+    inverse_mass = root @ root.T + 3.0 * np.eye(3)
+    stiffness, damping = rng.uniform(1.0, 5.0, 3), rng.uniform(0.5, 2.0, 3)
+    h = 0.05
+    x = rng.normal(size=6)
+
+    def acceleration(q, qd):
+        return -inverse_mass @ (stiffness * q + damping * qd)
+
+    q, qd = x[:3], x[3:]
+    qd_euler = qd + h * acceleration(q, qd)
+    euler = np.concatenate((q + h * qd_euler, qd_euler))
+    assert amplification(inverse_mass, stiffness, damping, "euler", h) @ x == pytest.approx(euler)
+
+    def f(state):
+        return np.concatenate((state[3:], acceleration(state[:3], state[3:])))
+
+    k1 = f(x)
+    k2 = f(x + 0.5 * h * k1)
+    k3 = f(x + 0.5 * h * k2)
+    k4 = f(x + h * k3)
+    rk4 = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    assert amplification(inverse_mass, stiffness, damping, "rk4", h) @ x == pytest.approx(rk4)
+
+
+def test_no_servo_has_no_limit():
+    assert largest_stable_step(np.eye(2), np.zeros(2), np.zeros(2), "euler") == np.inf
+
+
+@pytest.fixture(scope="module")
+def paper():
+    from aiauv_pin import loading
+    from aiauv_pin.paper_controller import VehiclePathFollowing
+    from aiauv_pin.scenario import Scenario, initial_state
+
+    vehicle = loading.load_vehicle(loading.bundled_urdf("uniform"))
+    scenario = Scenario(case="uniform")
+    law = VehiclePathFollowing(
+        vehicle, scenario.controller_gains, path=scenario.path_to_follow
+    ).compiled()
+    q0, v0 = initial_state(vehicle, scenario)
+    return vehicle, law, q0, v0
+
+
+def test_paper_servo_limits_agree_with_the_full_linearisation(paper):
+    from aiauv_pin.linear_model import linearize
+
+    vehicle, law, q0, _ = paper
+    servo = law.servo
+    model = linearize(vehicle, joint_gains=(float(servo.stiffness[0]), float(servo.damping[0])))
+    fastest = np.abs(np.linalg.eigvals(model.A).real).max()  # -189 1/s: the joint-8 servo mode
+    euler = servo_step_limit(vehicle, q0, servo.stiffness, servo.damping, "euler")
+    rk4 = servo_step_limit(vehicle, q0, servo.stiffness, servo.damping, "rk4")
+    # the servo alone, at the start, against the whole vehicle's linear model at 0.5 m/s: the
+    # fast mode is overdamped, so the bounds are those of a real eigenvalue
+    assert euler == pytest.approx(2.0 / fastest, rel=0.01)
+    assert rk4 == pytest.approx(RK4_REAL_LIMIT / fastest, rel=0.01)
+
+
+def test_simulate_warns_near_the_limit_only(paper):
+    from aiauv_pin.simulation import simulate
+
+    vehicle, law, q0, v0 = paper
+    with pytest.warns(StepNearStabilityLimit, match=r"dt = 0\.01 s is 9\d% .* semi-implicit Euler"):
+        simulate(vehicle, q0, v0, 0.02, 0.01, law, method="euler")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", StepNearStabilityLimit)
+        simulate(vehicle, q0, v0, 0.02, 0.01, law, method="rk4")  # 68 % of RK4's limit
+        simulate(vehicle, q0, v0, 0.008, 0.004, law, method="euler")
+        simulate(vehicle, q0, v0, 0.02, 0.01, None, method="euler")  # no servo, no limit
+
+
+def test_rollout_warns_too(paper):
+    from aiauv_pin.rollout import rollout
+
+    vehicle, law, q0, v0 = paper
+    with pytest.warns(StepNearStabilityLimit, match=f"take dt <= {STEP_MARGIN * 0.01055:.2g}"):
+        rollout(vehicle, q0, v0, 0.02, 0.01, law, method="euler", threads=1)
+
+
+def test_command_line_warns_once_in_one_line(tmp_path):
+    import subprocess
+    import sys
+
+    arguments = ["simulate", "--method", "euler", "--dt", "0.01", "--duration", "0.05"]
+    arguments += ["--no-html", "--quiet", "--out", str(tmp_path / "run")]
+    done = subprocess.run(
+        [sys.executable, "-m", "aiauv_pin.cli", *arguments],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr
+    lines = [line for line in done.stderr.splitlines() if "largest stable step" in line]
+    assert len(lines) == 1, done.stderr
+    assert lines[0].startswith("aiauv: warning: dt = 0.01 s is 9")
+    assert "Traceback" not in done.stderr
