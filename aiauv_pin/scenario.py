@@ -40,6 +40,9 @@ from .simulation import Trajectory, simulate
 from .vehicle import Vehicle
 
 CASES = ("uniform", "stabilised")
+#: The scenario's integrator and step [s] (see the module docstring for why these).
+DEFAULT_METHOD = "rk4"
+DEFAULT_DT = 0.01
 #: Controllers a scenario can name: the paper's path following (turning with the body), none
 #: (passive run), or the thruster-turning baseline (:mod:`aiauv_pin.thruster_turning`).
 CONTROLLERS = ("paper", "none", "thruster_turning")
@@ -82,10 +85,10 @@ class Scenario:
 
     case: str = "uniform"
     duration: float = 300.0
-    dt: float = 0.01
+    dt: float = DEFAULT_DT
     initial_offset: tuple[float, float] = (2.0, 2.0)
     initial_surge: float = 0.0
-    method: str = "rk4"
+    method: str = DEFAULT_METHOD
     current: tuple[float, float, float] = (0.0, 0.0, 0.0)
     gains: PathFollowingGains | None = None
     continuous_joints: bool = True
