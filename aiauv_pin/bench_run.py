@@ -311,7 +311,9 @@ def accuracy_per_cost(
                 row["cost_relative_to_rk4_0.01"] = statistics.median(costs) / rk4_cost
         rows.append(row)
     reachable = [r for r in rows if r["max_end_effector_error_m"] is not None]
-    within = [r for r in reachable if r["max_end_effector_error_m"] <= ACCURACY_TARGET and "cpu_s" in r]
+    within = [
+        r for r in reachable if r["max_end_effector_error_m"] <= ACCURACY_TARGET and "cpu_s" in r
+    ]
     cheapest = min(within, key=lambda r: r["cpu_s"]["median"]) if within else None
     default = {"method": DEFAULT_METHOD, "dt": DEFAULT_DT}
     return {
