@@ -223,10 +223,11 @@ def accuracy_per_cost(
     Costs are CPU seconds of the compiled run (median of ``repeats``, interleaved).
 
     ``controller`` is ``"paper"`` (the paper's path following) or ``"none"`` (a passive run);
-    ``current`` a constant water velocity in the world [m/s]. The result names the cheapest
-    candidate within :data:`ACCURACY_TARGET` over the whole path (issue 15's rule for the default step)
-    and whether it is the scenario's default (:data:`aiauv_pin.scenario.DEFAULT_METHOD`,
-    :data:`aiauv_pin.scenario.DEFAULT_DT`).
+    ``current`` a constant water velocity in the world [m/s]. Each row also gives the largest
+    distance across the path (in the y-z plane; the rest is a lag along it). The result names the
+    cheapest candidate within :data:`ACCURACY_TARGET` over the whole path (issue 15's rule for the
+    default step) and whether it is the scenario's default (:data:`aiauv_pin.scenario.DEFAULT_METHOD`,
+    :data:`aiauv_pin.scenario.DEFAULT_DT`, added to ``candidates`` if missing).
     """
     from . import loading
     from .controllers import CompiledController
@@ -278,16 +279,25 @@ def accuracy_per_cost(
     reference_t, reference_p = path("rk4", reference_dt)
     check_t, check_p = path("rk4", 2 * reference_dt)
 
-    def error_against_reference(t: np.ndarray, p: np.ndarray) -> float:
+    def difference_to_reference(t: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """End-effector position minus the reference's at the same times [m] (n x 3)."""
         stride = round((t[1] - t[0]) / (reference_t[1] - reference_t[0]))
         fine = reference_p[::stride]
         if not np.allclose(reference_t[::stride], t, atol=1e-9):
             raise RuntimeError("accuracy: log times do not coincide with the reference's")
-        return float(np.linalg.norm(p - fine, axis=1).max())
+        return p - fine
 
+    def error_against_reference(t: np.ndarray, p: np.ndarray) -> float:
+        return float(np.linalg.norm(difference_to_reference(t, p), axis=1).max())
+
+    default = (DEFAULT_METHOD, DEFAULT_DT)
+    if not any(m == default[0] and math.isclose(dt, default[1]) for m, dt in candidates):
+        candidates = (*candidates, default)
     rows = []
     cpu: dict[tuple[str, float], list[float]] = {c: [] for c in candidates}
     errors: dict[tuple[str, float], float | None] = {}
+    # largest distance across the paper's path (the world x-axis: in the y-z plane) [m]
+    across: dict[tuple[str, float], float] = {}
     for _ in range(repeats):
         for method, dt in candidates:
             if errors.get((method, dt), 0.0) is None:
@@ -299,12 +309,16 @@ def accuracy_per_cost(
                 errors[(method, dt)] = None
                 continue
             cpu[(method, dt)].append(time.process_time() - start)
-            errors[(method, dt)] = error_against_reference(t, p)
+            difference = difference_to_reference(t, p)
+            errors[(method, dt)] = float(np.linalg.norm(difference, axis=1).max())
+            across[(method, dt)] = float(np.linalg.norm(difference[:, 1:], axis=1).max())
     rk4_cost = statistics.median(cpu[("rk4", 0.01)]) if cpu.get(("rk4", 0.01)) else None
     for method, dt in candidates:
         error = errors.get((method, dt))
         costs = cpu[(method, dt)]
         row = {"method": method, "dt": dt, "max_end_effector_error_m": error}
+        if error is not None:
+            row["max_across_path_error_m"] = across[(method, dt)]
         if error is not None and costs:
             row["cpu_s"] = _spread(costs)
             if rk4_cost:
@@ -315,7 +329,6 @@ def accuracy_per_cost(
         r for r in reachable if r["max_end_effector_error_m"] <= ACCURACY_TARGET and "cpu_s" in r
     ]
     cheapest = min(within, key=lambda r: r["cpu_s"]["median"]) if within else None
-    default = {"method": DEFAULT_METHOD, "dt": DEFAULT_DT}
     return {
         "case": case,
         "controller": controller,
@@ -325,13 +338,13 @@ def accuracy_per_cost(
         "reference_convergence_m": error_against_reference(check_t, check_p),
         "target_m": ACCURACY_TARGET,
         "rows": rows,
-        "default": default,
+        "default": {"method": default[0], "dt": default[1]},
         "cheapest_within_2mm": (
             None if cheapest is None else {"method": cheapest["method"], "dt": cheapest["dt"]}
         ),
         "cheapest_is_default": cheapest is not None
-        and cheapest["method"] == default["method"]
-        and math.isclose(cheapest["dt"], default["dt"]),
+        and cheapest["method"] == default[0]
+        and math.isclose(cheapest["dt"], default[1]),
     }
 
 
@@ -359,9 +372,12 @@ def format_parts(results: dict) -> list[str]:
         spread("fresh 'import aiauv_pin.cli' wall", e2e["import_only_wall_s"], "s")
     acc = results.get("accuracy_per_cost")
     if acc:
+        default = acc.get("default") or {}
         for r in acc["rows"]:
             error = r["max_end_effector_error_m"]
-            label = f"EE error {r['method']} dt={r['dt']:g} vs converged"
+            is_default = r["method"] == default.get("method") and r["dt"] == default.get("dt")
+            mark = " (default)" if is_default else ""
+            label = f"EE error {r['method']} dt={r['dt']:g}{mark} vs converged"
             if error is None:
                 lines.append(f"{label:<48} diverges")
             else:
@@ -369,4 +385,9 @@ def format_parts(results: dict) -> list[str]:
                     f"{label:<48} {1000 * error:10.3f} mm, cost "
                     f"{r.get('cost_relative_to_rk4_0.01', float('nan')):.2f}x RK4 0.01"
                 )
+        if "cheapest_is_default" in acc:
+            cheapest = acc.get("cheapest_within_2mm")
+            text = "none" if cheapest is None else f"{cheapest['method']} dt={cheapest['dt']:g}"
+            verdict = "is" if acc["cheapest_is_default"] else "is NOT"
+            lines.append(f"{'cheapest within 2 mm':<48} {text} ({verdict} the default)")
     return lines

@@ -41,8 +41,8 @@ from .vehicle import Vehicle
 
 CASES = ("uniform", "stabilised")
 #: The scenario's integrator and step [s] (see the module docstring for why these).
-DEFAULT_METHOD = "rk4"
-DEFAULT_DT = 0.01
+DEFAULT_METHOD = "euler"
+DEFAULT_DT = 0.004
 #: Controllers a scenario can name: the paper's path following (turning with the body), none
 #: (passive run), or the thruster-turning baseline (:mod:`aiauv_pin.thruster_turning`).
 CONTROLLERS = ("paper", "none", "thruster_turning")

@@ -41,8 +41,8 @@ AROUND_DEFAULT = (("rk4", 0.01), ("euler", 0.005), ("euler", 0.004))
 CONFIGURATIONS = (
     ("uniform", "paper", STILL, NEAR_TARGET),
     ("stabilised", "paper", STILL, NEAR_TARGET),
-    ("uniform", "paper", CURRENT, AROUND_DEFAULT),
-    ("stabilised", "paper", CURRENT, AROUND_DEFAULT),
+    ("uniform", "paper", CURRENT, NEAR_TARGET),
+    ("stabilised", "paper", CURRENT, NEAR_TARGET),
     ("uniform", "none", CURRENT, AROUND_DEFAULT),
     ("stabilised", "none", CURRENT, AROUND_DEFAULT),
 )
