@@ -226,14 +226,15 @@ def accuracy_per_cost(
     ``current`` a constant water velocity in the world [m/s]. Each row also gives the largest
     distance across the path (in the y-z plane; the rest is a lag along it). The result names the
     cheapest candidate within :data:`ACCURACY_TARGET` over the whole path (issue 15's rule for the
-    default step) and whether it is the scenario's default (:data:`aiauv_pin.scenario.DEFAULT_METHOD`,
-    :data:`aiauv_pin.scenario.DEFAULT_DT`, added to ``candidates`` if missing).
+    default step) and whether it is the scenario's default (:mod:`aiauv_pin.scenario_defaults`,
+    added to ``candidates`` if missing).
     """
     from . import loading
     from .controllers import CompiledController
     from .errors import SimulationDiverged
     from .paper_controller import VehiclePathFollowing
-    from .scenario import DEFAULT_DT, DEFAULT_METHOD, Scenario, initial_state, tip_frame
+    from .scenario import Scenario, initial_state, tip_frame
+    from .scenario_defaults import DEFAULT_DT, DEFAULT_METHOD
     from .simulation import simulate
 
     if controller not in ("paper", "none"):
