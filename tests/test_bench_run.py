@@ -61,9 +61,11 @@ def test_accuracy_against_a_converged_reference_falls_with_the_step():
     # first order in dt (the controller is held over each step): halving the step about halves it
     assert rows[("euler", 0.0025)] < 0.7 * rows[("euler", 0.005)]
     assert result["reference_convergence_m"] < rows[("euler", 0.0025)]
-    # the scenario's default is always measured, and the verdict names it
+    # the scenario's default is always measured, and the verdict names it; a short version of the
+    # 300 s claim (benchmarks/default_step.json): the default stays within 2 mm over these 2 s
     default = (result["default"]["method"], result["default"]["dt"])
     assert default == (Scenario().method, Scenario().dt) and default in rows
+    assert rows[default] <= bench_run.ACCURACY_TARGET
     cheapest = result["cheapest_within_2mm"]
     assert result["cheapest_is_default"] == (
         cheapest is not None and (cheapest["method"], cheapest["dt"]) == default
