@@ -25,6 +25,7 @@ from .cli_types import (  # noqa: F401  (positive_seconds is part of the CLI's p
     positive_density,
     positive_seconds,
 )
+from .scenario_defaults import DEFAULT_DT, DEFAULT_METHOD
 
 #: Figure formats of ``--figure-format`` (PNG raster, SVG and PDF vector).
 FIGURE_FORMATS = ("png", "svg", "pdf")  # outputs.FIGURE_FORMATS, here so parsing stays light
@@ -60,8 +61,15 @@ def _add_simulate(subparsers) -> None:
         "roll-stabilised (k_D = 12) (uniform)",
     )
     parser.add_argument("--duration", type=positive_seconds, default=None, help="[s] (300)")
-    parser.add_argument("--dt", type=positive_seconds, default=None, help="step [s] (0.01)")
-    parser.add_argument("--method", choices=("rk4", "euler"), default=None, help="integrator (rk4)")
+    parser.add_argument(
+        "--dt", type=positive_seconds, default=None, help=f"step [s] ({DEFAULT_DT:g})"
+    )
+    parser.add_argument(
+        "--method",
+        choices=("rk4", "euler"),
+        default=None,
+        help=f"integrator: semi-implicit Euler or RK4 (Munthe-Kaas) ({DEFAULT_METHOD})",
+    )
     parser.add_argument(
         "--current",
         nargs=3,

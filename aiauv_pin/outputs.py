@@ -2,7 +2,7 @@
 
 The run is logged at every controller sample (every step by default) and ``summary.json``'s
 integrals (work) and settling times use every logged sample. ``timeseries.csv`` holds every
-``csv_period`` of the scenario (0.05 s by default, rounded to a whole number of logged samples;
+``csv_period`` of the scenario (0.04 s by default, rounded to a whole number of logged samples;
 the last sample is always included; ``None`` writes every sample). The figures draw, per curve,
 the minimum and maximum of each of at most :data:`PLOT_BUCKETS` consecutive runs of samples (in
 time order), which at their size is indistinguishable from drawing every sample.

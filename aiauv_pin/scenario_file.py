@@ -5,9 +5,9 @@ The format (every key optional; without a file ``aiauv simulate`` runs the paper
     case = "uniform"             # bundled vehicle and its gains
     vehicle = "my.urdf"          # or your own URDF (relative to this file)
     duration = 120.0             # [s]
-    dt = 0.01                    # [s]
-    method = "rk4"               # or "euler"
-    control_period = 0.01        # [s], a whole multiple of dt (default: every step)
+    dt = 0.004                   # [s]
+    method = "euler"             # semi-implicit Euler, or "rk4"
+    control_period = 0.02        # [s], a whole multiple of dt (default: every step)
     continuous_joints = true     # joint PD (eq. 24) as a servo at every stage
     added_mass = "exact"         # or "lagged" (UUV Simulator / gz-sim scheme; Python controller)
     lagged_filter = 0.3          # its filter coefficient in (0, 1]: 0.3 UUV Simulator, 1 gz-sim
@@ -30,7 +30,7 @@ The format (every key optional; without a file ``aiauv simulate`` runs the paper
                                  # current_compensation = "integral_los", turn_feedforward,
                                  # hydrostatic_compensation (README, "Beyond the paper")
     [output]
-    csv_period = 0.05            # [s] between rows of timeseries.csv
+    csv_period = 0.04            # [s] between rows of timeseries.csv
 
 The parameter names are those of sweep specs (:mod:`aiauv_pin.sweep_spec`): the run-level keys
 are the same, ``[controller]`` holds the gains under their sweep names, ``start.position`` is the

@@ -73,6 +73,7 @@ SCENARIOS = sorted((ROOT / "examples").glob("*.toml"))
 SWEEP_SPEC = """case = "uniform"
 duration = 0.3
 dt = 0.01
+method = "rk4"
 [grid]
 k_e = [0.05, 0.1]
 "initial_offset.y" = { linspace = [1.0, 3.0, 2] }
@@ -1201,6 +1202,7 @@ def run_kill_section(
 
 SWEEP_RESUME = """duration = 2.0
 dt = 0.01
+method = "rk4"
 [grid]
 k_e = [0.04, 0.06, 0.08, 0.1]
 "initial_offset.y" = [1.0, 2.0]
@@ -1319,7 +1321,9 @@ def run_sweep_section(
     # a killed worker: its runs are run again, not lost
     out = base / "worker_killed"
     slow = base / "slow.toml"
-    slow.write_text("duration = 30.0\ndt = 0.002\n[grid]\nk_e = [0.05, 0.06, 0.07, 0.08]\n")
+    slow.write_text(
+        'duration = 30.0\ndt = 0.002\nmethod = "rk4"\n[grid]\nk_e = [0.05, 0.06, 0.07, 0.08]\n'
+    )
     process = subprocess.Popen(
         aiauv("sweep", str(slow), "--out", str(out), "--workers", "1", "--quiet", "--no-plots"),
         cwd=work,
@@ -1392,7 +1396,9 @@ def run_sweep_section(
         failures.append({"what": "--workers 100000", **result})
     # every run fails: non-zero exit, one line
     failing = base / "failing.toml"
-    failing.write_text('duration = 5.0\ndt = 0.5\ncontroller = "none"\n[grid]\nk_e = [0.05, 0.1]\n')
+    failing.write_text(
+        'duration = 5.0\ndt = 0.5\nmethod = "rk4"\ncontroller = "none"\n[grid]\nk_e = [0.05, 0.1]\n'
+    )
     result = run_command(
         aiauv(
             "sweep",

@@ -26,6 +26,7 @@ import numpy as np
 
 from aiauv_pin.atomic import write_text
 from aiauv_pin.loading import bundled_urdf
+from aiauv_pin.scenario_defaults import DEFAULT_DT, DEFAULT_METHOD
 from aiauv_pin.sweep import dask_client, execute_run, run_sweep
 from aiauv_pin.sweep_spec import file_sha256, sweep_spec_from_dict
 
@@ -38,7 +39,7 @@ def _warm_up(duration: float) -> None:
     execute_run(point.run_id, point.parameters, path.read_text(encoding="utf-8"), file_sha256(path))
 
 
-def measure(workers: int, runs: int, duration: float, dt: float) -> dict:
+def measure(workers: int, runs: int, duration: float, dt: float, method: str) -> dict:
     """Time one sweep of ``runs`` runs on a warmed-up local cluster of ``workers`` processes."""
     start = time.perf_counter()
     with dask_client(workers=workers) as client:
@@ -48,6 +49,7 @@ def measure(workers: int, runs: int, duration: float, dt: float) -> dict:
             {
                 "duration": duration,
                 "dt": dt,
+                "method": method,
                 "grid": {"k_e": [float(x) for x in np.linspace(0.03, 0.1, runs)]},
             }
         )
@@ -76,7 +78,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=8, help="runs per sweep (8)")
     parser.add_argument("--duration", type=float, default=30.0, help="simulated time [s] (30)")
-    parser.add_argument("--dt", type=float, default=0.01, help="integration step [s] (0.01)")
+    parser.add_argument(
+        "--dt", type=float, default=DEFAULT_DT, help=f"integration step [s] ({DEFAULT_DT:g})"
+    )
+    parser.add_argument(
+        "--method", choices=("rk4", "euler"), default=DEFAULT_METHOD, help=f"({DEFAULT_METHOD})"
+    )
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2], help="(1 2)")
     parser.add_argument(
         "--out",
@@ -87,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     results = []
     for workers in args.workers:
-        result = measure(workers, args.runs, args.duration, args.dt)
+        result = measure(workers, args.runs, args.duration, args.dt, args.method)
         results.append(result)
         print(
             f"{workers} worker(s): {args.runs} runs of {args.duration:g} s in "
@@ -105,6 +112,7 @@ def main(argv: list[str] | None = None) -> int:
         "benchmark": "sweep_scaling",
         "duration_s": args.duration,
         "dt_s": args.dt,
+        "method": args.method,
         "machine": {
             "cpus": os.cpu_count(),
             "usable_cpus": len(os.sched_getaffinity(0)),

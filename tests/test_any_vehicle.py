@@ -43,7 +43,7 @@ def test_generated_vehicle_follows_the_path(tmp_path, n_modules, duration):
     path.write_text(build_urdf(spec), encoding="utf-8")
     vehicle = load_vehicle(path)
     assert vehicle.nv == 6 + n_modules - 1
-    scenario = PaperScenario(duration=duration, dt=0.01, initial_offset=(1.0, 1.0))
+    scenario = PaperScenario(duration=duration, dt=0.01, method="rk4", initial_offset=(1.0, 1.0))
     result = run_paper_scenario(vehicle, scenario)
     tr = result.trajectory
     assert tr.status == "complete"

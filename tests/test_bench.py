@@ -7,6 +7,7 @@ import pytest
 from aiauv_pin import bench, loading
 from aiauv_pin.cli import main
 from aiauv_pin.fast.loop import loop_for, run_chunk
+from aiauv_pin.scenario import Scenario
 
 
 def test_user_controller_runs_the_built_in_law_in_the_uncached_loop():
@@ -15,7 +16,7 @@ def test_user_controller_runs_the_built_in_law_in_the_uncached_loop():
     if not loading.load_vehicle().fast:
         pytest.skip("numba backend unavailable")
     results = bench.controller_comparison("uniform", 2.0, repeats=1)
-    assert results["steps"] == 200
+    assert results["steps"] == round(2.0 / Scenario().dt)  # the whole run, at the default step
     assert results["user_runs_in_uncached_loop"]
     assert results["compilation_excluded"]
     assert results["max_configuration_difference"] <= 1e-12

@@ -69,11 +69,13 @@ def test_measurement_and_output_match_the_python_adapter(numba_vehicle, rng):
 @pytest.mark.parametrize("case", ["uniform", "stabilised"])
 @pytest.mark.parametrize("feedforward", ["exact", "paper"])
 def test_paper_runs_unchanged_by_the_move_of_the_laws(case, feedforward):
-    """60 s of the paper scenario, sampled every 0.5 s, as recorded before the laws moved."""
+    """60 s of the paper scenario, sampled every 0.5 s, as recorded before the laws moved (with
+    RK4 at 0.01 s, the default then)."""
     reference = np.load(REFERENCE)
     vehicle = aiauv_pin.load_vehicle(aiauv_pin.bundled_urdf(case))
     gains = PathFollowingGains.for_case(case, feedforward=feedforward)
-    result = run_paper_scenario(vehicle, PaperScenario(case=case, duration=60.0, gains=gains))
+    scenario = PaperScenario(case=case, duration=60.0, gains=gains, method="rk4", dt=0.01)
+    result = run_paper_scenario(vehicle, scenario)
     trajectory = result.trajectory
     rows = np.arange(0, len(trajectory.t), 50)
     key = f"{case}_{feedforward}"
@@ -102,10 +104,16 @@ def _same_trajectory(got, expected, tol) -> None:
     "options",
     [
         dict(case="uniform"),
-        dict(case="stabilised", control_period=0.03, current=(0.1, -0.05, 0.02)),
+        dict(
+            case="stabilised",
+            control_period=0.03,
+            current=(0.1, -0.05, 0.02),
+            method="rk4",
+            dt=0.01,
+        ),
         dict(case="uniform", continuous_joints=False, method="euler", dt=0.005),
     ],
-    ids=["paper", "held_with_current", "sampled_joints_euler"],
+    ids=["paper", "held_with_current_rk4", "sampled_joints_euler"],
 )
 def test_compiled_scenario_matches_python_controller(numba_vehicle, options):
     scenario = PaperScenario(duration=2.0, **options)
@@ -143,7 +151,7 @@ def test_on_log_sees_every_logged_sample(numba_vehicle):
 
 
 def test_divergence_reports_the_same_time_and_partial_trajectory(numba_vehicle):
-    scenario = PaperScenario(duration=20.0, dt=0.5)
+    scenario = PaperScenario(duration=20.0, dt=0.5, method="rk4")
     errors = []
     for compiled in (True, False):
         with pytest.raises(SimulationDiverged) as error:
@@ -195,13 +203,14 @@ def test_csv_keeps_every_csv_period_and_the_summary_every_step(numba_vehicle, tm
 
     from aiauv_pin.outputs import write_results
 
-    result = run_paper_scenario(numba_vehicle, PaperScenario(duration=1.03))
+    scenario = PaperScenario(duration=1.032)  # the default step, 4 ms, and csv_period, 0.04 s
+    result = run_paper_scenario(numba_vehicle, scenario)
     write_results(result, tmp_path)
     rows = (tmp_path / "timeseries.csv").read_text().splitlines()[1:]
     times = [float(row.split(",")[0]) for row in rows]
-    np.testing.assert_allclose(times, [*np.arange(0.0, 1.0001, 0.05), 1.03], atol=1e-12)
+    np.testing.assert_allclose(times, [*np.arange(0.0, 1.0001, 0.04), 1.032], atol=1e-12)
     content = json.loads((tmp_path / "summary.json").read_text())
-    assert content["steps"] == 103  # integrals and settling times see every step
+    assert content["steps"] == 258  # integrals and settling times see every step
 
 
 def test_plot_envelope_keeps_each_buckets_extremes_in_time_order(rng):

@@ -23,7 +23,7 @@ from aiauv_pin.scenario import PaperScenario, run_paper_scenario
 def short_result():
     vehicle = load_vehicle(backend="pinocchio")
     return run_paper_scenario(
-        vehicle, PaperScenario(duration=0.5, dt=0.01), progress=False, compiled=False
+        vehicle, PaperScenario(duration=0.5, dt=0.01, method="rk4"), progress=False, compiled=False
     )
 
 

@@ -50,6 +50,7 @@ PAPER_SPEC = (Path(__file__).parents[1] / "urdf" / "paper_uniform.toml").read_te
 SWEEP_SPEC = """case = "uniform"
 duration = 1.0
 dt = 0.01
+method = "rk4"
 [grid]
 k_e = [0.05, 0.1]
 "initial_offset.y" = { linspace = [1.0, 3.0, 2] }

@@ -267,7 +267,11 @@ def test_unknown_subcommand_and_missing_argument(capfd):
 def test_diverging_run_names_time_and_cause_and_keeps_the_partial_results(tmp_path, capfd):
     out = tmp_path / "run"
     code, _, err = run_cli(
-        capfd, ["simulate", "--dt", "0.5", "--duration", "20", "--quiet", "--no-html", "--out", out]
+        capfd,
+        [
+            *("simulate", "--dt", "0.5", "--method", "rk4", "--duration", "20"),
+            *("--quiet", "--no-html", "--out", out),
+        ],
     )
     assert_one_line_error(code, err, "diverged", "t = 1 s", "non-finite", str(out))
     rows = (out / "timeseries.csv").read_text().splitlines()

@@ -95,6 +95,7 @@ def test_killed_simulate_never_leaves_a_folder_claiming_what_it_lacks(tmp_path):
 
 SWEEP = """duration = 0.5
 dt = 0.01
+method = "rk4"
 [grid]
 k_e = [0.05, 0.08, 0.1]
 """

@@ -33,10 +33,11 @@ from aiauv_pin.sweep_spec import (
 
 pytest.importorskip("distributed")
 
-# 2 complete runs of 4 s, and 2 with dt = 2 s that blow up at the second step (t = 4 s)
+# 2 complete runs of 4 s, and 2 with dt = 2 s that blow up at the second step (t = 4 s) with RK4
 # (the duration is a whole number of both steps: an inconsistent duration and dt is refused)
 SWEEP = """
 duration = 4.0
+method = "rk4"
 [grid]
 k_e = [0.05, 0.1]
 dt = [0.01, 2.0]

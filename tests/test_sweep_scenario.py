@@ -29,6 +29,7 @@ YAWED_LINE = """
 case = "uniform"
 duration = 3.0
 dt = 0.01
+method = "rk4"
 [start]
 position = [0.0, 1.0, 0.5]
 [path]

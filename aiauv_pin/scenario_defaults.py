@@ -1,0 +1,13 @@
+"""The scenario's default integrator, step and table period, named once.
+
+A module without imports, so that the command line's help (:mod:`aiauv_pin.cli`) states them
+without loading the simulation; :class:`aiauv_pin.scenario.Scenario` takes its defaults from here.
+Why these values: :mod:`aiauv_pin.scenario` (module docstring) and ``benchmarks/default_step.py``.
+"""
+
+#: Integrator of the scenario: semi-implicit Euler (``"euler"``) or RK4-Munthe-Kaas (``"rk4"``).
+DEFAULT_METHOD = "euler"
+#: Integration step of the scenario [s]: the cheapest within 2 mm of the converged path (issue 15).
+DEFAULT_DT = 0.004
+#: Time between rows of ``timeseries.csv`` [s] (every tenth step of :data:`DEFAULT_DT`).
+DEFAULT_CSV_PERIOD = 0.04
