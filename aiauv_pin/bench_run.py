@@ -99,7 +99,9 @@ def throughput(
                     [client.submit(_warm, 1.0, pure=False) for _ in range(2 * cores)]
                 )
                 assert set(statuses) == {"complete"}, statuses
-        rollout(vehicle, q0, v0, 1.0, scenario.dt, laws()[:cores], threads=cores)
+        rollout(
+            vehicle, q0, v0, 1.0, scenario.dt, laws()[:cores], method=scenario.method, threads=cores
+        )
         for _ in range(rounds):
             for name, cluster in clusters.items():
                 with tempfile.TemporaryDirectory() as folder:
@@ -118,7 +120,16 @@ def throughput(
                     )
             controllers = laws()
             start = time.perf_counter()
-            batch = rollout(vehicle, q0, v0, duration, scenario.dt, controllers, threads=cores)
+            batch = rollout(
+                vehicle,
+                q0,
+                v0,
+                duration,
+                scenario.dt,
+                controllers,
+                method=scenario.method,
+                threads=cores,
+            )
             times["rollout"].append(time.perf_counter() - start)
             if not (batch.status == "complete").all():
                 raise RuntimeError("rollout: a run diverged")
