@@ -273,7 +273,10 @@ def test_diverging_run_names_time_and_cause_and_keeps_the_partial_results(tmp_pa
             *("--quiet", "--no-html", "--out", out),
         ],
     )
-    assert_one_line_error(code, err, "diverged", "t = 1 s", "non-finite", str(out))
+    # the step warning foretold it (one line), then the one-line error
+    warning, error = err.splitlines()
+    assert warning.startswith("aiauv: warning: dt = 0.5 s is") and "stable step of RK4" in warning
+    assert_one_line_error(code, error, "diverged", "t = 1 s", "non-finite", str(out))
     rows = (out / "timeseries.csv").read_text().splitlines()
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "diverged"
