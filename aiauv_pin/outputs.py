@@ -33,8 +33,28 @@ def _import_plotting() -> None:
         import matplotlib.backends.backend_agg
         import matplotlib.pyplot  # noqa: F401
         import mpl_toolkits.mplot3d  # noqa: F401
+
+        _warm_plotting()
     except Exception:
         pass
+
+
+def _warm_plotting() -> None:
+    """Draw a small figure off screen with what the figures use first (log axis with math-text
+    tick labels, a legend with a math-text label, a title, a 3-D axes), so that matplotlib's lazy
+    one-time work (fonts, the math-text grammar, tick and marker set-up) is done, about 0.2 s per
+    process, before the figure processes fork. No backend is selected and nothing is written."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(2.0, 2.0), dpi=FIGURE_DPI)
+    ax = fig.add_subplot(2, 1, 1)
+    ax.set_yscale("log")
+    ax.plot([0.0, 1.0], [1e-4, 1e-1], label="$u_d$")
+    ax.legend()
+    ax.set(title="warm-up", xlabel="t [s]")
+    fig.add_subplot(2, 1, 2, projection="3d").plot([0.0, 1.0], [0.0, 1.0], [0.0, 1.0])
+    FigureCanvasAgg(fig).draw()
 
 
 def preload_plotting() -> None:
@@ -183,6 +203,10 @@ FIGURES = (
     "path_3d.png",
 )
 """File names of the figures, in drawing order."""
+
+#: Extra ``savefig`` options per format: PNG with zlib level 1, the same pixels as the default
+#: level 6 in about half the encoding time (files about 20 % larger).
+_SAVE_OPTIONS = {"png": {"pil_kwargs": {"compress_level": 1}}}
 
 #: Figures every run has (the others need the paper controller's diagnostics).
 PATH_FIGURES = ("fig2_cross_track.png", "path_3d.png")
@@ -365,7 +389,12 @@ def _render(
         fig.subplots_adjust(**_MARGINS[_LAYOUT_OF.get(name, "single")])
         path = figure_path(folder, name, figure_format)
         with atomic_path(path) as temporary:
-            fig.savefig(temporary, dpi=FIGURE_DPI, format=figure_format)
+            fig.savefig(
+                temporary,
+                dpi=FIGURE_DPI,
+                format=figure_format,
+                **_SAVE_OPTIONS.get(figure_format, {}),
+            )
         plt.close(fig)
         written.append(path)
     return written
