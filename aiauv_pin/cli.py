@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import gc
 import os
 import sys
@@ -212,19 +213,27 @@ def _run_simulate(args) -> int:
             f"({len(partial.t)} samples) written to {out}"
         ) from None
     with staged_folder(out) as staging:  # in place only once every file is written
-        content = write_results(
-            result, staging, {"vehicle": str(path), **timing}, figure_format=args.figure_format
-        )
-        if not args.no_html:
+        also = []
+        if not args.no_html:  # the page, written beside the figures (by whichever process is free)
             from .outputs import default_path_points
             from .playback import write_playback
 
-            write_playback(
-                vehicle,
-                result.trajectory,
-                staging / "playback.html",
-                path_points=default_path_points(result),
+            also.append(
+                functools.partial(
+                    write_playback,
+                    vehicle,
+                    result.trajectory,
+                    staging / "playback.html",
+                    path_points=default_path_points(result),
+                )
             )
+        content = write_results(
+            result,
+            staging,
+            {"vehicle": str(path), **timing},
+            figure_format=args.figure_format,
+            also=also,
+        )
     final = content["final"]
     errors = (
         f"final p_y = {final['p_y']:+.4f} m, p_z = {final['p_z']:+.4f} m"

@@ -15,9 +15,11 @@ is selected until figures are written (Agg). The figures are drawn by two proces
 
 from __future__ import annotations
 
+import functools
 import json
 import sys
 import threading
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -429,6 +431,120 @@ def _die_with_parent(parent: int) -> None:
         os._exit(1)
 
 
+#: The figures from the slowest to draw to the fastest (measured, 2026-11), the order in which
+#: :func:`_run_tasks` hands them out.
+_SLOWEST_FIRST = (
+    "fig7_pointing.png",
+    "fig2_cross_track.png",
+    "fig4_phi_tilde.png",
+    "fig5_omega_tilde.png",
+    "path_3d.png",
+    "fig3_surge.png",
+    "fig6_base_angles.png",
+)
+
+
+def _take_tasks(tasks, taken) -> None:
+    """Run the tasks no process has taken yet, one at a time (``taken``: shared next index)."""
+    while True:
+        with taken.get_lock():
+            index = taken.value
+            taken.value += 1
+        if index >= len(tasks):
+            return
+        tasks[index]()
+
+
+def _task_worker(tasks, taken, sender, parent: int) -> None:
+    """The forked process of :func:`_run_tasks`: take tasks, then send ``None`` or the exception."""
+    _die_with_parent(parent)
+    failure = None
+    try:
+        _take_tasks(tasks, taken)
+    except BaseException as exc:  # reported to the parent, which raises it
+        failure = exc
+    try:
+        sender.send(failure)
+    except Exception:  # an exception that does not pickle
+        sender.send(RuntimeError(f"{failure.__class__.__name__}: {failure}"))
+
+
+def _run_tasks(tasks, parallel: bool = True, here_first=None):
+    """Run zero-argument ``tasks`` (slowest first) in this process and one forked process.
+
+    Each process takes the next task nobody has taken, so both finish about together whatever
+    each task costs. The forked process (Linux, more than one CPU, ``parallel``) shares the run
+    without copying it, and is killed if this one dies (:func:`_die_with_parent`). Otherwise the
+    tasks run here, in order.
+
+    Args:
+        tasks: What to run; only side effects (files) count.
+        parallel: Use a second process where possible.
+        here_first: Run in this process before it takes tasks (while the other process starts on
+            them); its value is returned.
+
+    Raises:
+        The exception of a failed task, once every other task has run.
+    """
+    import os
+
+    context = _fork_context() if parallel and (os.cpu_count() or 1) > 1 else None
+    if context is None or len(tasks) < 2:
+        value = here_first() if here_first is not None else None
+        for task in tasks:
+            task()
+        return value
+    taken = context.Value("i", 0)
+    receiver, sender = context.Pipe(duplex=False)
+    worker = context.Process(
+        target=_task_worker, args=(tasks, taken, sender, os.getpid()), name="aiauv-figures"
+    )
+    worker.start()
+    sender.close()
+    try:
+        value = here_first() if here_first is not None else None
+        _take_tasks(tasks, taken)
+    except BaseException:
+        worker.kill()
+        worker.join()
+        raise
+    try:
+        failure = receiver.recv()
+    except EOFError:  # died without a word (killed)
+        worker.join()
+        failure = RuntimeError(f"the figure process died (exit status {worker.exitcode})")
+    worker.join()
+    receiver.close()
+    if failure is not None:
+        raise failure
+    return value
+
+
+def _prepare_figures(figure_format: str) -> None:
+    """Check the format and import matplotlib (Agg) here, before a figure process forks."""
+    if figure_format not in FIGURE_FORMATS:
+        raise ValueError(
+            f"unknown figure format '{figure_format}' (expected {', '.join(FIGURE_FORMATS)})"
+        )
+    _wait_for_preload()  # no import may be in progress in another thread when forking
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot
+    import mpl_toolkits.mplot3d  # noqa: F401
+
+
+def _figure_tasks(result: ScenarioResult, folder: Path, figure_format: str, drawing: dict):
+    """One task per figure of ``result``, slowest first."""
+    names = figures_of(result)
+    ordered = [name for name in _SLOWEST_FIRST if name in names]
+    ordered += [name for name in names if name not in ordered]
+    return [
+        functools.partial(_render, result, folder, (name,), figure_format, **drawing)
+        for name in ordered
+    ]
+
+
 def write_figures(
     result: ScenarioResult,
     folder: Path,
@@ -443,8 +559,8 @@ def write_figures(
     Error figures (cross-track, ``phi_tilde``, ``omega_tilde``) have a log-scale panel of the
     error's magnitude under the linear one, so that final errors of 1e-5 are visible; the 3-D path
     has equal axes. With ``parallel`` (on Linux, with more than one CPU) a forked process draws
-    half of them while this one draws the rest; that process is killed if this one dies
-    (:func:`_die_with_parent`).
+    some of them while this one draws the others (:func:`_run_tasks`); that process is killed if
+    this one dies (:func:`_die_with_parent`).
 
     Args:
         result: The run.
@@ -458,40 +574,11 @@ def write_figures(
     Returns:
         The files written, in the order of :data:`FIGURES`.
     """
-    if figure_format not in FIGURE_FORMATS:
-        raise ValueError(
-            f"unknown figure format '{figure_format}' (expected {', '.join(FIGURE_FORMATS)})"
-        )
-    drawing = {"vehicle_name": vehicle_name, "path_points": path_points}
-    import os
-
-    _wait_for_preload()  # no import may be in progress in another thread when forking
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot
-    import mpl_toolkits.mplot3d  # noqa: F401
-
+    _prepare_figures(figure_format)
     folder = Path(folder)
-    names = figures_of(result)
-    context = _fork_context() if parallel and (os.cpu_count() or 1) > 1 else None
-    if context is None or len(names) < len(FIGURES):
-        return _render(result, folder, names, figure_format, **drawing)
-    from concurrent.futures import ProcessPoolExecutor
-
-    # the 3-D path and the 3-panel figure are the slowest: split the work about evenly
-    mine = ("fig7_pointing.png", "fig2_cross_track.png", "fig4_phi_tilde.png")
-    theirs = tuple(name for name in FIGURES if name not in mine)
-    with ProcessPoolExecutor(
-        max_workers=1,
-        mp_context=context,
-        initializer=_die_with_parent,
-        initargs=(os.getpid(),),
-    ) as pool:
-        future = pool.submit(_render, result, folder, theirs, figure_format, **drawing)
-        _render(result, folder, mine, figure_format, **drawing)
-        future.result()
-    return [figure_path(folder, name, figure_format) for name in FIGURES]
+    drawing = {"vehicle_name": vehicle_name, "path_points": path_points}
+    _run_tasks(_figure_tasks(result, folder, figure_format, drawing), parallel)
+    return [figure_path(folder, name, figure_format) for name in figures_of(result)]
 
 
 def write_results(
@@ -502,8 +589,14 @@ def write_results(
     figure_format: str = "png",
     vehicle_name: str | None = None,
     path_points: np.ndarray | None = None,
+    also: Sequence[Callable[[], object]] = (),
+    parallel: bool = True,
 ) -> dict:
     """Write every result file of a run into ``out_dir``; return the summary.
+
+    The files are written by two processes where possible (see :func:`_run_tasks`), ``also``
+    first (the slowest, e.g. the playback page), then the figures and ``timeseries.csv``;
+    ``summary.json`` is written here meanwhile.
 
     Args:
         result: The run.
@@ -513,18 +606,23 @@ def write_results(
         vehicle_name: Name in the figure titles (default: the stem of ``extra["vehicle"]``, else
             the scenario's case).
         path_points: See :func:`write_figures`.
+        also: More tasks that write files (zero-argument callables), run beside the figures,
+            in this process or in the forked one (so only their files count).
+        parallel: See :func:`write_figures`.
     """
+    _prepare_figures(figure_format)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    write_timeseries(result, out_dir / "timeseries.csv")
-    content = write_summary(result, out_dir / "summary.json", extra)
     if vehicle_name is None and extra and extra.get("vehicle"):
         vehicle_name = Path(str(extra["vehicle"])).stem
-    write_figures(
-        result,
-        out_dir / "figures",
-        figure_format=figure_format,
-        vehicle_name=vehicle_name,
-        path_points=path_points,
+    drawing = {"vehicle_name": vehicle_name, "path_points": path_points}
+    tasks = [
+        *also,
+        *_figure_tasks(result, out_dir / "figures", figure_format, drawing),
+        functools.partial(write_timeseries, result, out_dir / "timeseries.csv"),
+    ]
+    return _run_tasks(
+        tasks,
+        parallel,
+        here_first=functools.partial(write_summary, result, out_dir / "summary.json", extra),
     )
-    return content

@@ -835,14 +835,14 @@ class VehicleScene:
         link_poses = np.empty((len(self._link_frames), count, 4, 4))
         trail = np.empty((count, 3))
         head = np.empty((count, 3)) if self.head_frame is not None else None
+        update = pin.updateFramePlacement  # the frames drawn only (same as framesForwardKinematics)
         for n in range(count):
-            pin.framesForwardKinematics(model, data, q[n])
-            placements = data.oMf
+            pin.forwardKinematics(model, data, q[n])
             for j, i in enumerate(self._link_frames):
-                link_poses[j, n] = placements[i].homogeneous
-            trail[n] = placements[self.trail_frame].translation
+                link_poses[j, n] = update(model, data, i).homogeneous
+            trail[n] = update(model, data, self.trail_frame).translation
             if head is not None:
-                head[n] = placements[self.head_frame].translation
+                head[n] = update(model, data, self.head_frame).translation
         link_index = {name: j for j, name in enumerate(self.links)}
         states = FrameStates(
             poses={f"{LINKS}/{name}": link_poses[j] for j, name in enumerate(self.links)},
@@ -879,9 +879,10 @@ class VehicleScene:
             x_ref = info.get("x_ref")
             if x_ref is not None:
                 x_ref = np.asarray(x_ref, dtype=float)
-                for n in range(count):
-                    if np.all(np.isfinite(x_ref[n])) and np.linalg.norm(x_ref[n]) > 0:
-                        pose[n, :3, :3] = _rotation_y_to(x_ref[n])
+                finite = np.all(np.isfinite(x_ref), axis=1)
+                usable = finite & (np.einsum("ij,ij->i", x_ref, x_ref) > 0.0)  # a direction
+                for n in np.flatnonzero(usable):
+                    pose[n, :3, :3] = _rotation_y_to(x_ref[n])
             states.poses[LOS] = pose
         return states
 
