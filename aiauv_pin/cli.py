@@ -405,8 +405,18 @@ def _run_annotate(args) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``aiauv`` argument parser with every subcommand."""
+#: Subcommands defined in this module: parsing one of them needs no other module's parser.
+LOCAL_COMMANDS = ("simulate", "build", "check", "annotate")
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``aiauv`` argument parser with every subcommand.
+
+    Args:
+        command: The first argument, if known: for one of :data:`LOCAL_COMMANDS` the subcommands
+            of other modules (bench, sweep, interop, linearize) are left out, sparing their
+            imports (about 0.06 s); the parse is the same.
+    """
     parser = OneLineArgumentParser(
         prog="aiauv",
         description="Simulation and control of articulated intervention AUVs.",
@@ -415,15 +425,17 @@ def build_parser() -> argparse.ArgumentParser:
         "--version", action="version", version=f"aiauv {_version()}", help="print the version"
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    _add_simulate(subparsers)
+    _add_build(subparsers)
+    _add_check(subparsers)
+    _add_annotate(subparsers)
+    if command in LOCAL_COMMANDS:
+        return parser
     from .bench import add_bench_parser
     from .interop.cli import add_interop_subcommands
     from .linearize_cli import add_linearize_parser
     from .sweep import add_sweep_subcommand
 
-    _add_simulate(subparsers)
-    _add_build(subparsers)
-    _add_check(subparsers)
-    _add_annotate(subparsers)
     add_bench_parser(subparsers)
     add_sweep_subcommand(subparsers)
     add_interop_subcommands(subparsers)
@@ -439,8 +451,9 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``aiauv`` console script."""
     from .errors import AiauvError
 
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    arguments = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(arguments[0] if arguments else None)
+    args = parser.parse_args(arguments)
     previous = warnings.showwarning
     warnings.showwarning = _show_warning
     try:
