@@ -158,10 +158,13 @@ def _distances_to_path(points: np.ndarray, path: np.ndarray, chunk: int = 256) -
     lengths = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
     distances = np.empty(len(points))
     for start in range(0, len(points), chunk):  # (chunk, N, 3) temporaries at most
-        point = points[start : start + chunk, None, :]
-        s = np.clip(np.einsum("fij,ij->fi", point - a, ab) / lengths, 0.0, 1.0)
-        closest = np.linalg.norm(a + s[..., None] * ab - point, axis=2)
-        distances[start : start + chunk] = np.min(closest, axis=1)
+        point = points[start : start + chunk]
+        s = np.clip(np.einsum("fij,ij->fi", point[:, None, :] - a, ab) / lengths, 0.0, 1.0)
+        # |a + s ab - point| per axis, summed in norm's order; sqrt after the min (monotonic)
+        squares = [(a[:, k] + s * ab[:, k] - point[:, k, None]) ** 2 for k in range(3)]
+        distances[start : start + chunk] = np.sqrt(
+            np.min((squares[0] + squares[1]) + squares[2], axis=1)
+        )
     return distances
 
 
