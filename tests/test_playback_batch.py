@@ -72,3 +72,17 @@ def test_same_hemisphere_flips_only_signs():
     np.testing.assert_array_equal(np.abs(flipped), np.abs(quaternions))
     np.testing.assert_array_equal(flipped[0], quaternions[0])
     assert np.all(np.einsum("ij,ij->i", flipped[1:], flipped[:-1]) >= 0.0)
+
+
+def test_distances_to_a_polyline_are_those_of_each_point():
+    rng = np.random.default_rng(5)
+    path = np.cumsum(rng.normal(size=(300, 3)), axis=0)
+    points = 3.0 * rng.normal(size=(700, 3))  # several chunks
+    a, ab = path[:-1], np.diff(path, axis=0)
+    expected = []
+    for point in points:  # closest point of each segment, then the closest segment
+        s = np.clip(np.einsum("ij,ij->i", point - a, ab) / np.einsum("ij,ij->i", ab, ab), 0.0, 1.0)
+        expected.append(np.min(np.linalg.norm(a + s[:, None] * ab - point, axis=1)))
+    got = playback._distances_to_path(points, path)
+    np.testing.assert_allclose(got, expected, rtol=1e-14, atol=0.0)
+    assert playback._distance_to_path(points[3], path) == got[3]
