@@ -28,6 +28,29 @@ from .atomic import atomic_path, write_text
 from .scenario import ScenarioResult, summary
 
 _preload: threading.Thread | None = None
+_stop_warming = threading.Event()  # set when the figures are due: the warm-up stops early
+_math_parser = None  # one math-text parser for every figure of this process (its cache shared)
+
+#: Math text the figures write (legends, axis labels) and the log axes' tick labels: parsed while
+#: the simulation runs (:func:`_warm_math`), so that drawing only looks them up. A string missing
+#: here is parsed when drawn, as before.
+_MATH_TEXT = (
+    "$p_y$",
+    "$p_z$",
+    "$e_1$",
+    "$e_2$",
+    "$u$",
+    "$u_d$",
+    r"$\tilde\phi$ [rad]",
+    r"$|\tilde\phi|$ [rad]",
+    r"$\tilde\omega_y$",
+    r"$\tilde\omega_z$",
+    "$q_{y,0}$",
+    "$q_{z,0}$",
+    *(f"$x^I_{axis}$" for axis in "xyz"),
+    *(rf"$x_{{ref,{axis}}}$" for axis in "xyz"),
+    *(rf"$\mathdefault{{10^{{{k}}}}}$" for k in range(0, -11, -1)),
+)
 
 
 def _import_plotting() -> None:
@@ -57,6 +80,32 @@ def _warm_plotting() -> None:
     ax.set(title="warm-up", xlabel="t [s]")
     fig.add_subplot(2, 1, 2, projection="3d").plot([0.0, 1.0], [0.0, 1.0], [0.0, 1.0])
     FigureCanvasAgg(fig).draw()
+    _warm_math()
+
+
+def _shared_math_parser():
+    """The math-text parser of this process's Agg figures (see :func:`_render`)."""
+    global _math_parser
+    if _math_parser is None:
+        from matplotlib.mathtext import MathTextParser
+
+        _math_parser = MathTextParser("path")  # what matplotlib's Agg renderer makes for itself
+    return _math_parser
+
+
+def _warm_math() -> None:
+    """Parse :data:`_MATH_TEXT` as the figures' 10-point labels at :data:`FIGURE_DPI`, until the
+    figures are due (:data:`_stop_warming`)."""
+    import matplotlib as mpl
+    from matplotlib.font_manager import FontProperties
+
+    parser = _shared_math_parser()
+    for size in ("xtick.labelsize", "legend.fontsize", "axes.labelsize"):
+        prop = FontProperties(size=mpl.rcParams[size])
+        for text in _MATH_TEXT:
+            if _stop_warming.is_set():
+                return
+            parser.parse(text, FIGURE_DPI, prop)
 
 
 def preload_plotting() -> None:
@@ -69,6 +118,7 @@ def preload_plotting() -> None:
 
 def _wait_for_preload() -> None:
     if _preload is not None:
+        _stop_warming.set()
         _preload.join()
 
 
@@ -389,6 +439,9 @@ def _render(
     for name in names:
         fig = _draw(name, result, plt, **drawing)
         fig.subplots_adjust(**_MARGINS[_LAYOUT_OF.get(name, "single")])
+        if figure_format == "png":  # the renderer savefig reuses, with the shared parser
+            fig.set_dpi(FIGURE_DPI)
+            fig.canvas.get_renderer().mathtext_parser = _shared_math_parser()
         path = figure_path(folder, name, figure_format)
         with atomic_path(path) as temporary:
             fig.savefig(
