@@ -32,8 +32,9 @@ _stop_warming = threading.Event()  # set when the figures are due: the warm-up s
 _math_parser = None  # one math-text parser for every figure of this process (its cache shared)
 
 #: Math text the figures write (legends, axis labels) and the log axes' tick labels: parsed while
-#: the simulation runs (:func:`_warm_math`), so that drawing only looks them up. A string missing
-#: here is parsed when drawn, as before.
+#: the simulation runs (:func:`_warm_math`), so that drawing them in this process only looks them
+#: up (a forked figure process parses its own, :func:`_forget_parsed_math`). A string missing here
+#: is parsed when drawn, as before.
 _MATH_TEXT = (
     "$p_y$",
     "$p_z$",
@@ -508,9 +509,21 @@ def _take_tasks(tasks, taken) -> None:
         tasks[index]()
 
 
+def _forget_parsed_math() -> None:
+    """Empty the math-text cache in a forked process: its entries hold the parent's fonts, whose
+    font files the two processes would read through one shared file offset (matplotlib itself
+    empties its font cache on fork for the same reason)."""
+    global _math_parser
+    _math_parser = None
+    mathtext = sys.modules.get("matplotlib.mathtext")
+    if mathtext is not None:
+        mathtext.MathTextParser._parse_cached.cache_clear()
+
+
 def _task_worker(tasks, taken, sender, parent: int) -> None:
     """The forked process of :func:`_run_tasks`: take tasks, then send ``None`` or the exception."""
     _die_with_parent(parent)
+    _forget_parsed_math()
     failure = None
     try:
         _take_tasks(tasks, taken)
@@ -537,7 +550,8 @@ def _run_tasks(tasks, parallel: bool = True, here_first=None):
             them); its value is returned.
 
     Raises:
-        The exception of a failed task, once every other task has run.
+        The exception of a failed task: at once (the forked process is stopped) if it failed
+        here; once this process has run the tasks left, if it failed in the forked process.
     """
     import os
 
