@@ -9,13 +9,35 @@ The main entry points::
     model = aiauv_pin.linearize(vehicle)          # linear model about straight-line motion
 """
 
+from typing import TYPE_CHECKING
+
 from .errors import AiauvError, SimulationDiverged, VehicleLoadError
 from .integrators import rk4_step, semi_implicit_euler_step
-from .linear_model import linearize, straight_line_trim
 from .loading import BUNDLED_CASES, bundled_urdf, load_vehicle
 from .rollout import Rollout, rollout
 from .simulation import Trajectory, simulate
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:
+    from .linear_model import linearize, straight_line_trim
+
+#: Names imported on first use (PEP 562): modules a simulation never needs.
+_LAZY = {"linearize": "linear_model", "straight_line_trim": "linear_model"}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})
+
 
 __all__ = [
     "BUNDLED_CASES",

@@ -170,13 +170,25 @@ def _simulate_command(case: str, duration: float, out: Path, html: bool) -> list
 
 def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5) -> dict:
     """Wall time of fresh ``aiauv simulate`` processes (warm cache), with and without playback,
-    interleaved; plus a fresh ``python -c "import aiauv_pin"`` for the import share."""
+    interleaved; plus a fresh ``python -c "import aiauv_pin"`` for the import share.
+
+    ``breakdown`` splits each run's wall time with its own ``summary.json``: ``setup_s`` (vehicle
+    loading and the compiled code's loading, ``setup_time``), ``simulation_s`` (``wall_time``), and
+    ``rest_s``, the remainder: start-up and imports (about ``import_only``), writing the files
+    (CSV, summary, figures, page) and the exit.
+    """
+    import json
+
     walls: dict[str, list[float]] = {"no_html": [], "with_html": [], "import_only": []}
+    parts: dict[str, dict[str, list[float]]] = {
+        name: {"setup_s": [], "simulation_s": [], "rest_s": []} for name in ("no_html", "with_html")
+    }
     with tempfile.TemporaryDirectory() as folder:
         base = Path(folder)
+        outs = {"no_html": base / "a", "with_html": base / "b"}
         commands = {
-            "no_html": _simulate_command(case, duration, base / "a", html=False),
-            "with_html": _simulate_command(case, duration, base / "b", html=True),
+            "no_html": _simulate_command(case, duration, outs["no_html"], html=False),
+            "with_html": _simulate_command(case, duration, outs["with_html"], html=True),
             "import_only": [sys.executable, "-c", "import aiauv_pin.cli"],
         }
         for command in commands.values():  # one untimed run each (page cache, numba cache)
@@ -186,6 +198,12 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
                 start = time.perf_counter()
                 subprocess.run(command, capture_output=True, check=True, cwd=base)
                 walls[name].append(time.perf_counter() - start)
+                if name in parts:
+                    summary = json.loads((outs[name] / "summary.json").read_text(encoding="utf-8"))
+                    parts[name]["setup_s"].append(summary["setup_time"])
+                    parts[name]["simulation_s"].append(summary["wall_time"])
+                    rest = walls[name][-1] - summary["setup_time"] - summary["wall_time"]
+                    parts[name]["rest_s"].append(rest)
     return {
         "case": case,
         "duration_s": duration,
@@ -197,6 +215,10 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
             for name, c in commands.items()
         },
         **{f"{name}_wall_s": _spread(w) for name, w in walls.items()},
+        "breakdown": {
+            name: {part: _spread(values) for part, values in split.items()}
+            for name, split in parts.items()
+        },
     }
 
 
@@ -382,6 +404,9 @@ def format_parts(results: dict) -> list[str]:
         spread("fresh 'aiauv simulate --no-html' wall", e2e["no_html_wall_s"], "s")
         spread("fresh 'aiauv simulate' (with playback) wall", e2e["with_html_wall_s"], "s")
         spread("fresh 'import aiauv_pin.cli' wall", e2e["import_only_wall_s"], "s")
+        for name, label in (("no_html", "--no-html"), ("with_html", "with playback")):
+            for part, values in e2e.get("breakdown", {}).get(name, {}).items():
+                spread(f"  {label}: {part[:-2]}", values, "s")
     acc = results.get("accuracy_per_cost")
     if acc:
         default = acc.get("default") or {}

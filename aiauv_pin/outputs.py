@@ -15,9 +15,11 @@ is selected until figures are written (Agg). The figures are drawn by two proces
 
 from __future__ import annotations
 
+import functools
 import json
 import sys
 import threading
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +28,30 @@ from .atomic import atomic_path, write_text
 from .scenario import ScenarioResult, summary
 
 _preload: threading.Thread | None = None
+_stop_warming = threading.Event()  # set when the figures are due: the warm-up stops early
+_math_parser = None  # one math-text parser for every figure of this process (its cache shared)
+
+#: Math text the figures write (legends, axis labels) and the log axes' tick labels: parsed while
+#: the simulation runs (:func:`_warm_math`), so that drawing them in this process only looks them
+#: up (a forked figure process parses its own, :func:`_forget_parsed_math`). A string missing here
+#: is parsed when drawn, as before.
+_MATH_TEXT = (
+    "$p_y$",
+    "$p_z$",
+    "$e_1$",
+    "$e_2$",
+    "$u$",
+    "$u_d$",
+    r"$\tilde\phi$ [rad]",
+    r"$|\tilde\phi|$ [rad]",
+    r"$\tilde\omega_y$",
+    r"$\tilde\omega_z$",
+    "$q_{y,0}$",
+    "$q_{z,0}$",
+    *(f"$x^I_{axis}$" for axis in "xyz"),
+    *(rf"$x_{{ref,{axis}}}$" for axis in "xyz"),
+    *(rf"$\mathdefault{{10^{{{k}}}}}$" for k in range(0, -11, -1)),
+)
 
 
 def _import_plotting() -> None:
@@ -33,8 +59,54 @@ def _import_plotting() -> None:
         import matplotlib.backends.backend_agg
         import matplotlib.pyplot  # noqa: F401
         import mpl_toolkits.mplot3d  # noqa: F401
+
+        _warm_plotting()
     except Exception:
         pass
+
+
+def _warm_plotting() -> None:
+    """Draw a small figure off screen with what the figures use first (log axis with math-text
+    tick labels, a legend with a math-text label, a title, a 3-D axes), so that matplotlib's lazy
+    one-time work (fonts, the math-text grammar, tick and marker set-up) is done, about 0.2 s per
+    process, before the figure processes fork. No backend is selected and nothing is written."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(2.0, 2.0), dpi=FIGURE_DPI)
+    ax = fig.add_subplot(2, 1, 1)
+    ax.set_yscale("log")
+    ax.plot([0.0, 1.0], [1e-4, 1e-1], label="$u_d$")
+    ax.legend()
+    ax.set(title="warm-up", xlabel="t [s]")
+    fig.add_subplot(2, 1, 2, projection="3d").plot([0.0, 1.0], [0.0, 1.0], [0.0, 1.0])
+    FigureCanvasAgg(fig).draw()
+    _warm_math()
+
+
+def _shared_math_parser():
+    """The math-text parser of this process's Agg figures (see :func:`_render`)."""
+    global _math_parser
+    if _math_parser is None:
+        from matplotlib.mathtext import MathTextParser
+
+        _math_parser = MathTextParser("path")  # what matplotlib's Agg renderer makes for itself
+    return _math_parser
+
+
+def _warm_math() -> None:
+    """Parse :data:`_MATH_TEXT` as the figures' 10-point labels at :data:`FIGURE_DPI`, until the
+    figures are due (:data:`_stop_warming`)."""
+    import matplotlib as mpl
+    from matplotlib.font_manager import FontProperties
+
+    parser = _shared_math_parser()
+    for size in ("xtick.labelsize", "legend.fontsize", "axes.labelsize"):
+        prop = FontProperties(size=mpl.rcParams[size])
+        for text in _MATH_TEXT:
+            if _stop_warming.is_set():
+                return
+            parser.parse(text, FIGURE_DPI, prop)
 
 
 def preload_plotting() -> None:
@@ -47,6 +119,7 @@ def preload_plotting() -> None:
 
 def _wait_for_preload() -> None:
     if _preload is not None:
+        _stop_warming.set()
         _preload.join()
 
 
@@ -183,6 +256,10 @@ FIGURES = (
     "path_3d.png",
 )
 """File names of the figures, in drawing order."""
+
+#: Extra ``savefig`` options per format: PNG with zlib level 1, the same pixels as the default
+#: level 6 in about half the encoding time (files about 20 % larger).
+_SAVE_OPTIONS = {"png": {"pil_kwargs": {"compress_level": 1}}}
 
 #: Figures every run has (the others need the paper controller's diagnostics).
 PATH_FIGURES = ("fig2_cross_track.png", "path_3d.png")
@@ -363,9 +440,17 @@ def _render(
     for name in names:
         fig = _draw(name, result, plt, **drawing)
         fig.subplots_adjust(**_MARGINS[_LAYOUT_OF.get(name, "single")])
+        if figure_format == "png":  # the renderer savefig reuses, with the shared parser
+            fig.set_dpi(FIGURE_DPI)
+            fig.canvas.get_renderer().mathtext_parser = _shared_math_parser()
         path = figure_path(folder, name, figure_format)
         with atomic_path(path) as temporary:
-            fig.savefig(temporary, dpi=FIGURE_DPI, format=figure_format)
+            fig.savefig(
+                temporary,
+                dpi=FIGURE_DPI,
+                format=figure_format,
+                **_SAVE_OPTIONS.get(figure_format, {}),
+            )
         plt.close(fig)
         written.append(path)
     return written
@@ -400,6 +485,133 @@ def _die_with_parent(parent: int) -> None:
         os._exit(1)
 
 
+#: The figures from the slowest to draw to the fastest (measured, 2026-11), the order in which
+#: :func:`_run_tasks` hands them out.
+_SLOWEST_FIRST = (
+    "fig7_pointing.png",
+    "fig2_cross_track.png",
+    "fig4_phi_tilde.png",
+    "fig5_omega_tilde.png",
+    "path_3d.png",
+    "fig3_surge.png",
+    "fig6_base_angles.png",
+)
+
+
+def _take_tasks(tasks, taken) -> None:
+    """Run the tasks no process has taken yet, one at a time (``taken``: shared next index)."""
+    while True:
+        with taken.get_lock():
+            index = taken.value
+            taken.value += 1
+        if index >= len(tasks):
+            return
+        tasks[index]()
+
+
+def _forget_parsed_math() -> None:
+    """Empty the math-text cache in a forked process: its entries hold the parent's fonts, whose
+    font files the two processes would read through one shared file offset (matplotlib itself
+    empties its font cache on fork for the same reason)."""
+    global _math_parser
+    _math_parser = None
+    mathtext = sys.modules.get("matplotlib.mathtext")
+    if mathtext is not None:
+        mathtext.MathTextParser._parse_cached.cache_clear()
+
+
+def _task_worker(tasks, taken, sender, parent: int) -> None:
+    """The forked process of :func:`_run_tasks`: take tasks, then send ``None`` or the exception."""
+    _die_with_parent(parent)
+    _forget_parsed_math()
+    failure = None
+    try:
+        _take_tasks(tasks, taken)
+    except BaseException as exc:  # reported to the parent, which raises it
+        failure = exc
+    try:
+        sender.send(failure)
+    except Exception:  # an exception that does not pickle
+        sender.send(RuntimeError(f"{failure.__class__.__name__}: {failure}"))
+
+
+def _run_tasks(tasks, parallel: bool = True, here_first=None):
+    """Run zero-argument ``tasks`` (slowest first) in this process and one forked process.
+
+    Each process takes the next task nobody has taken, so both finish about together whatever
+    each task costs. The forked process (Linux, more than one CPU, ``parallel``) shares the run
+    without copying it, and is killed if this one dies (:func:`_die_with_parent`). Otherwise the
+    tasks run here, in order.
+
+    Args:
+        tasks: What to run; only side effects (files) count.
+        parallel: Use a second process where possible.
+        here_first: Run in this process before it takes tasks (while the other process starts on
+            them); its value is returned.
+
+    Raises:
+        The exception of a failed task: at once (the forked process is stopped) if it failed
+        here; once this process has run the tasks left, if it failed in the forked process.
+    """
+    import os
+
+    context = _fork_context() if parallel and (os.cpu_count() or 1) > 1 else None
+    if context is None or len(tasks) < 2:
+        value = here_first() if here_first is not None else None
+        for task in tasks:
+            task()
+        return value
+    taken = context.Value("i", 0)
+    receiver, sender = context.Pipe(duplex=False)
+    worker = context.Process(
+        target=_task_worker, args=(tasks, taken, sender, os.getpid()), name="aiauv-figures"
+    )
+    worker.start()
+    sender.close()
+    try:
+        value = here_first() if here_first is not None else None
+        _take_tasks(tasks, taken)
+    except BaseException:
+        worker.kill()
+        worker.join()
+        raise
+    try:
+        failure = receiver.recv()
+    except EOFError:  # died without a word (killed)
+        worker.join()
+        failure = RuntimeError(f"the figure process died (exit status {worker.exitcode})")
+    worker.join()
+    receiver.close()
+    if failure is not None:
+        raise failure
+    return value
+
+
+def _prepare_figures(figure_format: str) -> None:
+    """Check the format and import matplotlib (Agg) here, before a figure process forks."""
+    if figure_format not in FIGURE_FORMATS:
+        raise ValueError(
+            f"unknown figure format '{figure_format}' (expected {', '.join(FIGURE_FORMATS)})"
+        )
+    _wait_for_preload()  # no import may be in progress in another thread when forking
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot
+    import mpl_toolkits.mplot3d  # noqa: F401
+
+
+def _figure_tasks(result: ScenarioResult, folder: Path, figure_format: str, drawing: dict):
+    """One task per figure of ``result``, slowest first."""
+    names = figures_of(result)
+    ordered = [name for name in _SLOWEST_FIRST if name in names]
+    ordered += [name for name in names if name not in ordered]
+    return [
+        functools.partial(_render, result, folder, (name,), figure_format, **drawing)
+        for name in ordered
+    ]
+
+
 def write_figures(
     result: ScenarioResult,
     folder: Path,
@@ -414,8 +626,8 @@ def write_figures(
     Error figures (cross-track, ``phi_tilde``, ``omega_tilde``) have a log-scale panel of the
     error's magnitude under the linear one, so that final errors of 1e-5 are visible; the 3-D path
     has equal axes. With ``parallel`` (on Linux, with more than one CPU) a forked process draws
-    half of them while this one draws the rest; that process is killed if this one dies
-    (:func:`_die_with_parent`).
+    some of them while this one draws the others (:func:`_run_tasks`); that process is killed if
+    this one dies (:func:`_die_with_parent`).
 
     Args:
         result: The run.
@@ -429,40 +641,11 @@ def write_figures(
     Returns:
         The files written, in the order of :data:`FIGURES`.
     """
-    if figure_format not in FIGURE_FORMATS:
-        raise ValueError(
-            f"unknown figure format '{figure_format}' (expected {', '.join(FIGURE_FORMATS)})"
-        )
-    drawing = {"vehicle_name": vehicle_name, "path_points": path_points}
-    import os
-
-    _wait_for_preload()  # no import may be in progress in another thread when forking
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot
-    import mpl_toolkits.mplot3d  # noqa: F401
-
+    _prepare_figures(figure_format)
     folder = Path(folder)
-    names = figures_of(result)
-    context = _fork_context() if parallel and (os.cpu_count() or 1) > 1 else None
-    if context is None or len(names) < len(FIGURES):
-        return _render(result, folder, names, figure_format, **drawing)
-    from concurrent.futures import ProcessPoolExecutor
-
-    # the 3-D path and the 3-panel figure are the slowest: split the work about evenly
-    mine = ("fig7_pointing.png", "fig2_cross_track.png", "fig4_phi_tilde.png")
-    theirs = tuple(name for name in FIGURES if name not in mine)
-    with ProcessPoolExecutor(
-        max_workers=1,
-        mp_context=context,
-        initializer=_die_with_parent,
-        initargs=(os.getpid(),),
-    ) as pool:
-        future = pool.submit(_render, result, folder, theirs, figure_format, **drawing)
-        _render(result, folder, mine, figure_format, **drawing)
-        future.result()
-    return [figure_path(folder, name, figure_format) for name in FIGURES]
+    drawing = {"vehicle_name": vehicle_name, "path_points": path_points}
+    _run_tasks(_figure_tasks(result, folder, figure_format, drawing), parallel)
+    return [figure_path(folder, name, figure_format) for name in figures_of(result)]
 
 
 def write_results(
@@ -473,8 +656,14 @@ def write_results(
     figure_format: str = "png",
     vehicle_name: str | None = None,
     path_points: np.ndarray | None = None,
+    also: Sequence[Callable[[], object]] = (),
+    parallel: bool = True,
 ) -> dict:
     """Write every result file of a run into ``out_dir``; return the summary.
+
+    The files are written by two processes where possible (see :func:`_run_tasks`), ``also``
+    first (the slowest, e.g. the playback page), then the figures and ``timeseries.csv``;
+    ``summary.json`` is written here meanwhile.
 
     Args:
         result: The run.
@@ -484,18 +673,23 @@ def write_results(
         vehicle_name: Name in the figure titles (default: the stem of ``extra["vehicle"]``, else
             the scenario's case).
         path_points: See :func:`write_figures`.
+        also: More tasks that write files (zero-argument callables), run beside the figures,
+            in this process or in the forked one (so only their files count).
+        parallel: See :func:`write_figures`.
     """
+    _prepare_figures(figure_format)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    write_timeseries(result, out_dir / "timeseries.csv")
-    content = write_summary(result, out_dir / "summary.json", extra)
     if vehicle_name is None and extra and extra.get("vehicle"):
         vehicle_name = Path(str(extra["vehicle"])).stem
-    write_figures(
-        result,
-        out_dir / "figures",
-        figure_format=figure_format,
-        vehicle_name=vehicle_name,
-        path_points=path_points,
+    drawing = {"vehicle_name": vehicle_name, "path_points": path_points}
+    tasks = [
+        *also,
+        *_figure_tasks(result, out_dir / "figures", figure_format, drawing),
+        functools.partial(write_timeseries, result, out_dir / "timeseries.csv"),
+    ]
+    return _run_tasks(
+        tasks,
+        parallel,
+        here_first=functools.partial(write_summary, result, out_dir / "summary.json", extra),
     )
-    return content

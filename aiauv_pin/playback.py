@@ -22,7 +22,6 @@ import os
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 
 from .atomic import atomic_path
 from .simulation import Trajectory
@@ -151,13 +150,77 @@ def frame_indices(t: np.ndarray, fps: float, max_frames: int | None = None) -> n
     return index
 
 
-def _distance_to_path(point: np.ndarray, path: np.ndarray) -> float:
-    """Distance from a point to a polyline (N, 3) [m]."""
+def _distances_to_path(points: np.ndarray, path: np.ndarray, chunk: int = 256) -> np.ndarray:
+    """Distance from each point (F, 3) to a polyline (N, 3), (F,) [m]: to its closest point."""
+    points = np.asarray(points, dtype=float)
     a, b = path[:-1], path[1:]
     ab = b - a
     lengths = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
-    s = np.clip(np.einsum("ij,ij->i", point - a, ab) / lengths, 0.0, 1.0)
-    return float(np.min(np.linalg.norm(a + s[:, None] * ab - point, axis=1)))
+    distances = np.empty(len(points))
+    for start in range(0, len(points), chunk):  # (chunk, N, 3) temporaries at most
+        point = points[start : start + chunk]
+        s = np.clip(np.einsum("fij,ij->fi", point[:, None, :] - a, ab) / lengths, 0.0, 1.0)
+        # |a + s ab - point| per axis, summed in norm's order; sqrt after the min (monotonic)
+        squares = [(a[:, k] + s * ab[:, k] - point[:, k, None]) ** 2 for k in range(3)]
+        distances[start : start + chunk] = np.sqrt(
+            np.min((squares[0] + squares[1]) + squares[2], axis=1)
+        )
+    return distances
+
+
+def _distance_to_path(point: np.ndarray, path: np.ndarray) -> float:
+    """Distance from a point (3,) to a polyline (N, 3) [m]."""
+    return float(_distances_to_path(np.asarray(point, dtype=float)[None], path)[0])
+
+
+def rotation_quaternions(rotations: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``(x, y, z, w)`` of rotation matrices (..., 3, 3) -> (..., 4).
+
+    Shepperd's method as Eigen writes it (``Quaternion(const Matrix3&)``: from the trace when it
+    is positive, else from the largest diagonal entry), with the same operations in the same
+    order, so that it returns the bits of ``pin.Quaternion(R).coeffs()``, for many matrices at once.
+    """
+    rotations = np.asarray(rotations, dtype=float)
+    m = rotations.reshape(-1, 3, 3)
+    out = np.empty((len(m), 4))
+    trace = m[:, 0, 0] + (m[:, 1, 1] + m[:, 2, 2])
+    positive = trace > 0.0
+    root = np.sqrt(trace[positive] + 1.0)
+    half_inverse = 0.5 / root
+    mp = m[positive]
+    out[positive, 0] = (mp[:, 2, 1] - mp[:, 1, 2]) * half_inverse
+    out[positive, 1] = (mp[:, 0, 2] - mp[:, 2, 0]) * half_inverse
+    out[positive, 2] = (mp[:, 1, 0] - mp[:, 0, 1]) * half_inverse
+    out[positive, 3] = 0.5 * root
+    for n in np.flatnonzero(~positive):  # rare on a smooth motion
+        r = m[n]
+        i = 0
+        if r[1, 1] > r[0, 0]:
+            i = 1
+        if r[2, 2] > r[i, i]:
+            i = 2
+        j, k = (i + 1) % 3, (i + 2) % 3
+        root_i = math.sqrt(r[i, i] - r[j, j] - r[k, k] + 1.0)
+        half_inverse_i = 0.5 / root_i
+        out[n, i] = 0.5 * root_i
+        out[n, 3] = (r[k, j] - r[j, k]) * half_inverse_i
+        out[n, j] = (r[j, i] + r[i, j]) * half_inverse_i
+        out[n, k] = (r[k, i] + r[i, k]) * half_inverse_i
+    return out.reshape((*rotations.shape[:-2], 4))
+
+
+def same_hemisphere(quaternions: np.ndarray) -> np.ndarray:
+    """Quaternions (F, 4) with signs flipped so that each is on the same side as the one before
+    (non-negative dot product), the first kept: keys that interpolate along the short arc."""
+    quaternions = np.array(quaternions, dtype=float)
+    dots = np.einsum("ij,ij->i", quaternions[1:], quaternions[:-1])
+    sign = 1.0
+    signs = np.ones(len(quaternions))
+    for k, dot in enumerate(dots.tolist(), start=1):
+        # against the previous key as flipped: its dot product is sign * dot
+        sign = -1.0 if sign * dot < 0.0 else 1.0
+        signs[k] = sign
+    return quaternions * signs[:, None]
 
 
 def legend_entries(commands: list[dict]) -> list[tuple[str, str]]:
@@ -183,8 +246,11 @@ def _round(values: np.ndarray) -> list[float]:
     return rounded.tolist()
 
 
+_FRAME_INFO = ("thrust", "x_ref", "p")  # the diagnostics a frame draws
+
+
 def _info_at(info: dict[str, np.ndarray], k: int) -> dict[str, np.ndarray]:
-    return {key: value[k] for key, value in info.items() if key in ("thrust", "x_ref", "p")}
+    return {key: value[k] for key, value in info.items() if key in _FRAME_INFO}
 
 
 def playback_commands(
@@ -245,28 +311,18 @@ def playback_commands(
         max_frames = max(2, KEYFRAME_BUDGET // (_CHARS_PER_NUMBER * numbers))
     index = frame_indices(t, fps, max_frames)
 
-    poses: dict[str, list[np.ndarray]] = {}
-    scales: dict[str, list[np.ndarray]] = {}
-    centroid: list[np.ndarray] = []
-    trail: list[np.ndarray] = []
-    for k in index:
-        state = scene.frame(q[k], _info_at(info, int(k)))
-        for path, pose in state.poses.items():
-            poses.setdefault(path, []).append(pose)
-        for path, scale in state.scales.items():
-            scales.setdefault(path, []).append(scale)
-        centroid.append(state.centroid)
-        trail.append(scene.trail_point(q[k]))
+    states = scene.frames(q[index], {key: info[key][index] for key in _FRAME_INFO if key in info})
+    poses, scales, centroid = states.poses, states.scales, states.centroid
     if not show_los:
         poses.pop(LOS, None)
     times = _round(t[index] - t[0])
     # camera: far enough to show the path from wherever the vehicle is (the view is centred on it)
-    offset = max(_distance_to_path(c, scene.path_points) for c in centroid)
+    offset = float(np.max(_distances_to_path(centroid, scene.path_points)))
     scene.camera_distance = max(scene.camera_distance, 1.2 * offset)
 
     commands = scene.static_commands()
-    if len(trail) >= 2:
-        points = np.array(trail)
+    if len(states.trail) >= 2:
+        points = states.trail
         segments = np.stack((points[:-1], points[1:]), axis=1).reshape(-1, 3)
         commands.append(set_object(TRAIL, line_object(segments, TRAIL_COLOR)))
     # the first frame, so that the scene is right before the animation starts (and if it is paused)
@@ -285,25 +341,16 @@ def playback_commands(
         return {"name": f".{name}", "type": kind, "times": times, "values": _round(values)}
 
     animations = []
-    for path, frames in poses.items():
-        matrices = np.array(frames)
-        quaternions = np.array([pin.Quaternion(m[:3, :3]).coeffs() for m in matrices])  # x y z w
-        # same hemisphere frame to frame, so that the keys interpolate along the short arc
-        for k in range(1, len(quaternions)):
-            if quaternions[k] @ quaternions[k - 1] < 0:
-                quaternions[k] = -quaternions[k]
+    for path, matrices in poses.items():
+        quaternions = same_hemisphere(rotation_quaternions(matrices[:, :3, :3]))  # x y z w
         tracks = [
             track("position", "vector3", matrices[:, :3, 3]),
             track("quaternion", "quaternion", quaternions),
         ]
         animations.append({"path": path, "clip": clip(tracks)})
     for path, frames in scales.items():
-        animations.append(
-            {"path": path, "clip": clip([track("scale", "vector3", np.array(frames))])}
-        )
-    animations.append(
-        {"path": ROOT, "clip": clip([track("position", "vector3", -np.array(centroid))])}
-    )
+        animations.append({"path": path, "clip": clip([track("scale", "vector3", frames)])})
+    animations.append({"path": ROOT, "clip": clip([track("position", "vector3", -centroid)])})
     commands.append(
         {
             "type": "set_animation",

@@ -530,13 +530,16 @@ def _arrow_commands(path: str, color, *, shaft_radius: float, head_fraction: flo
     ]
 
 
-def _thrust_scale(thrust: float, max_thrust: float, length: float) -> np.ndarray:
+def _thrust_scales(thrust: np.ndarray, max_thrust: float, length: float) -> np.ndarray:
+    """Scales ``(1, s, 1)`` of a thruster's arrow, one row per thrust (F,) [N] -> (F, 3): ``s`` is
+    the thrust's fraction of ``max_thrust``, clipped to [-1, 1], times ``length`` [m]."""
+    fraction = thrust / max_thrust if max_thrust > 0 else np.zeros_like(thrust)
+    s = np.clip(fraction, -1.0, 1.0) * length
     # never exactly zero: a singular matrix has no inverse for the normal matrix
-    fraction = thrust / max_thrust if max_thrust > 0 else 0.0
-    s = float(np.clip(fraction, -1.0, 1.0)) * length
-    if abs(s) < 1e-4:
-        s = 1e-4
-    return np.array([1.0, s, 1.0])
+    s[np.abs(s) < 1e-4] = 1e-4
+    scales = np.ones((len(s), 3))
+    scales[:, 1] = s
+    return scales
 
 
 def path_segments(points: np.ndarray, tick: float = 0.04, step: float | None = None) -> np.ndarray:
@@ -607,6 +610,23 @@ class FrameState:
     poses: dict[str, np.ndarray] = field(default_factory=dict)
     scales: dict[str, np.ndarray] = field(default_factory=dict)
     centroid: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+
+@dataclass
+class FrameStates:
+    """What moves in a sequence of frames (:meth:`VehicleScene.frames`), as arrays over frames.
+
+    Attributes:
+        poses: Node path -> world (or parent-frame) poses (F, 4, 4).
+        scales: Node path -> scales ``(sx, sy, sz)`` (F, 3).
+        centroid: Centroid of the link visuals in the world (F, 3) [m].
+        trail: World position of the trail's frame (:meth:`VehicleScene.trail_point`) (F, 3) [m].
+    """
+
+    poses: dict[str, np.ndarray] = field(default_factory=dict)
+    scales: dict[str, np.ndarray] = field(default_factory=dict)
+    centroid: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    trail: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
 
 class VehicleScene:
@@ -786,43 +806,85 @@ class VehicleScene:
         q = np.asarray(q, dtype=float)
         if q.shape != (self.vehicle.nq,) or not np.all(np.isfinite(q)):
             raise ValueError(f"q must be {self.vehicle.nq} finite numbers, got shape {q.shape}")
+        rows = {}
+        for key, value in (info or {}).items():
+            if key in ("thrust", "x_ref", "p") and value is not None:
+                rows[key] = np.asarray(value, dtype=float).ravel()[None]
+        states = self.frames(q[None], rows)
+        return FrameState(
+            poses={path: poses[0] for path, poses in states.poses.items()},
+            scales={path: scales[0] for path, scales in states.scales.items()},
+            centroid=states.centroid[0],
+        )
+
+    def frames(self, q: np.ndarray, info: Mapping[str, np.ndarray] | None = None) -> FrameStates:
+        """:meth:`frame` of many configurations at once (one kinematics pass each, the rest in
+        arrays): what a playback of thousands of frames needs.
+
+        Args:
+            q: Finite configurations, one per row (F, nq).
+            info: Optional rows per frame: ``thrust`` (F, n_thrusters) [N], ``x_ref`` (F, 3) LOS
+                direction in the world, ``p`` (F, 3) end-effector position [m] (default: the
+                ``end_effector`` frame).
+        """
+        q = np.asarray(q, dtype=float)
+        count = len(q)
         info = info or {}
         model, data = self.vehicle.model, self._data
-        pin.framesForwardKinematics(model, data, q)
-        state = FrameState()
-        for name, i in zip(self.links, self._link_frames, strict=True):
-            state.poses[f"{LINKS}/{name}"] = data.oMf[i].homogeneous
-        centres = np.array(
-            [(state.poses[f"{LINKS}/{v.link}"] @ v.placement)[:3, 3] for v in self.visuals]
+        # one kinematics pass per frame: link poses, trail point and head position
+        link_poses = np.empty((len(self._link_frames), count, 4, 4))
+        trail = np.empty((count, 3))
+        head = np.empty((count, 3)) if self.head_frame is not None else None
+        update = pin.updateFramePlacement  # the frames drawn only (same as framesForwardKinematics)
+        for n in range(count):
+            pin.forwardKinematics(model, data, q[n])
+            for j, i in enumerate(self._link_frames):
+                link_poses[j, n] = update(model, data, i).homogeneous
+            trail[n] = update(model, data, self.trail_frame).translation
+            if head is not None:
+                head[n] = update(model, data, self.head_frame).translation
+        link_index = {name: j for j, name in enumerate(self.links)}
+        states = FrameStates(
+            poses={f"{LINKS}/{name}": link_poses[j] for j, name in enumerate(self.links)},
+            trail=trail,
         )
-        state.centroid = centres.mean(axis=0)
-        thrust = info.get("thrust")
+        centres = np.stack(
+            [
+                np.matmul(link_poses[link_index[v.link]], v.placement)[:, :3, 3]
+                for v in self.visuals
+            ],
+            axis=1,
+        )
+        states.centroid = centres.mean(axis=1)
         names = self.vehicle.thruster_names
+        thrust = info.get("thrust")
         if thrust is not None:
-            thrust = np.asarray(thrust, dtype=float).ravel()
-            if thrust.shape != (len(names),):
-                raise ValueError(
-                    f"info['thrust'] must have {len(names)} entries, got {thrust.size}"
-                )
+            thrust = np.asarray(thrust, dtype=float)
+            if thrust.ndim != 2 or thrust.shape != (count, len(names)):
+                entries = thrust.shape[-1] if thrust.ndim == 2 else thrust.size
+                raise ValueError(f"info['thrust'] must have {len(names)} entries, got {entries}")
         for t in self.thrusters:
-            value = 0.0 if thrust is None else float(thrust[names.index(t.name)])
-            if not math.isfinite(value):
-                value = 0.0
-            state.scales[self.thruster_path(t.name)] = _thrust_scale(
+            if thrust is None:
+                value = np.zeros(count)
+            else:
+                value = thrust[:, names.index(t.name)].copy()
+                value[~np.isfinite(value)] = 0.0
+            states.scales[self.thruster_path(t.name)] = _thrust_scales(
                 value, t.max_thrust, self.arrow_length
             )
-        x_ref = info.get("x_ref")
-        if self.head_frame is not None:
-            head = info.get("p")
-            head = (
-                data.oMf[self.head_frame].translation if head is None else np.asarray(head, float)
-            )
-            pose = np.eye(4)
-            pose[:3, 3] = head
-            if x_ref is not None and np.all(np.isfinite(x_ref)) and np.linalg.norm(x_ref) > 0:
-                pose[:3, :3] = _rotation_y_to(np.asarray(x_ref, dtype=float))
-            state.poses[LOS] = pose
-        return state
+        if head is not None:
+            p = info.get("p")
+            pose = np.tile(np.eye(4), (count, 1, 1))
+            pose[:, :3, 3] = head if p is None else np.asarray(p, dtype=float)
+            x_ref = info.get("x_ref")
+            if x_ref is not None:
+                x_ref = np.asarray(x_ref, dtype=float)
+                finite = np.all(np.isfinite(x_ref), axis=1)
+                usable = finite & (np.einsum("ij,ij->i", x_ref, x_ref) > 0.0)  # a direction
+                for n in np.flatnonzero(usable):
+                    pose[n, :3, :3] = _rotation_y_to(x_ref[n])
+            states.poses[LOS] = pose
+        return states
 
     def has_los(self, info: Mapping[str, object] | None) -> bool:
         """Whether the LOS arrow is shown for these diagnostics."""

@@ -1,0 +1,77 @@
+"""The result files' task runner (:func:`aiauv_pin.outputs._run_tasks`) and its forked process.
+
+Every task runs exactly once whichever process takes it; a failure in either process is raised
+and leaves no process behind; the forked process starts with an empty math-text cache (its entries
+hold the parent's fonts, whose files the two processes would otherwise read through one shared
+file offset: garbled glyphs, ``FT_Load_Glyph ... failed``).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from functools import partial
+from pathlib import Path
+
+import pytest
+
+from aiauv_pin import outputs
+
+pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="fork")
+
+
+def _write(folder: Path, name: str) -> None:
+    (folder / name).write_text(str(os.getpid()))
+
+
+def _fail(message: str) -> None:
+    raise ValueError(message)
+
+
+def _math_cache_size(folder: Path) -> None:
+    from matplotlib.mathtext import MathTextParser
+
+    info = MathTextParser._parse_cached.cache_info()
+    (folder / f"math-{os.getpid()}").write_text(str(info.currsize))
+
+
+@pytest.mark.parametrize("parallel", [True, False])
+def test_every_task_runs_once(tmp_path, parallel):
+    tasks = [partial(_write, tmp_path, f"task{k}") for k in range(9)]
+    value = outputs._run_tasks(tasks, parallel, here_first=lambda: "summary")
+    assert value == "summary"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [f"task{k}" for k in range(9)]
+    writers = {p.read_text() for p in tmp_path.iterdir()}
+    if not parallel:
+        assert writers == {str(os.getpid())}
+
+
+@pytest.mark.parametrize("where", range(3))
+def test_a_failed_task_is_raised_whichever_process_ran_it(tmp_path, where):
+    tasks = [partial(_write, tmp_path, f"task{k}") for k in range(4)]
+    tasks.insert(where, partial(_fail, "bad figure"))
+    with pytest.raises(ValueError, match="bad figure"):
+        outputs._run_tasks(tasks, True)
+    assert not [p for p in outputs._fork_context().active_children() if p.name == "aiauv-figures"]
+
+
+def test_the_forked_process_parses_its_own_math_text(tmp_path):
+    from matplotlib.mathtext import MathTextParser
+
+    outputs._prepare_figures("png")
+    outputs._stop_warming.clear()  # an earlier run in this process may have stopped the warm-up
+    outputs._warm_math()
+    assert MathTextParser._parse_cached.cache_info().currsize > 0
+    tasks = [partial(_math_cache_size, tmp_path) for _ in range(2)]
+    # the first task is taken by one process, the second by the other or the same: both must
+    # see an empty cache if they are the forked process
+    tasks.insert(1, partial(_write, tmp_path, "slow"))
+    outputs._run_tasks(tasks, True, here_first=partial(_write, tmp_path, "here"))
+    sizes = {
+        p.name.split("-")[1]: int(p.read_text()) for p in tmp_path.iterdir() if "math" in p.name
+    }
+    for pid, size in sizes.items():
+        if pid != str(os.getpid()):
+            assert size == 0
+        else:
+            assert size > 0
