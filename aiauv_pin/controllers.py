@@ -81,13 +81,14 @@ class CompiledController:
         """Number of floats in one info row."""
         return sum(int(np.prod(shape, dtype=int)) for shape in self.info_shapes.values())
 
-    def unpack(self, block: np.ndarray) -> dict[str, np.ndarray]:
-        """Split info rows ``(..., info_width)`` into the named diagnostics (copies)."""
+    def unpack(self, block: np.ndarray, *, copy: bool = True) -> dict[str, np.ndarray]:
+        """Split info rows ``(..., info_width)`` into the named diagnostics: copies, or with
+        ``copy=False`` views into ``block`` (no memory of their own)."""
         out = {}
         offset = 0
         for key, shape in self.info_shapes.items():
             size = int(np.prod(shape, dtype=int))
-            part = block[..., offset : offset + size]
-            out[key] = np.array(part.reshape(block.shape[:-1] + tuple(shape)))
+            part = block[..., offset : offset + size].reshape(block.shape[:-1] + tuple(shape))
+            out[key] = np.array(part) if copy else part
             offset += size
         return out

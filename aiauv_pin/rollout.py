@@ -247,7 +247,9 @@ def rollout(
     check_log_size(n_steps, log_every, nq, nv, n_runs)
     width = laws[0].info_width
     n_logs = n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
-    log = np.full((n_runs, n_logs, 1 + nq + 2 * nv + width), np.nan)
+    # written by the run that owns it, in its own thread (no serial first pass over what can be
+    # gigabytes); rows a diverged run never reached are set to NaN after it
+    log = np.empty((n_runs, n_logs, 1 + nq + 2 * nv + width))
     counts = np.zeros((n_runs, 2), dtype=np.int64)  # (rows logged, steps completed)
     method_code = METHOD_CODES[method]
 
@@ -294,6 +296,7 @@ def rollout(
             0,
             new_workspace(fast.model, nq, nv),
         )
+        log[i, logged:] = np.nan
         counts[i] = logged, done
 
     pool_size = min(threads, n_runs)
@@ -313,7 +316,7 @@ def rollout(
         q=log[:, :, 1 : 1 + nq],
         v=log[:, :, 1 + nq : 1 + nq + nv],
         tau=log[:, :, 1 + nq + nv : 1 + nq + 2 * nv],
-        info=laws[0].unpack(log[:, :, 1 + nq + 2 * nv :]),
+        info=laws[0].unpack(log[:, :, 1 + nq + 2 * nv :], copy=False),
         steps=steps,
         status=np.where(steps == n_steps, "complete", "diverged"),
     )
