@@ -27,6 +27,7 @@ from .atomic import atomic_path
 from .simulation import Trajectory
 from .vehicle import Vehicle
 from .viewer import (
+    FRAME_INFO,
     LEGEND,
     LOS,
     PATH,
@@ -246,11 +247,8 @@ def _round(values: np.ndarray) -> list[float]:
     return rounded.tolist()
 
 
-_FRAME_INFO = ("thrust", "x_ref", "p")  # the diagnostics a frame draws
-
-
 def _info_at(info: dict[str, np.ndarray], k: int) -> dict[str, np.ndarray]:
-    return {key: value[k] for key, value in info.items() if key in _FRAME_INFO}
+    return {key: value[k] for key, value in info.items() if key in FRAME_INFO}
 
 
 def playback_commands(
@@ -290,7 +288,7 @@ def playback_commands(
         bad = int(np.flatnonzero(~finite)[0])
         raise ValueError(f"trajectory has a non-finite configuration at sample {bad}")
     info = {k: np.asarray(v, dtype=float) for k, v in (trajectory.info or {}).items()}
-    for key in ("thrust", "x_ref", "p"):
+    for key in FRAME_INFO:
         if key in info and info[key].shape[0] != t.size:
             raise ValueError(
                 f"trajectory.info['{key}'] has {info[key].shape[0]} rows, not {t.size}"
@@ -311,7 +309,7 @@ def playback_commands(
         max_frames = max(2, KEYFRAME_BUDGET // (_CHARS_PER_NUMBER * numbers))
     index = frame_indices(t, fps, max_frames)
 
-    states = scene.frames(q[index], {key: info[key][index] for key in _FRAME_INFO if key in info})
+    states = scene.frames(q[index], {key: info[key][index] for key in FRAME_INFO if key in info})
     poses, scales, centroid = states.poses, states.scales, states.centroid
     if not show_los:
         poses.pop(LOS, None)

@@ -55,6 +55,8 @@ from .vehicle import Vehicle
 ROOT = "/aiauv"
 LINKS = f"{ROOT}/links"
 LOS = f"{ROOT}/los"
+#: The diagnostics a frame draws (:meth:`VehicleScene.frame`): thrusts, LOS direction, head position.
+FRAME_INFO = ("thrust", "x_ref", "p")
 PATH = f"{ROOT}/path"
 CAMERA_OBJECT = "/Cameras/default/rotated/<object>"
 
@@ -808,7 +810,7 @@ class VehicleScene:
             raise ValueError(f"q must be {self.vehicle.nq} finite numbers, got shape {q.shape}")
         rows = {}
         for key, value in (info or {}).items():
-            if key in ("thrust", "x_ref", "p") and value is not None:
+            if key in FRAME_INFO and value is not None:
                 rows[key] = np.asarray(value, dtype=float).ravel()[None]
         states = self.frames(q[None], rows)
         return FrameState(
