@@ -236,6 +236,8 @@ def accuracy_per_cost(
         ("rk4", 0.01),
         ("rk4", 0.008),
         ("rk4", 0.005),
+        ("euler", 0.04),
+        ("euler", 0.02),
         ("euler", 0.01),
         ("euler", 0.005),
         ("euler", 0.004),

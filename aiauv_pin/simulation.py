@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from control.laws import joint_pd_torque
+from control.laws import joint_pd_implicit_terms, joint_pd_torque
 from hydro.currents import as_current
 from hydro.laws import UUV_SIMULATOR_FILTER
 
@@ -98,6 +98,27 @@ class JointServo:
                 q[7 + k], v[6 + k], self.references[k], g[k], self.stiffness[k], self.damping[k]
             )
         return tau
+
+    def implicit_acceleration(
+        self, vehicle: Vehicle, q: np.ndarray, v: np.ndarray, acceleration: np.ndarray, h: float
+    ) -> np.ndarray:
+        """The acceleration of a semi-implicit Euler step of ``h`` [s] with this servo implicit.
+
+        From the explicit ``acceleration`` (servo included): ``(M + A) a' = M a - h k_p q_dot``, so
+        ``a' = a - (M + A)^-1 (A a + h k_p q_dot)``, with the armature ``A`` and torque of
+        :func:`control.laws.joint_pd_implicit_terms` on the joint rows and ``M`` the mass matrix
+        (added mass included). The compiled kernels put ``A`` into the articulated-body pass.
+        """
+        n = self.references.size
+        armature = np.zeros(vehicle.nv)
+        force = np.zeros(vehicle.nv)
+        for k in range(n):
+            armature[6 + k], correction = joint_pd_implicit_terms(
+                h, v[6 + k], self.stiffness[k], self.damping[k]
+            )
+            force[6 + k] = armature[6 + k] * acceleration[6 + k] - correction
+        mass = vehicle.mass_matrix(q) + np.diag(armature)
+        return acceleration - np.linalg.solve(mass, force)
 
     def packed(self):
         """The :class:`aiauv_pin.fast.records.Servo` record the kernels read.
@@ -234,7 +255,8 @@ def simulate(
             :class:`aiauv_pin.controllers.CompiledController` (the whole run then executes in
             compiled code, in chunks of ``chunk_seconds`` of simulated time between which the
             progress bar and ``on_log`` run), or ``None`` (no input).
-        method: ``"rk4"`` (Runge-Kutta-Munthe-Kaas, order 4) or ``"euler"`` (semi-implicit, order 1).
+        method: ``"rk4"`` (Runge-Kutta-Munthe-Kaas, order 4) or ``"euler"`` (semi-implicit, order 1;
+            a :class:`JointServo` is implicit in it, so the servo bounds no step).
         current: Water velocity: ``None`` (still water), a constant world velocity (3,) [m/s], or a
             :class:`hydro.currents.Current` (time- and space-varying, compiled), sampled at every
             body at every integrator stage.
@@ -354,6 +376,9 @@ def simulate(
         (lambda qq, vv: servo.torque(vehicle, qq, vv)) if isinstance(servo, JointServo) else servo
     )
 
+    # semi-implicit Euler makes a JointServo implicit (control.laws.joint_pd_implicit_terms)
+    implicit_servo = method == "euler" and isinstance(servo, JointServo)
+
     def dynamics_with(tau: np.ndarray):
         def dynamics(qq, vv, tt):
             if not (np.all(np.isfinite(qq)) and np.all(np.isfinite(vv))):
@@ -365,7 +390,10 @@ def simulate(
                 total = total + _generalized(python_disturbance(tt, qq, vv), model.nv)
             elif compiled_disturbance is not None:
                 total = total + compiled_disturbance.generalized_force(tt, qq, vv)
-            return body.acceleration(qq, vv, total, current, t=tt)
+            acceleration = body.acceleration(qq, vv, total, current, t=tt)
+            if implicit_servo:
+                return servo.implicit_acceleration(body, qq, vv, acceleration, dt)
+            return acceleration
 
         return dynamics
 

@@ -15,7 +15,8 @@ interpreted when numba is missing.
   the hydrostatic compensation;
 * :func:`reduced_attitude_law` - the reduced-attitude law of eq. (9) (and eq. 23 for ``J = I``,
   ``m = 0``) with the ``"paper"`` or ``"exact"`` feedforward (findings 1 and 2 of PAPER_DATA.md);
-* :func:`joint_reference` - eq. (22); :func:`joint_pd_torque` - eq. (24);
+* :func:`joint_reference` - eq. (22); :func:`joint_pd_torque` - eq. (24) (and
+  :func:`joint_pd_implicit_terms`, its implicit Euler step);
 * :func:`surge_pi` - eq. (25) with conditional-integration anti-windup;
 * :func:`path_following_command` - the composition of all of them (paper, Section 3).
 
@@ -538,6 +539,25 @@ def joint_reference(base_angle, scale, q_max):
 def joint_pd_torque(q, q_dot, q_ref, g_q, k_qp, k_qd):
     """Joint PD with hydrostatic compensation, ``-k_qP (q - q*) - k_qD q_dot + g_q`` (eq. 24) [N m]."""
     return -k_qp * (q - q_ref) - k_qd * q_dot + g_q
+
+
+@compiled
+def joint_pd_implicit_terms(h, q_dot, k_qp, k_qd):
+    """What one linearly implicit Euler step of ``h`` [s] adds for the PD of eq. (24) on a joint.
+
+    Semi-implicit Euler evaluates the PD at the step's end, ``(q + h q_dot', q_dot')``, instead of
+    its start; the PD being linear, ``M (q_dot' - q_dot) / h = f(q, q_dot) - (k_qD + h k_qP)
+    (q_dot' - q_dot) - h k_qP q_dot`` gives ``(M + A) (q_dot' - q_dot) / h = f - h k_qP q_dot``:
+    the joint's inertia gains the armature ``A = h k_qD + h^2 k_qP`` and its torque
+    ``-h k_qP q_dot`` (implicit Euler on the servo, stable for every ``h > 0``: Hairer and Wanner
+    1996, "Solving ordinary differential equations II", Sec. IV.3). MuJoCo's Euler makes joint
+    damping implicit the same way ("Computation: numerical integration" in its documentation), and
+    its 3.13 changelog names ``M + h D + h^2 K`` as the effective metric of damping and stiffness.
+
+    Returns:
+        ``(armature [kg m^2], torque [N m])``.
+    """
+    return h * k_qd + h * h * k_qp, -h * k_qp * q_dot
 
 
 # ---------------------------------------------------------------------- surge PI (eq. 25)

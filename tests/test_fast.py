@@ -161,6 +161,36 @@ def test_step_matches_reference_integrator(pair, method, rng):
     np.testing.assert_allclose(got[1], expected[1], **TOL)
 
 
+@pytest.mark.parametrize("dt", [0.004, 0.05])
+def test_euler_step_with_the_servo_implicit_matches_the_reference(pair, dt, rng):
+    """The kernels fold the servo's implicit terms into the articulated-body pass (an armature on
+    each joint); the reference solves ``(M + A) a' = M a - h k_p q_dot`` with Pinocchio's mass
+    matrix (JointServo.implicit_acceleration). Stiff gains: 0.05 s is far beyond the explicit
+    servo's stable step on these links."""
+    fast, reference = pair
+    n = reference.nv - 6
+    if n == 0:
+        pytest.skip("no joints")
+    q, v = random_state(reference.model, rng)
+    tau = rng.normal(size=reference.nv)
+    servo = JointServo(
+        rng.uniform(50.0, 400.0, n), rng.uniform(5.0, 60.0, n), rng.normal(scale=0.3, size=n)
+    )
+    current = CURRENTS[1]
+
+    def dynamics(qq, vv):
+        explicit = reference.acceleration(qq, vv, tau + servo.torque(reference, qq, vv), current)
+        return servo.implicit_acceleration(reference, qq, vv, explicit, dt)
+
+    expected = INTEGRATORS["euler"](reference.model, dynamics, q, v, dt)
+    got = fast.fast.step(q, v, tau, dt, method="euler", current=current, servo=servo.packed())
+    np.testing.assert_allclose(got[0], expected[0], **TOL)
+    np.testing.assert_allclose(got[1], expected[1], **TOL)
+    # and it is not the explicit servo's step
+    explicit = v + dt * reference.acceleration(q, v, tau + servo.torque(reference, q, v), current)
+    assert not np.allclose(got[1], explicit, rtol=1e-3)
+
+
 # ---------------------------------------------------------------- simulate
 def _controller(vehicle):
     def control(t, q, v):

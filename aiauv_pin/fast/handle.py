@@ -111,7 +111,7 @@ def checked_acceleration_of(handle, t, q, v, tau, tolerance, exact_below, out):
         return verdict
     state = W.q_stage if normalised else q
     kernels.acceleration_into(
-        handle.model, handle.still_water, handle.no_servo, t, state, v, tau, W, out
+        handle.model, handle.still_water, handle.no_servo, t, state, v, tau, W, out, 0.0
     )
     return STATE_OK
 
@@ -119,7 +119,9 @@ def checked_acceleration_of(handle, t, q, v, tau, tolerance, exact_below, out):
 @compiled(fastmath=True)
 def acceleration_of(handle, env, servo, t, q, v, tau, out):
     """:func:`aiauv_pin.fast.kernels.acceleration_into` on the records of ``handle``."""
-    kernels.acceleration_into(handle.model, env, servo, t, q, v, tau, handle.workspace, out)
+    kernels.acceleration_into(
+        handle.model, env, servo, t, q, v, tau, handle.workspace, out, 0.0
+    )
 
 
 @compiled(fastmath=True)

@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from control.laws import joint_pd_torque
+from control.laws import joint_pd_implicit_terms, joint_pd_torque
 from hydro.currents import current_velocity
 from hydro.jit import compiled
 from hydro.laws import (
@@ -561,13 +561,18 @@ def _add_child_inertia(xform, art, child, parent):
 
 
 @compiled(fastmath=True, borrows_only=True)
-def articulated_into(model, servo, q, v, tau, W, out):
+def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
     """ABA passes 2 and 3 (Featherstone 2008, Table 7.1) with general 6x6 body inertias.
 
     After :func:`kinematics` and :func:`body_bias`. The joint servo of the paper, eq. (24)
     (``tau_q += -k_p (q - q*) - k_d qd + g_q(q)``), is applied inside the inward pass: ``g_q`` is the
     joint's share of the hydrostatic wrenches of its subtree, carried inward alongside the
     articulated bias (what :func:`restoring_into` computes in a separate pass).
+
+    With ``implicit_step`` ``h > 0`` [s] it returns instead the servo-implicit acceleration of one
+    semi-implicit Euler step, ``(M + A) dv = tau + servo - bias - h k_p qd``
+    (:func:`control.laws.joint_pd_implicit_terms`): the armature ``A`` enters each servoed joint's
+    ``D = S^T I^A S`` (the joint-space diagonal the ABA inverts).
     """
     bodies = model.bodies
     nb = bodies.parent.shape[0]
@@ -652,6 +657,12 @@ def articulated_into(model, servo, q, v, tau, W, out):
                 stiffness[joint],
                 damping[joint],
             )
+            if implicit_step > 0.0:
+                armature, correction = joint_pd_implicit_terms(
+                    implicit_step, v[6 + joint], stiffness[joint], damping[joint]
+                )
+                d += armature
+                tau_b += correction
         di = 1.0 / d
         us = tau_b - sp
         u_vec[b, 0], u_vec[b, 1], u_vec[b, 2] = u0, u1, u2
@@ -864,8 +875,12 @@ def new_workspace(model, nq: int, nv: int) -> Workspace:
 
 # ---------------------------------------------------------------------- forward dynamics
 @compiled(fastmath=True, borrows_only=True)
-def acceleration_into(model, env, servo, t, q, v, tau, W, out):
-    """Forward dynamics ``dv`` of ``M(q) dv + bias(q, v) = tau + servo + disturbance`` into ``out``."""
+def acceleration_into(model, env, servo, t, q, v, tau, W, out, implicit_step):
+    """Forward dynamics ``dv`` of ``M(q) dv + bias(q, v) = tau + servo + disturbance`` into ``out``.
+
+    ``implicit_step``: 0 for the dynamics; ``h > 0`` [s] for the servo-implicit acceleration of
+    a semi-implicit Euler step of that size (:func:`articulated_into`).
+    """
     kinematics(model.bodies, q, v, W)
     sample_current(model, env, t, W)
     body_bias(model, W)
@@ -875,7 +890,7 @@ def acceleration_into(model, env, servo, t, q, v, tau, W, out):
     add_disturbance(
         env.disturbance_function, env.disturbance_kind, t, q, v, env.disturbance_parameters, tau_all
     )
-    articulated_into(model, servo, q, v, tau_all, W, out)
+    articulated_into(model, servo, q, v, tau_all, W, out, implicit_step)
 
 
 # ------------------------------------------------------------------ SE(3) x R^n group operations
@@ -1023,24 +1038,24 @@ def rk4_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
     half = 0.5 * dt
     a1, a2, a3, a4 = W.acc1, W.acc2, W.acc3, W.acc4
     k2, k3, k4, xi, vs, qs = W.rate2, W.rate3, W.rate4, W.xi, W.v_stage, W.q_stage
-    acceleration_into(model, env, servo, t, q, v, tau, W, a1)
+    acceleration_into(model, env, servo, t, q, v, tau, W, a1, 0.0)
     for i in range(nv):
         xi[i] = half * v[i]  # k1 = v: the Jacobian at xi = 0 is the identity
         vs[i] = v[i] + half * a1[i]
     integrate(q, xi, qs)
-    acceleration_into(model, env, servo, t + half, qs, vs, tau, W, a2)
+    acceleration_into(model, env, servo, t + half, qs, vs, tau, W, a2, 0.0)
     tangent_rate(xi, vs, k2)
     for i in range(nv):
         xi[i] = half * k2[i]
         vs[i] = v[i] + half * a2[i]
     integrate(q, xi, qs)
-    acceleration_into(model, env, servo, t + half, qs, vs, tau, W, a3)
+    acceleration_into(model, env, servo, t + half, qs, vs, tau, W, a3, 0.0)
     tangent_rate(xi, vs, k3)
     for i in range(nv):
         xi[i] = dt * k3[i]
         vs[i] = v[i] + dt * a3[i]
     integrate(q, xi, qs)
-    acceleration_into(model, env, servo, t + dt, qs, vs, tau, W, a4)
+    acceleration_into(model, env, servo, t + dt, qs, vs, tau, W, a4, 0.0)
     tangent_rate(xi, vs, k4)
     sixth = dt / 6.0
     for i in range(nv):
@@ -1051,10 +1066,11 @@ def rk4_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
 
 @compiled(fastmath=True, borrows_only=True)
 def euler_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
-    """Semi-implicit Euler: ``v += dt f(q, v)``, then ``q = q * exp(dt v)``."""
+    """Semi-implicit Euler: ``v += dt f(q, v)``, then ``q = q * exp(dt v)``; the joint servo
+    implicit (:func:`control.laws.joint_pd_implicit_terms`), so it is stable at any step."""
     a = W.acc1
     xi = W.xi
-    acceleration_into(model, env, servo, t, q, v, tau, W, a)
+    acceleration_into(model, env, servo, t, q, v, tau, W, a, dt)
     for i in range(v.shape[0]):
         v_out[i] = v[i] + dt * a[i]
         xi[i] = dt * v_out[i]
@@ -1106,7 +1122,7 @@ def run_steps(model, env, servo, t0, q, v, tau, dt, n_steps, method, W):
 def time_accelerations(model, env, servo, q, v, tau, repeats, W, out):
     """Evaluate the dynamics ``repeats`` times in compiled code (benchmarking)."""
     for _ in range(repeats):
-        acceleration_into(model, env, servo, 0.0, q, v, tau, W, out)
+        acceleration_into(model, env, servo, 0.0, q, v, tau, W, out, 0.0)
 
 
 @compiled(fastmath=True)

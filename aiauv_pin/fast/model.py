@@ -160,7 +160,7 @@ class FastModel:
             self._fast_call(acceleration_of, (self.handle, env, servo, float(t), q, v, tau, out))
         else:
             kernels.acceleration_into(
-                self.model, env, servo, float(t), q, v, tau, self.workspace, out
+                self.model, env, servo, float(t), q, v, tau, self.workspace, out, 0.0
             )
         return out
 
