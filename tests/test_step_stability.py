@@ -63,7 +63,9 @@ def test_amplification_is_one_step_of_each_method():
     # (control.laws.joint_pd_implicit_terms)
     joint_mass = np.linalg.inv(inverse_mass)
     lhs = joint_mass + np.diag(h * damping + h * h * stiffness)
-    qd_euler = qd + np.linalg.solve(lhs, h * (joint_mass @ acceleration(q, qd) - h * stiffness * qd))
+    qd_euler = qd + np.linalg.solve(
+        lhs, h * (joint_mass @ acceleration(q, qd) - h * stiffness * qd)
+    )
     euler = np.concatenate((q + h * qd_euler, qd_euler))
     assert amplification(inverse_mass, stiffness, damping, "euler", h) @ x == pytest.approx(euler)
 

@@ -119,9 +119,7 @@ def checked_acceleration_of(handle, t, q, v, tau, tolerance, exact_below, out):
 @compiled(fastmath=True)
 def acceleration_of(handle, env, servo, t, q, v, tau, out):
     """:func:`aiauv_pin.fast.kernels.acceleration_into` on the records of ``handle``."""
-    kernels.acceleration_into(
-        handle.model, env, servo, t, q, v, tau, handle.workspace, out, 0.0
-    )
+    kernels.acceleration_into(handle.model, env, servo, t, q, v, tau, handle.workspace, out, 0.0)
 
 
 @compiled(fastmath=True)
