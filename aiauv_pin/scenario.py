@@ -13,12 +13,13 @@ leaves open, documented here and in the README:
   every integrator stage (see :class:`aiauv_pin.paper_controller.VehiclePathFollowing`);
 * semi-implicit Euler with ``dt = 0.004`` s (:mod:`aiauv_pin.scenario_defaults`), issue 15's rule:
   the cheapest setting whose end-effector path stays within 2 mm of a converged reference (RK4 at
-  0.5 ms) over the whole 300 s run. On both bundled vehicles it is 1.88 mm off; RK4 at 0.01 s (the
-  default before) 2.42-2.43 mm, RK4 at 0.008 s 1.91-1.92 mm. Euler at 0.004 s costs 0.89x RK4 at
-  0.01 s and RK4 at 0.008 s 1.33x (``aiauv bench``, 2026-11-23): Euler takes 2.5 times as many
+  0.5 ms) over the whole 300 s run. On both bundled vehicles it is 1.87 mm off; RK4 at 0.01 s
+  (the default before) 2.42-2.43 mm, RK4 at 0.008 s 1.91-1.92 mm. Euler at 0.004 s costs 0.88x RK4
+  at 0.01 s and RK4 at 0.008 s 1.26x (``aiauv bench``, 2026-11-23): Euler takes 2.5 times as many
   steps, but each costs one evaluation and one controller sample against RK4's four evaluations.
-  Holding the controller over a step makes the error first order in ``dt`` for
-  both methods, so RK4's order buys nothing here. Measured by ``benchmarks/default_step.py``
+  Holding the controller over a step makes the error first order in ``dt`` for both methods, so
+  RK4's order buys nothing here. Euler's joint servo is implicit, so a larger step only costs
+  accuracy (4.9 mm at 0.01 s, 2 cm at 0.04 s). Measured by ``benchmarks/default_step.py``
   (``benchmarks/default_step.json``); ``aiauv bench --only accuracy-per-cost`` says whether the
   default is still the cheapest within 2 mm;
 * ``timeseries.csv`` holds one row every ``csv_period = 0.04`` s (every tenth step, 25 per second
