@@ -88,6 +88,17 @@ def parse_robot_text(text: str, where: str = "URDF text") -> Element:
     return root
 
 
+def parse_bool(text: str | None, what: str) -> bool:
+    """An XML boolean (``1``, ``true``, ``0``, ``false``, any case, spaces around), as URDF and SDF
+    files write them."""
+    value = (text or "").strip().lower()
+    if value in ("1", "true"):
+        return True
+    if value in ("0", "false"):
+        return False
+    raise HydroError(f"{what}: expected 0, 1, true or false, got '{_one_line(text or '')}'")
+
+
 def parse_numbers(text: str | None, what: str) -> np.ndarray:
     """Whitespace-separated finite numbers.
 

@@ -85,6 +85,7 @@ from hydro.urdf_xml import (
     MATRIX_TOLERANCE,
     UrdfLink,
     check_added_mass,
+    parse_bool,
     parse_numbers,
     parse_robot,
     parse_scalar,
@@ -217,15 +218,6 @@ def _uuv_matrix(element: Element | None, what: str, allow_diagonal: bool) -> np.
         return np.diag(values)
     expected = "6 or 36" if allow_diagonal else "36"
     raise HydroError(f"{what}: expected {expected} numbers, got {values.size}")
-
-
-def _parse_bool(text: str | None, what: str) -> bool:
-    value = (text or "").strip().lower()
-    if value in ("1", "true"):
-        return True
-    if value in ("0", "false"):
-        return False
-    raise HydroError(f"{what}: expected 0, 1, true or false, got '{text}'")
 
 
 def _collision_centroid(link: Element, name: str, what: str) -> np.ndarray:
@@ -466,7 +458,7 @@ def _uuv_link(
     forward = convert_forward_speed_damping(forward)
 
     neutral_element = element.find("neutrally_buoyant")
-    neutral = neutral_element is not None and _parse_bool(
+    neutral = neutral_element is not None and parse_bool(
         neutral_element.text, f"{what} neutrally_buoyant"
     )
     if neutral:

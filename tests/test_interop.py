@@ -201,6 +201,13 @@ def test_bad_gz_parameters_are_one_line_errors(plugin, inertial_extra, message, 
     assert "\n" not in str(info.value)
 
 
+def test_a_bad_boolean_in_the_gz_plugin_is_an_interop_error(tmp_path):
+    path = tmp_path / "auv.sdf"
+    path.write_text(_sdf("<xDotU>-9</xDotU><disable_added_mass>sometimes</disable_added_mass>"))
+    with pytest.raises(InteropError, match="expected 0, 1, true or false, got 'sometimes'"):
+        read_gz_model(path)
+
+
 def test_disable_added_mass_drops_the_plugin_terms(tmp_path):
     path = tmp_path / "auv.sdf"
     fluid = "<fluid_added_mass><xx>3</xx></fluid_added_mass>"

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from hydro import FRD_TO_FLU, HydroError, convert_fossen_matrices, read_hydrodynamics
+from hydro.urdf_xml import parse_bool
 from hydro.uuv_simulator import read_uuv_simulator
 
 REXROV = Path(__file__).parent / "data" / "rexrov_uuv_simulator.urdf"
@@ -134,6 +135,31 @@ def test_neutrally_buoyant_volume_from_urdf_mass():
     body = "<neutrally_buoyant>1</neutrally_buoyant><center_of_buoyancy>0 0 0</center_of_buoyancy>"
     spec = read_uuv_simulator(vehicle(uuv_link("v/b", body)))
     assert spec.links[0].volume == pytest.approx(5.0 / 1000.0)  # rho V = m
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [("1", True), (" TRUE ", True), ("true", True), ("0", False), ("False", False)],
+)
+def test_xml_booleans(text, expected):
+    assert parse_bool(text, "x") is expected
+
+
+@pytest.mark.parametrize("text", [None, "", "yes", "2", "t rue"])
+def test_xml_boolean_errors_name_the_element(text):
+    with pytest.raises(
+        HydroError, match=r"^<neutrally_buoyant>: expected 0, 1, true or false"
+    ) as error:
+        parse_bool(text, "<neutrally_buoyant>")
+    assert "\n" not in str(error.value)
+
+
+def test_a_bad_neutrally_buoyant_is_one_line():
+    body = (
+        "<neutrally_buoyant>maybe</neutrally_buoyant><center_of_buoyancy>0 0 0</center_of_buoyancy>"
+    )
+    with pytest.raises(HydroError, match="expected 0, 1, true or false, got 'maybe'"):
+        read_uuv_simulator(vehicle(uuv_link("v/b", body)))
 
 
 def test_missing_center_of_buoyancy_is_the_collision_centroid():

@@ -59,6 +59,7 @@ import numpy as np
 from hydro.spec import HydroError, LinkHydrodynamics
 from hydro.urdf_block import parse_robot_text, read_hydrodynamics
 from hydro.urdf_writer import format_number, format_numbers, fossen_link_element
+from hydro.urdf_xml import parse_bool
 
 from ..atomic import write_text as atomic_write_text
 from .common import ExportSource, load_export_source, rpy_of, rpy_to_matrix
@@ -128,12 +129,11 @@ def _numbers(text: str | None, count: int, what: str) -> np.ndarray:
 
 
 def _parse_bool(text: str | None, what: str) -> bool:
-    value = (text or "").strip().lower()
-    if value in ("1", "true"):
-        return True
-    if value in ("0", "false"):
-        return False
-    raise InteropError(f"{what}: expected true or false, got '{_one_line(text)}'")
+    """:func:`hydro.urdf_xml.parse_bool`, its error as an :class:`InteropError`."""
+    try:
+        return parse_bool(text, what)
+    except HydroError as exc:
+        raise InteropError(str(exc)) from None
 
 
 @dataclass(frozen=True)
