@@ -22,6 +22,7 @@ from .cli_types import (  # noqa: F401  (positive_seconds is part of the CLI's p
     EXIT_FAILED,
     EXIT_USAGE,
     OneLineArgumentParser,
+    filter_coefficient,
     finite_number,
     positive_density,
     positive_seconds,
@@ -86,6 +87,21 @@ def _add_simulate(subparsers) -> None:
         help="the paper's path following, none (a passive run), or the thruster-turning "
         "baseline (paper)",
     )
+    parser.add_argument(
+        "--added-mass",
+        choices=("exact", "lagged"),
+        default=None,
+        help="added mass in the mass matrix, or lagged as UUV Simulator and gz-sim apply it "
+        "(the previous steps' filtered acceleration; runs the Python controller) (exact)",
+    )
+    parser.add_argument(
+        "--lagged-filter",
+        type=filter_coefficient,
+        default=None,
+        metavar="ALPHA",
+        help="the lagged scheme's acceleration filter, in (0, 1]: 0.3 is UUV Simulator's, "
+        "1 gz-sim's (unfiltered) (0.3)",
+    )
     parser.add_argument("--out", type=Path, default=None, help="output folder (results/<name>/)")
     parser.add_argument("--no-html", action="store_true", help="do not write playback.html")
     parser.add_argument(
@@ -111,6 +127,7 @@ def scenario_for_args(args):
     """The scenario of ``aiauv simulate``'s arguments: the file's (or the paper's), flags applied."""
     from hydro.currents import Current
 
+    from .errors import AiauvError
     from .scenario import Scenario
     from .scenario_file import load_scenario
 
@@ -120,7 +137,7 @@ def scenario_for_args(args):
         changes["case"] = args.case
         if scenario.gains is None or args.scenario is None:
             changes["gains"] = None
-    for name in ("duration", "dt", "method", "controller"):
+    for name in ("duration", "dt", "method", "controller", "added_mass", "lagged_filter"):
         if getattr(args, name) is not None:
             changes[name] = getattr(args, name)
     if args.vehicle is not None:
@@ -128,6 +145,10 @@ def scenario_for_args(args):
     if args.current is not None:
         changes["current"] = Current.constant(args.current)
     scenario = dataclasses.replace(scenario, **changes)
+    if args.lagged_filter is not None and scenario.added_mass != "lagged":
+        raise AiauvError(
+            "--lagged-filter applies to lagged added mass only: add --added-mass lagged"
+        )
     if args.feedforward is not None:
         gains = scenario.controller_gains.with_changes(feedforward=args.feedforward)
         scenario = dataclasses.replace(scenario, gains=gains)

@@ -51,3 +51,14 @@ def finite_number(text: str) -> float:
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"must be finite, got '{text}'")
     return value
+
+
+def filter_coefficient(text: str) -> float:
+    """argparse type for a first-order filter's coefficient: a number in ``(0, 1]``."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+    if not (math.isfinite(value) and 0.0 < value <= 1.0):
+        raise argparse.ArgumentTypeError(f"must be in (0, 1], got '{text}'")
+    return value

@@ -65,6 +65,41 @@ def test_issue_file_as_written_and_every_flag_overrides_it(tmp_path):
     assert _scenario([path, "--controller", "paper"]).controller == "paper"
 
 
+def test_lagged_added_mass_flags(tmp_path, capfd):
+    assert _scenario([]).added_mass == "exact"
+    lagged = _scenario(["--added-mass", "lagged"])
+    assert (lagged.added_mass, lagged.lagged_filter) == ("lagged", 0.3)  # UUV Simulator's
+    assert _scenario(["--added-mass", "lagged", "--lagged-filter", "1"]).lagged_filter == 1.0
+    path = tmp_path / "lagged.toml"
+    path.write_text('added_mass = "lagged"\n' + ISSUE_TOML)
+    assert _scenario([path, "--lagged-filter", "0.5"]).lagged_filter == 0.5  # the file's scheme
+    assert _scenario([path, "--added-mass", "exact"]).added_mass == "exact"
+    with pytest.raises(SystemExit) as exit_:
+        build_parser().parse_args(["simulate", "--lagged-filter", "0"])
+    assert exit_.value.code == 2 and "must be in (0, 1], got '0'" in capfd.readouterr().err
+    out = tmp_path / "run"
+    argv = ["simulate", "--lagged-filter", "0.5", "--duration", "0.1", "--out", str(out)]
+    assert main(argv) == EXIT_FAILED
+    err = capfd.readouterr().err.strip()
+    assert (
+        err
+        == "aiauv: error: --lagged-filter applies to lagged added mass only: add --added-mass lagged"
+    )
+    assert not out.exists()
+
+
+def test_a_lagged_run_records_its_scheme(tmp_path, capsys):
+    out = tmp_path / "run"
+    argv = ["simulate", "--added-mass", "lagged", "--lagged-filter", "0.5", "--duration", "0.5"]
+    argv += ["--dt", "0.01", "--no-html", "--quiet", "--out", str(out)]
+    assert main(argv) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["parameters"]["added_mass"] == "lagged"
+    assert summary["parameters"]["lagged_filter"] == 0.5
+    assert summary["compiled_controller"] is False  # the lagged scheme runs the Python controller
+    capsys.readouterr()
+
+
 def test_vehicle_is_taken_relative_to_the_file(tmp_path):
     folder = tmp_path / "runs"
     folder.mkdir()
