@@ -13,7 +13,11 @@ that is unusual but simulable is a *warning*: the report lists it and the comman
   suggests ``aiauv annotate``, which estimates them;
 * the vehicle has no thrusters, or none along a link x-axis (the path-following controller needs
   them for surge), no ``end_effector`` frame, or joints other than equal numbers of y- and z-axis
-  revolute joints (the path-following controller's layout).
+  revolute joints (the path-following controller's layout);
+* the playback cannot draw it as described: mesh files of its ``<visual>`` or ``<collision>``
+  elements that are not found (those links are drawn without them), or a file or shape it cannot
+  read (``aiauv simulate`` then needs ``--no-html``). The meshes are read as the playback reads
+  them (:func:`aiauv_pin.viewer.vehicle_visuals`, through Pinocchio's geometry loader).
 """
 
 from __future__ import annotations
@@ -156,6 +160,7 @@ def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
             "joints are not equal numbers of y- and z-axis revolute joints "
             "(the path-following controller's layout)"
         )
+    warnings += _playback_warnings(vehicle, load_options.get("package_path", ()))
     root_frame = data.oMf[model.getFrameId(structure.root, pin.FrameType.BODY)]
     cg_total = root_frame.actInv(weighted_cg / total_mass) if total_mass > 0 else np.zeros(3)
     cb_total = root_frame.actInv(weighted_cb / total_volume) if total_volume > 0 else None
@@ -178,6 +183,23 @@ def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
         smallest_mass_eigenvalue=smallest_eigenvalue,
         warnings=tuple(warnings),
     )
+
+
+def _playback_warnings(vehicle, package_path) -> list[str]:
+    """What the playback would say of the vehicle's shapes (its warnings, or why it cannot draw
+    them), as one-line warnings."""
+    import warnings as python_warnings
+
+    from .viewer import vehicle_visuals
+
+    with python_warnings.catch_warnings(record=True) as caught:
+        python_warnings.simplefilter("always")
+        try:
+            vehicle_visuals(vehicle, package_path=package_path)
+        except ValueError as exc:
+            reason = " ".join(str(exc).split())
+            return [f"the playback cannot draw this vehicle: {reason} (simulate with --no-html)"]
+    return [f"the playback: {' '.join(str(w.message).split())}" for w in caught]
 
 
 def _margin(displaced: float, mass: float, gravity: float) -> float:

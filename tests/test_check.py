@@ -94,3 +94,41 @@ def test_a_body_without_mass_or_added_mass_is_unusable(tmp_path, capfd):
     assert main(["check", str(path)]) == 1
     out, err = capfd.readouterr()
     assert out == "" and len(err.splitlines()) == 1 and "singular" in err
+
+
+def visual_urdf(tmp_path, geometry: str):
+    text = f"""<robot name="blob">
+  <link name="a"><inertial><mass value="10"/>
+    <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
+    <visual><geometry>{geometry}</geometry></visual></link>
+  <hydrodynamics fluid_density="1000" gravity="10">
+    <link name="a" model="fossen"><volume>0.01</volume></link>
+  </hydrodynamics>
+</robot>"""
+    path = tmp_path / "blob.urdf"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_a_missing_mesh_is_a_playback_warning(tmp_path, capfd):
+    path = visual_urdf(tmp_path, '<mesh filename="meshes/hull.stl"/>')
+    report = check_vehicle(path)
+    assert (
+        "the playback: 1 mesh file(s) not found, e.g. meshes/hull.stl (give --package-path)"
+        in report.warnings
+    )
+    assert main(["check", str(path)]) == 0  # still usable: the link is drawn without it
+    assert "meshes/hull.stl" in capfd.readouterr().out
+
+
+def test_an_unreadable_mesh_is_a_playback_warning(tmp_path):
+    (tmp_path / "hull.stl").write_bytes(b"solid hull\nfacet garbage\n")
+    report = check_vehicle(visual_urdf(tmp_path, '<mesh filename="hull.stl"/>'))
+    (warning,) = [w for w in report.warnings if "playback" in w]
+    assert warning.startswith("the playback cannot draw this vehicle: cannot read the visuals")
+    assert warning.endswith("(simulate with --no-html)") and "\n" not in warning
+
+
+def test_primitive_visuals_give_no_playback_warning(tmp_path):
+    report = check_vehicle(visual_urdf(tmp_path, '<box size="1 0.2 0.2"/>'))
+    assert not [w for w in report.warnings if "playback" in w]
