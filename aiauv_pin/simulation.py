@@ -271,8 +271,8 @@ def simulate(
             ``dt``.
         on_log: ``on_log(t, q, info)`` called at every logged sample (e.g. a live viewer).
         chunk_seconds: Compiled controller only: simulated time per compiled call (default 1 s
-            with ``on_log``, 10 s with a progress bar or ``after_first_chunk``, else the whole
-            run in one call).
+            with ``on_log``, 10 s with a progress bar, the first 10 s and then the rest with
+            ``after_first_chunk`` alone, else the whole run in one call).
         after_first_chunk: Compiled controller only: called once after the first chunk (the code
             is then compiled; later chunks release the GIL, so a background thread started here
             overlaps them).
@@ -539,6 +539,9 @@ def _simulate_compiled(
     # with no yield to the scheduler between chunks (a sweep's runs on a loaded machine lost
     # whole time slices there); the steps and their results are the same
     interactive = progress or on_log is not None or after_first_chunk is not None
+    # with only ``after_first_chunk`` (a background thread), the rest is one call: each return from
+    # a chunk waits for the GIL that thread holds (about one switch interval, 5 ms, per chunk)
+    rest_in_one_call = chunk_seconds is None and not progress and on_log is None
     if chunk_seconds is None:
         chunk_seconds = 1.0 if on_log is not None else (10.0 if interactive else math.inf)
     chunk = max(1, n_steps) if math.isinf(chunk_seconds) else max(1, round(chunk_seconds / dt))
@@ -587,6 +590,8 @@ def _simulate_compiled(
                 bar.update(done)
             if k == 0 and after_first_chunk is not None:
                 after_first_chunk()
+                if rest_in_one_call:
+                    chunk = max(1, n_steps)
             if k + done < stop:
                 diverged_at = k + done
                 break

@@ -136,6 +136,18 @@ def test_compiled_scenario_matches_pinocchio_reference():
     _same_trajectory(got.trajectory, expected.trajectory, dict(rtol=1e-9, atol=1e-9))
 
 
+def test_after_first_chunk_runs_once_and_changes_nothing(numba_vehicle):
+    """The CLI's background work starts after the first 10 s; the rest then runs in one call."""
+    scenario = PaperScenario(duration=25.0)
+    calls = []
+    with_callback = run_paper_scenario(
+        numba_vehicle, scenario, after_first_chunk=lambda: calls.append(1)
+    )
+    plain = run_paper_scenario(numba_vehicle, scenario)
+    assert calls == [1]
+    _same_trajectory(with_callback.trajectory, plain.trajectory, dict(rtol=0, atol=0))
+
+
 def test_on_log_sees_every_logged_sample(numba_vehicle):
     scenario = PaperScenario(duration=2.5, control_period=0.02)
     seen = {True: [], False: []}
