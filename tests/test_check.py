@@ -52,10 +52,11 @@ def test_cli_prints_the_table_and_exits_zero(capfd):
     assert "link5_x_port" in out and "joint8" in out and out.rstrip().endswith("OK: usable vehicle")
 
 
-def heavy_urdf(tmp_path, volume: float, mass: float = 10.0):
+def heavy_urdf(tmp_path, volume: float, mass: float = 10.0, geometry: str | None = None):
+    visual = "" if geometry is None else f"<visual><geometry>{geometry}</geometry></visual>"
     text = f"""<robot name="blob">
   <link name="a"><inertial><mass value="{mass}"/>
-    <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+    <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>{visual}</link>
   <hydrodynamics fluid_density="1000" gravity="10">
     <link name="a" model="fossen"><volume>{volume}</volume></link>
   </hydrodynamics>
@@ -97,17 +98,8 @@ def test_a_body_without_mass_or_added_mass_is_unusable(tmp_path, capfd):
 
 
 def visual_urdf(tmp_path, geometry: str):
-    text = f"""<robot name="blob">
-  <link name="a"><inertial><mass value="10"/>
-    <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
-    <visual><geometry>{geometry}</geometry></visual></link>
-  <hydrodynamics fluid_density="1000" gravity="10">
-    <link name="a" model="fossen"><volume>0.01</volume></link>
-  </hydrodynamics>
-</robot>"""
-    path = tmp_path / "blob.urdf"
-    path.write_text(text, encoding="utf-8")
-    return path
+    """A neutrally buoyant one-link vehicle drawn with ``geometry``."""
+    return heavy_urdf(tmp_path, volume=0.01, geometry=geometry)
 
 
 def test_a_missing_mesh_is_a_playback_warning(tmp_path, capfd):
