@@ -52,10 +52,16 @@ def _warm(duration: float) -> str:
     return record["status"]
 
 
+#: The sparse rollout's log period in steps: every 10th step, the CSV's 0.04 s at the default step.
+ROLLOUT_SPARSE_LOG = 10
+
+
 def throughput(
     case: str = "uniform", duration: float = 300.0, runs: int = 8, rounds: int = 3, cores: int = 2
 ) -> dict:
-    """Runs per minute of ``runs`` paper-scenario runs (cross-track gain varied), three ways."""
+    """Runs per minute of ``runs`` paper-scenario runs (cross-track gain varied): the sweep in
+    processes and in threads, and :func:`aiauv_pin.rollout` logging every step (its default) and
+    every :data:`ROLLOUT_SPARSE_LOG` th step (the CSV's 0.04 s at the default step)."""
     import logging
 
     from dask.distributed import Client, LocalCluster
@@ -91,7 +97,12 @@ def throughput(
             silence_logs=logging.ERROR,
         ),
     }
-    times: dict[str, list[float]] = {"sweep_processes": [], "sweep_threads": [], "rollout": []}
+    times: dict[str, list[float]] = {
+        "sweep_processes": [],
+        "sweep_threads": [],
+        "rollout": [],
+        "rollout_sparse_log": [],
+    }
     try:
         for cluster in clusters.values():
             with Client(cluster) as client:
@@ -133,6 +144,24 @@ def throughput(
             times["rollout"].append(time.perf_counter() - start)
             if not (batch.status == "complete").all():
                 raise RuntimeError("rollout: a run diverged")
+            del batch  # its 57 MB per run, before the next batch's
+            controllers = laws()
+            start = time.perf_counter()
+            sparse = rollout(
+                vehicle,
+                q0,
+                v0,
+                duration,
+                scenario.dt,
+                controllers,
+                method=scenario.method,
+                threads=cores,
+                log_every=ROLLOUT_SPARSE_LOG,
+            )
+            times["rollout_sparse_log"].append(time.perf_counter() - start)
+            if not (sparse.status == "complete").all():
+                raise RuntimeError("rollout: a run diverged")
+            del sparse
     finally:
         for cluster in clusters.values():
             cluster.close()
@@ -144,6 +173,7 @@ def throughput(
         "runs_per_round": runs,
         "rounds": rounds,
         "cores": cores,
+        "rollout_sparse_log_every": ROLLOUT_SPARSE_LOG,
     }
     for name, walls in times.items():
         results[name] = {
@@ -401,6 +431,12 @@ def format_parts(results: dict) -> list[str]:
         spread(f"{head}: sweep, processes", tp["sweep_processes"]["runs_per_minute"], "")
         spread(f"{head}: sweep, threads", tp["sweep_threads"]["runs_per_minute"], "")
         spread(f"{head}: rollout()", tp["rollout"]["runs_per_minute"], "")
+        if "rollout_sparse_log" in tp:
+            spread(
+                f"{head}: rollout(), log every {tp['rollout_sparse_log_every']}th step",
+                tp["rollout_sparse_log"]["runs_per_minute"],
+                "",
+            )
     e2e = results.get("end_to_end")
     if e2e:
         spread("fresh 'aiauv simulate --no-html' wall", e2e["no_html_wall_s"], "s")

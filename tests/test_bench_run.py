@@ -25,6 +25,8 @@ def test_format_parts_prints_medians_and_ranges():
             "sweep_processes": {"runs_per_minute": _spread(140.0)},
             "sweep_threads": {"runs_per_minute": _spread(141.0)},
             "rollout": {"runs_per_minute": _spread(150.0)},
+            "rollout_sparse_log": {"runs_per_minute": _spread(200.0)},
+            "rollout_sparse_log_every": 10,
         },
         "accuracy_per_cost": {
             "rows": [
@@ -45,6 +47,7 @@ def test_format_parts_prints_medians_and_ranges():
     assert any(
         "rollout()" in line and "150.00" in line and "(135.00-165.00)" in line for line in lines
     )
+    assert any("log every 10th step" in line and "200.00" in line for line in lines)
     assert any("rk4 dt=0.02" in line and "diverges" in line for line in lines)
     assert any("euler dt=0.004 (default)" in line and "1.900 mm" in line for line in lines)
     assert any("cheapest within 2 mm" in line and "is the default" in line for line in lines)
