@@ -94,12 +94,26 @@ def _shared_math_parser():
     return _math_parser
 
 
+def _math_cache_clear():
+    """``cache_clear`` of matplotlib's math-text cache (``MathTextParser._parse_cached``, a private
+    ``functools.lru_cache``), or ``None`` if this matplotlib has no such cache."""
+    mathtext = sys.modules.get("matplotlib.mathtext")
+    if mathtext is None:
+        return None
+    return getattr(getattr(mathtext.MathTextParser, "_parse_cached", None), "cache_clear", None)
+
+
 def _warm_math() -> None:
     """Parse :data:`_MATH_TEXT` as the figures' 10-point labels at :data:`FIGURE_DPI`, until the
-    figures are due (:data:`_stop_warming`)."""
+    figures are due (:data:`_stop_warming`). Only where a forked process can empty the cache again
+    (:func:`_forget_parsed_math`): a matplotlib without that private cache gets no warm-up, so its
+    figure processes never share parsed text."""
     import matplotlib as mpl
+    import matplotlib.mathtext  # what _math_cache_clear looks in
     from matplotlib.font_manager import FontProperties
 
+    if _math_cache_clear() is None:
+        return
     parser = _shared_math_parser()
     for size in ("xtick.labelsize", "legend.fontsize", "axes.labelsize"):
         prop = FontProperties(size=mpl.rcParams[size])
@@ -515,9 +529,9 @@ def _forget_parsed_math() -> None:
     empties its font cache on fork for the same reason)."""
     global _math_parser
     _math_parser = None
-    mathtext = sys.modules.get("matplotlib.mathtext")
-    if mathtext is not None:
-        mathtext.MathTextParser._parse_cached.cache_clear()
+    clear = _math_cache_clear()
+    if clear is not None:  # without it, _warm_math parsed nothing to share
+        clear()
 
 
 def _task_worker(tasks, taken, sender, parent: int) -> None:

@@ -75,3 +75,20 @@ def test_the_forked_process_parses_its_own_math_text(tmp_path):
             assert size == 0
         else:
             assert size > 0
+
+
+def test_a_matplotlib_without_the_private_math_cache_gets_no_warm_up(tmp_path, monkeypatch):
+    """The shared math-text cache rests on matplotlib's private ``_parse_cached``: without it
+    nothing is warmed (so nothing is shared with a forked process), and the forked process's
+    emptying of the cache is a no-op instead of an AttributeError."""
+    from matplotlib.mathtext import MathTextParser
+
+    outputs._prepare_figures("png")
+    MathTextParser._parse_cached.cache_clear()
+    monkeypatch.delattr(MathTextParser, "_parse_cached")
+    assert outputs._math_cache_clear() is None
+    outputs._stop_warming.clear()
+    outputs._warm_math()  # a no-op
+    outputs._forget_parsed_math()  # no AttributeError
+    monkeypatch.undo()
+    assert MathTextParser._parse_cached.cache_info().currsize == 0
