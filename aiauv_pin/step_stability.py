@@ -64,12 +64,7 @@ def amplification(
         ``G`` (2n, 2n) acting on ``(q, q_dot)``.
     """
     n = stiffness.shape[0]
-    a = np.block(
-        [
-            [np.zeros((n, n)), np.eye(n)],
-            [-joint_inverse_mass * stiffness[np.newaxis, :], -joint_inverse_mass * damping],
-        ]
-    )
+    a = _state_matrix(joint_inverse_mass, stiffness, damping)
     if method == "euler":
         return np.linalg.inv(np.eye(2 * n) - h * a)
     if method == "rk4":
@@ -82,6 +77,17 @@ def amplification(
     raise ValueError(f"unknown method {method!r} (expected 'euler' or 'rk4')")
 
 
+def _state_matrix(joint_inverse_mass, stiffness, damping) -> np.ndarray:
+    """``A = [[0, I], [-W K, -W C]]`` (2n, 2n): the servo's linear joint dynamics [1/s, 1/s^2]."""
+    n = stiffness.shape[0]
+    return np.block(
+        [
+            [np.zeros((n, n)), np.eye(n)],
+            [-joint_inverse_mass * stiffness[np.newaxis, :], -joint_inverse_mass * damping],
+        ]
+    )
+
+
 def spectral_radius(matrix: np.ndarray) -> float:
     """Largest eigenvalue modulus of a square matrix [-]."""
     return float(np.max(np.abs(np.linalg.eigvals(matrix)))) if matrix.size else 0.0
@@ -91,17 +97,13 @@ def largest_stable_step(
     joint_inverse_mass: np.ndarray, stiffness: np.ndarray, damping: np.ndarray, method: str
 ) -> float:
     """The largest step [s] for which ``G(h)`` has spectral radius at most 1 (``inf`` when the
-    servo has no stiffness or damping), by bisection to a relative 1e-6 below the fastest mode's
-    bound ``4 / |lambda|`` (above both methods' real-axis limits, 2 and 2.785)."""
+    servo has no stiffness or damping, or when the method stays stable up to ``|h lambda| = 1e6``,
+    as semi-implicit Euler with its servo implicit does), by bisection to a relative 1e-6, starting
+    from the fastest mode's ``4 / |lambda|`` (above RK4's real-axis limit 2.785)."""
     n = stiffness.shape[0]
     if n == 0 or not (np.any(stiffness > 0.0) or np.any(damping > 0.0)):
         return math.inf
-    a = np.block(
-        [
-            [np.zeros((n, n)), np.eye(n)],
-            [-joint_inverse_mass * stiffness, -joint_inverse_mass * damping],
-        ]
-    )
+    a = _state_matrix(joint_inverse_mass, stiffness, damping)
     fastest = float(np.max(np.abs(np.linalg.eigvals(a))))
     if fastest == 0.0:
         return math.inf
