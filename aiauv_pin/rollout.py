@@ -204,7 +204,7 @@ def rollout(
     """
     from .fast.kernels import new_workspace
     from .fast.loop import loop_for
-    from .fast.model import METHOD_CODES
+    from .fast.model import METHOD_MARKERS
 
     n_steps, steps_per_control = check_run_arguments(
         duration, dt, method, log_every, control_period
@@ -251,7 +251,7 @@ def rollout(
     # gigabytes); rows a diverged run never reached are set to NaN after it
     log = np.empty((n_runs, n_logs, 1 + nq + 2 * nv + width))
     counts = np.zeros((n_runs, 2), dtype=np.int64)  # (rows logged, steps completed)
-    method_code = METHOD_CODES[method]
+    method_marker = METHOD_MARKERS[method]
 
     # everything a run mutates is private to it: workspace, state, parameters' buffers, servo
     jobs = []
@@ -286,7 +286,7 @@ def rollout(
             np.zeros(nv),
             np.full(width, np.nan),
             float(dt),
-            method_code,
+            method_marker,
             0,
             n_steps,
             n_steps,

@@ -503,7 +503,7 @@ def _simulate_compiled(
 ) -> Trajectory:
     """:func:`simulate` with a compiled controller: the whole loop in compiled code."""
     from .fast.loop import loop_for
-    from .fast.model import METHOD_CODES
+    from .fast.model import METHOD_MARKERS
 
     fast = vehicle.fast
     if fast is None:
@@ -569,7 +569,7 @@ def _simulate_compiled(
                 tau,
                 info,
                 float(dt),
-                METHOD_CODES[method],
+                METHOD_MARKERS[method],
                 k,
                 stop,
                 n_steps,

@@ -28,17 +28,18 @@ stage with the stage's own time:
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from control.laws import joint_pd_implicit_terms, joint_pd_torque
 from hydro.currents import current_velocity
-from hydro.jit import compiled
+from hydro.jit import NUMBA_AVAILABLE, compiled
 from hydro.laws import (
     add_body_fluid_bias,
     coriolis_of_momentum,
     hydrostatic_wrench,
-    stacked_row_dot,
+    stacked_times_6,
 )
 
 from ..disturbances import apply_disturbance
@@ -50,19 +51,6 @@ RK4, EULER = 0, 1
 
 
 # ---------------------------------------------------------------------- small linear algebra
-@compiled(fastmath=True)
-def _dot6(m, b, i, x, c):
-    """``m[b, i] . x[c]`` for 6-vectors, indexing the stacked arrays directly (no views)."""
-    return (
-        m[b, i, 0] * x[c, 0]
-        + m[b, i, 1] * x[c, 1]
-        + m[b, i, 2] * x[c, 2]
-        + m[b, i, 3] * x[c, 3]
-        + m[b, i, 4] * x[c, 4]
-        + m[b, i, 5] * x[c, 5]
-    )
-
-
 @compiled(fastmath=True)
 def _dot_rows(a, i, x, j):
     """``a[i] . x[j]`` for rows of 6 (no views)."""
@@ -355,12 +343,7 @@ def body_bias(model, W):
             w0,
             w1,
             w2,
-            stacked_row_dot(rigid, b, 0, v0, v1, v2, w0, w1, w2),
-            stacked_row_dot(rigid, b, 1, v0, v1, v2, w0, w1, w2),
-            stacked_row_dot(rigid, b, 2, v0, v1, v2, w0, w1, w2),
-            stacked_row_dot(rigid, b, 3, v0, v1, v2, w0, w1, w2),
-            stacked_row_dot(rigid, b, 4, v0, v1, v2, w0, w1, w2),
-            stacked_row_dot(rigid, b, 5, v0, v1, v2, w0, w1, w2),
+            *stacked_times_6(rigid, b, v0, v1, v2, w0, w1, w2),
         )
         for i in range(6):
             bias[b, i] = w[i]
@@ -627,12 +610,9 @@ def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
             g = restoring[b, k] if carry_restoring else 0.0
         else:
             s = axis
-            u0 = _dot6(art, b, 0, s, b)
-            u1 = _dot6(art, b, 1, s, b)
-            u2 = _dot6(art, b, 2, s, b)
-            u3 = _dot6(art, b, 3, s, b)
-            u4 = _dot6(art, b, 4, s, b)
-            u5 = _dot6(art, b, 5, s, b)
+            u0, u1, u2, u3, u4, u5 = stacked_times_6(
+                art, b, s[b, 0], s[b, 1], s[b, 2], s[b, 3], s[b, 4], s[b, 5]
+            )
             d = (
                 u0 * s[b, 0]
                 + u1 * s[b, 1]
@@ -678,12 +658,22 @@ def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
                 art[b, i, j] -= ui * u_vec[b, j]
         # p^a = p^A + I^a c + U u / D, then the parent's X^T p^a
         f = us * di
-        x0 = pa[b, 0] + _dot6(art, b, 0, bias_acc, b) + u0 * f
-        x1 = pa[b, 1] + _dot6(art, b, 1, bias_acc, b) + u1 * f
-        x2 = pa[b, 2] + _dot6(art, b, 2, bias_acc, b) + u2 * f
-        x3 = pa[b, 3] + _dot6(art, b, 3, bias_acc, b) + u3 * f
-        x4 = pa[b, 4] + _dot6(art, b, 4, bias_acc, b) + u4 * f
-        x5 = pa[b, 5] + _dot6(art, b, 5, bias_acc, b) + u5 * f
+        c0, c1, c2, c3, c4, c5 = stacked_times_6(
+            art,
+            b,
+            bias_acc[b, 0],
+            bias_acc[b, 1],
+            bias_acc[b, 2],
+            bias_acc[b, 3],
+            bias_acc[b, 4],
+            bias_acc[b, 5],
+        )
+        x0 = pa[b, 0] + c0 + u0 * f
+        x1 = pa[b, 1] + c1 + u1 * f
+        x2 = pa[b, 2] + c2 + u2 * f
+        x3 = pa[b, 3] + c3 + u3 * f
+        x4 = pa[b, 4] + c4 + u4 * f
+        x5 = pa[b, 5] + c5 + u5 * f
         _add_child_inertia(xform, art, b, parent)
         _add_child_force(xform, b, x0, x1, x2, x3, x4, x5, pa, parent)
         if carry_restoring:
@@ -827,9 +817,12 @@ def thrust_into(model, W, thrusts, out):
 
 
 # ---------------------------------------------------------------------- workspace
-@compiled
-def workspace(nb, nq, nv):
-    """Scratch arrays of one evaluation (allocate once, reuse in every step)."""
+def workspace(nb: int, nq: int, nv: int) -> Workspace:
+    """Scratch arrays of one evaluation for ``nb`` bodies (allocate once, reuse in every step).
+
+    Built in Python: it is only called from Python, and compiling it cost 2.2 s of the first run
+    (34 array allocations, issue 15).
+    """
     return Workspace(
         np.empty((nb, 3, 3)),
         np.empty((nb, 3)),
@@ -1084,6 +1077,55 @@ def step_into(model, env, servo, t, q, v, tau, dt, method, W, q_out, v_out):
         rk4_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out)
     else:
         euler_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out)
+
+
+class EulerMethod(NamedTuple):
+    """Semi-implicit Euler for :func:`integrator_step`: chosen when the caller is compiled."""
+
+    code: int = EULER
+
+
+class RK4Method(NamedTuple):
+    """RK4 (Munthe-Kaas) for :func:`integrator_step`: chosen when the caller is compiled."""
+
+    code: int = RK4
+
+
+def integrator_step(method, model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
+    """One step of ``method`` into ``q_out, v_out``: an :class:`EulerMethod` or :class:`RK4Method`
+    (compiled, the integrator is chosen by its type when the caller is compiled, so a loop
+    compiled for one method does not compile the other: 7 s of a first Euler run, issue 15), or a
+    code (:data:`RK4`, :data:`EULER`) chosen at run time by :func:`step_into`."""
+    code = method if isinstance(method, int) else method.code
+    step_into(model, env, servo, t, q, v, tau, dt, code, W, q_out, v_out)
+
+
+if NUMBA_AVAILABLE:
+    from numba import types
+    from numba.extending import overload
+
+    @overload(integrator_step)
+    def _integrator_step(method, model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
+        chosen = getattr(method, "instance_class", None)
+        if chosen is EulerMethod:
+
+            def euler(method, model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
+                euler_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out)
+
+            return euler
+        if chosen is RK4Method:
+
+            def rk4(method, model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
+                rk4_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out)
+
+            return rk4
+        if isinstance(method, types.Integer):
+
+            def by_code(method, model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
+                step_into(model, env, servo, t, q, v, tau, dt, method, W, q_out, v_out)
+
+            return by_code
+        return None
 
 
 @compiled(fastmath=True)

@@ -2,7 +2,7 @@
 
 :func:`run_chunk` advances a run by a block of steps without returning to Python: at every control
 sample it calls the controller (any compiled controller, :mod:`aiauv_pin.fast.controllers`), logs
-every ``log_every`` steps, and integrates with :func:`aiauv_pin.fast.kernels.step_into` (current,
+every ``log_every`` steps, and integrates with :func:`aiauv_pin.fast.kernels.integrator_step` (current,
 disturbance and joint servo at every stage). :func:`aiauv_pin.simulate` drives it in chunks so that
 a progress bar and ``on_log`` callbacks still run between them.
 """
@@ -14,7 +14,7 @@ from functools import lru_cache
 from hydro.jit import NUMBA_AVAILABLE, PROJECT_PACKAGES, compiled
 
 from .dispatch import run_controller
-from .kernels import is_finite_state, step_into
+from .kernels import integrator_step, is_finite_state
 
 
 @compiled(borrows_only=True)
@@ -44,6 +44,9 @@ def run_chunk(
 
     ``controller`` is a user's compiled controller, or ``None`` for the built-in one that
     ``parameters`` select (:func:`aiauv_pin.fast.dispatch.run_controller`).
+
+    ``method`` is a :class:`aiauv_pin.fast.kernels.EulerMethod` or ``RK4Method`` (the loop is
+    compiled for that integrator alone) or a method code.
 
     ``log`` rows are ``(t, q, v, tau, info)``; ``tau`` and ``info`` hold the last controller output
     between calls (zero-order hold).
@@ -76,7 +79,7 @@ def run_chunk(
             log_index += 1
         if k == n_total:
             return log_index, k - k_start
-        step_into(model, env, servo, t, q, v, tau, dt, method, W, W.q_next, W.v_next)
+        integrator_step(method, model, env, servo, t, q, v, tau, dt, W, W.q_next, W.v_next)
         if not is_finite_state(W.q_next, W.v_next):
             return log_index, k - k_start
         q_next, v_next = W.q_next, W.v_next

@@ -21,6 +21,10 @@ from .records import Environment, Servo
 #: ``(method name -> code)`` understood by :func:`kernels.step_into` and :func:`kernels.run_steps`.
 METHOD_CODES = {"rk4": kernels.RK4, "euler": kernels.EULER}
 
+#: ``(method name -> marker)`` for :func:`kernels.integrator_step`: the compiled loop is compiled
+#: for one integrator only.
+METHOD_MARKERS = {"rk4": kernels.RK4Method(), "euler": kernels.EulerMethod()}
+
 
 def no_servo() -> Servo:
     """A :class:`Servo` record that does nothing."""
