@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 #: Printed (to standard error) before the first compilation in an installation.
-COMPILE_NOTICE = "aiauv: compiling kernels once for this installation (about 1-2 min of CPU time)"
+COMPILE_NOTICE = "aiauv: compiling kernels once for this installation (about a minute of CPU time)"
 
 
 def _cache_folders() -> list[Path]:

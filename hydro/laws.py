@@ -101,54 +101,6 @@ def _row_dot(matrix, i, vector):
 
 
 @compiled(fastmath=True)
-def matrix_times_6(m, x):
-    """``m @ x`` for a 6x6 matrix and a 6-vector (array or tuple), as 6 floats (no temporary).
-
-    All six rows in one function, written out: numba compiles a helper once per literal
-    argument, so six calls of a row helper with the constant rows 0..5 cost six compilations of it
-    for every combination of argument types (seen in numba's compile events, issue 15).
-    """
-    return (
-        m[0, 0] * x[0]
-        + m[0, 1] * x[1]
-        + m[0, 2] * x[2]
-        + m[0, 3] * x[3]
-        + m[0, 4] * x[4]
-        + m[0, 5] * x[5],
-        m[1, 0] * x[0]
-        + m[1, 1] * x[1]
-        + m[1, 2] * x[2]
-        + m[1, 3] * x[3]
-        + m[1, 4] * x[4]
-        + m[1, 5] * x[5],
-        m[2, 0] * x[0]
-        + m[2, 1] * x[1]
-        + m[2, 2] * x[2]
-        + m[2, 3] * x[3]
-        + m[2, 4] * x[4]
-        + m[2, 5] * x[5],
-        m[3, 0] * x[0]
-        + m[3, 1] * x[1]
-        + m[3, 2] * x[2]
-        + m[3, 3] * x[3]
-        + m[3, 4] * x[4]
-        + m[3, 5] * x[5],
-        m[4, 0] * x[0]
-        + m[4, 1] * x[1]
-        + m[4, 2] * x[2]
-        + m[4, 3] * x[3]
-        + m[4, 4] * x[4]
-        + m[4, 5] * x[5],
-        m[5, 0] * x[0]
-        + m[5, 1] * x[1]
-        + m[5, 2] * x[2]
-        + m[5, 3] * x[3]
-        + m[5, 4] * x[4]
-        + m[5, 5] * x[5],
-    )
-
-
-@compiled(fastmath=True)
 def coriolis_wrench(inertia, twist):
     """Coriolis-centripetal wrench ``nu x* (M nu)`` of a body or of its added mass.
 
@@ -163,7 +115,16 @@ def coriolis_wrench(inertia, twist):
     Returns:
         The wrench as it appears on the left-hand side, 6 floats [N, N m].
     """
-    f0, f1, f2, n0, n1, n2 = matrix_times_6(inertia, twist)
+    f0, f1, f2 = (
+        _row_dot(inertia, 0, twist),
+        _row_dot(inertia, 1, twist),
+        _row_dot(inertia, 2, twist),
+    )
+    n0, n1, n2 = (
+        _row_dot(inertia, 3, twist),
+        _row_dot(inertia, 4, twist),
+        _row_dot(inertia, 5, twist),
+    )
     return coriolis_of_momentum(
         twist[0], twist[1], twist[2], twist[3], twist[4], twist[5], f0, f1, f2, n0, n1, n2
     )
@@ -194,46 +155,15 @@ def coriolis_of_momentum(v0, v1, v2, w0, w1, w2, f0, f1, f2, n0, n1, n2):
 
 
 @compiled(fastmath=True)
-def stacked_times_6(m, b, x0, x1, x2, x3, x4, x5):
-    """``m[b] @ x`` for a stack of 6x6 matrices and a 6-vector in scalars, as 6 floats (no views;
-    all rows in one function, compiled once: see :func:`matrix_times_6`)."""
+def stacked_row_dot(matrices, b, i, x0, x1, x2, x3, x4, x5):
+    """``matrices[b, i] . x`` for a stack of 6x6 matrices and a 6-vector in scalars (no views)."""
     return (
-        m[b, 0, 0] * x0
-        + m[b, 0, 1] * x1
-        + m[b, 0, 2] * x2
-        + m[b, 0, 3] * x3
-        + m[b, 0, 4] * x4
-        + m[b, 0, 5] * x5,
-        m[b, 1, 0] * x0
-        + m[b, 1, 1] * x1
-        + m[b, 1, 2] * x2
-        + m[b, 1, 3] * x3
-        + m[b, 1, 4] * x4
-        + m[b, 1, 5] * x5,
-        m[b, 2, 0] * x0
-        + m[b, 2, 1] * x1
-        + m[b, 2, 2] * x2
-        + m[b, 2, 3] * x3
-        + m[b, 2, 4] * x4
-        + m[b, 2, 5] * x5,
-        m[b, 3, 0] * x0
-        + m[b, 3, 1] * x1
-        + m[b, 3, 2] * x2
-        + m[b, 3, 3] * x3
-        + m[b, 3, 4] * x4
-        + m[b, 3, 5] * x5,
-        m[b, 4, 0] * x0
-        + m[b, 4, 1] * x1
-        + m[b, 4, 2] * x2
-        + m[b, 4, 3] * x3
-        + m[b, 4, 4] * x4
-        + m[b, 4, 5] * x5,
-        m[b, 5, 0] * x0
-        + m[b, 5, 1] * x1
-        + m[b, 5, 2] * x2
-        + m[b, 5, 3] * x3
-        + m[b, 5, 4] * x4
-        + m[b, 5, 5] * x5,
+        matrices[b, i, 0] * x0
+        + matrices[b, i, 1] * x1
+        + matrices[b, i, 2] * x2
+        + matrices[b, i, 3] * x3
+        + matrices[b, i, 4] * x4
+        + matrices[b, i, 5] * x5
     )
 
 
@@ -281,8 +211,12 @@ def damping_wrench(linear, quadratic, quadratic_is_diagonal, twist):
     Returns:
         The damping wrench acting on the link, 6 floats [N, N m].
     """
-    d0, d1, d2, d3, d4, d5 = matrix_times_6(linear, twist)
-    d0, d1, d2, d3, d4, d5 = -d0, -d1, -d2, -d3, -d4, -d5
+    d0 = -_row_dot(linear, 0, twist)
+    d1 = -_row_dot(linear, 1, twist)
+    d2 = -_row_dot(linear, 2, twist)
+    d3 = -_row_dot(linear, 3, twist)
+    d4 = -_row_dot(linear, 4, twist)
+    d5 = -_row_dot(linear, 5, twist)
     s0, s1, s2 = abs(twist[0]) * twist[0], abs(twist[1]) * twist[1], abs(twist[2]) * twist[2]
     s3, s4, s5 = abs(twist[3]) * twist[3], abs(twist[4]) * twist[4], abs(twist[5]) * twist[5]
     if quadratic_is_diagonal:
@@ -294,8 +228,15 @@ def damping_wrench(linear, quadratic, quadratic_is_diagonal, twist):
             d4 - quadratic[4, 4] * s4,
             d5 - quadratic[5, 5] * s5,
         )
-    e0, e1, e2, e3, e4, e5 = matrix_times_6(quadratic, (s0, s1, s2, s3, s4, s5))
-    return (d0 - e0, d1 - e1, d2 - e2, d3 - e3, d4 - e4, d5 - e5)
+    square = (s0, s1, s2, s3, s4, s5)
+    return (
+        d0 - _row_dot(quadratic, 0, square),
+        d1 - _row_dot(quadratic, 1, square),
+        d2 - _row_dot(quadratic, 2, square),
+        d3 - _row_dot(quadratic, 3, square),
+        d4 - _row_dot(quadratic, 4, square),
+        d5 - _row_dot(quadratic, 5, square),
+    )
 
 
 @compiled(fastmath=True)
@@ -317,8 +258,14 @@ def forward_speed_damping_wrench(forward, twist):
         The wrench acting on the link, 6 floats [N, N m].
     """
     u = twist[0]
-    d0, d1, d2, d3, d4, d5 = matrix_times_6(forward, twist)
-    return (-u * d0, -u * d1, -u * d2, -u * d3, -u * d4, -u * d5)
+    return (
+        -u * _row_dot(forward, 0, twist),
+        -u * _row_dot(forward, 1, twist),
+        -u * _row_dot(forward, 2, twist),
+        -u * _row_dot(forward, 3, twist),
+        -u * _row_dot(forward, 4, twist),
+        -u * _row_dot(forward, 5, twist),
+    )
 
 
 @compiled(fastmath=True)
@@ -462,7 +409,12 @@ def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch
             r3,
             r4,
             r5,
-            *stacked_times_6(added, b, r0, r1, r2, r3, r4, r5),
+            stacked_row_dot(added, b, 0, r0, r1, r2, r3, r4, r5),
+            stacked_row_dot(added, b, 1, r0, r1, r2, r3, r4, r5),
+            stacked_row_dot(added, b, 2, r0, r1, r2, r3, r4, r5),
+            stacked_row_dot(added, b, 3, r0, r1, r2, r3, r4, r5),
+            stacked_row_dot(added, b, 4, r0, r1, r2, r3, r4, r5),
+            stacked_row_dot(added, b, 5, r0, r1, r2, r3, r4, r5),
         )
         h = hydrostatic_wrench(
             hydrostatics[b, 0],
@@ -607,7 +559,12 @@ def coriolis_wrench_jacobian(inertia, twist, out):
         out[3, j] = v1 * f2 - v2 * f1 + w1 * n2 - w2 * n1
         out[4, j] = v2 * f0 - v0 * f2 + w2 * n0 - w0 * n2
         out[5, j] = v0 * f1 - v1 * f0 + w0 * n1 - w1 * n0
-    f0, f1, f2, n0, n1, n2 = matrix_times_6(inertia, twist)
+    f0 = _row_dot(inertia, 0, twist)
+    f1 = _row_dot(inertia, 1, twist)
+    f2 = _row_dot(inertia, 2, twist)
+    n0 = _row_dot(inertia, 3, twist)
+    n1 = _row_dot(inertia, 4, twist)
+    n2 = _row_dot(inertia, 5, twist)
     # -[f] in the (0:3, 3:6) and (3:6, 0:3) blocks, -[n] in (3:6, 3:6); [a] b = a x b
     for r in range(2):
         o = 3 * r

@@ -39,7 +39,7 @@ from hydro.laws import (
     add_body_fluid_bias,
     coriolis_of_momentum,
     hydrostatic_wrench,
-    stacked_times_6,
+    stacked_row_dot,
 )
 
 from ..disturbances import apply_disturbance
@@ -51,6 +51,19 @@ RK4, EULER = 0, 1
 
 
 # ---------------------------------------------------------------------- small linear algebra
+@compiled(fastmath=True)
+def _dot6(m, b, i, x, c):
+    """``m[b, i] . x[c]`` for 6-vectors, indexing the stacked arrays directly (no views)."""
+    return (
+        m[b, i, 0] * x[c, 0]
+        + m[b, i, 1] * x[c, 1]
+        + m[b, i, 2] * x[c, 2]
+        + m[b, i, 3] * x[c, 3]
+        + m[b, i, 4] * x[c, 4]
+        + m[b, i, 5] * x[c, 5]
+    )
+
+
 @compiled(fastmath=True)
 def _dot_rows(a, i, x, j):
     """``a[i] . x[j]`` for rows of 6 (no views)."""
@@ -343,7 +356,12 @@ def body_bias(model, W):
             w0,
             w1,
             w2,
-            *stacked_times_6(rigid, b, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 0, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 1, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 2, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 3, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 4, v0, v1, v2, w0, w1, w2),
+            stacked_row_dot(rigid, b, 5, v0, v1, v2, w0, w1, w2),
         )
         for i in range(6):
             bias[b, i] = w[i]
@@ -610,9 +628,12 @@ def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
             g = restoring[b, k] if carry_restoring else 0.0
         else:
             s = axis
-            u0, u1, u2, u3, u4, u5 = stacked_times_6(
-                art, b, s[b, 0], s[b, 1], s[b, 2], s[b, 3], s[b, 4], s[b, 5]
-            )
+            u0 = _dot6(art, b, 0, s, b)
+            u1 = _dot6(art, b, 1, s, b)
+            u2 = _dot6(art, b, 2, s, b)
+            u3 = _dot6(art, b, 3, s, b)
+            u4 = _dot6(art, b, 4, s, b)
+            u5 = _dot6(art, b, 5, s, b)
             d = (
                 u0 * s[b, 0]
                 + u1 * s[b, 1]
@@ -658,22 +679,12 @@ def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
                 art[b, i, j] -= ui * u_vec[b, j]
         # p^a = p^A + I^a c + U u / D, then the parent's X^T p^a
         f = us * di
-        c0, c1, c2, c3, c4, c5 = stacked_times_6(
-            art,
-            b,
-            bias_acc[b, 0],
-            bias_acc[b, 1],
-            bias_acc[b, 2],
-            bias_acc[b, 3],
-            bias_acc[b, 4],
-            bias_acc[b, 5],
-        )
-        x0 = pa[b, 0] + c0 + u0 * f
-        x1 = pa[b, 1] + c1 + u1 * f
-        x2 = pa[b, 2] + c2 + u2 * f
-        x3 = pa[b, 3] + c3 + u3 * f
-        x4 = pa[b, 4] + c4 + u4 * f
-        x5 = pa[b, 5] + c5 + u5 * f
+        x0 = pa[b, 0] + _dot6(art, b, 0, bias_acc, b) + u0 * f
+        x1 = pa[b, 1] + _dot6(art, b, 1, bias_acc, b) + u1 * f
+        x2 = pa[b, 2] + _dot6(art, b, 2, bias_acc, b) + u2 * f
+        x3 = pa[b, 3] + _dot6(art, b, 3, bias_acc, b) + u3 * f
+        x4 = pa[b, 4] + _dot6(art, b, 4, bias_acc, b) + u4 * f
+        x5 = pa[b, 5] + _dot6(art, b, 5, bias_acc, b) + u5 * f
         _add_child_inertia(xform, art, b, parent)
         _add_child_force(xform, b, x0, x1, x2, x3, x4, x5, pa, parent)
         if carry_restoring:
