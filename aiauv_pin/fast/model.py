@@ -18,12 +18,13 @@ from . import kernels
 from .handle import STATE_OK, acceleration_of, checked_acceleration_of, new_handle, step_of
 from .records import Environment, Servo
 
-#: ``(method name -> code)`` understood by :func:`kernels.step_into` and :func:`kernels.run_steps`.
-METHOD_CODES = {"rk4": kernels.RK4, "euler": kernels.EULER}
-
 #: ``(method name -> marker)`` for :func:`kernels.integrator_step`: the compiled loop is compiled
 #: for one integrator only.
 METHOD_MARKERS = {"rk4": kernels.RK4Method(), "euler": kernels.EulerMethod()}
+
+#: ``(method name -> code)`` understood by :func:`kernels.step_into` and :func:`kernels.run_steps`
+#: (each marker's code).
+METHOD_CODES = {name: marker.code for name, marker in METHOD_MARKERS.items()}
 
 
 def no_servo() -> Servo:
