@@ -85,12 +85,18 @@ def _warm_plotting() -> None:
 
 
 def _shared_math_parser():
-    """The math-text parser of this process's Agg figures (see :func:`_render`)."""
+    """The math-text parser of this process's Agg figures (see :func:`_render`).
+
+    It is the one an Agg renderer makes for itself, whose output type differs between matplotlib
+    versions (``"agg"`` up to 3.10, ``"path"`` from 3.11, with 6 and 5 values per parse): a parser
+    of the other type made every figure with math text fail on Python 3.10, where matplotlib 3.11
+    is not available.
+    """
     global _math_parser
     if _math_parser is None:
-        from matplotlib.mathtext import MathTextParser
+        from matplotlib.backends.backend_agg import RendererAgg
 
-        _math_parser = MathTextParser("path")  # what matplotlib's Agg renderer makes for itself
+        _math_parser = RendererAgg(1, 1, FIGURE_DPI).mathtext_parser
     return _math_parser
 
 

@@ -92,3 +92,21 @@ def test_a_matplotlib_without_the_private_math_cache_gets_no_warm_up(tmp_path, m
     outputs._forget_parsed_math()  # no AttributeError
     monkeypatch.undo()
     assert MathTextParser._parse_cached.cache_info().currsize == 0
+
+
+def test_the_shared_math_parser_is_the_kind_an_agg_renderer_makes():
+    """Its parse results must be what the Agg renderer unpacks: 6 values up to matplotlib 3.10,
+    5 from 3.11 (a parser of the other kind broke every figure on Python 3.10)."""
+    from matplotlib.backends.backend_agg import RendererAgg
+    from matplotlib.font_manager import FontProperties
+
+    own = RendererAgg(10, 10, outputs.FIGURE_DPI).mathtext_parser
+    shared = outputs._shared_math_parser()
+    prop = FontProperties(size=10)
+    assert len(shared.parse("$u_d$", outputs.FIGURE_DPI, prop)) == len(
+        own.parse("$u_d$", outputs.FIGURE_DPI, prop)
+    )
+    renderer = RendererAgg(50, 50, outputs.FIGURE_DPI)
+    renderer.mathtext_parser = shared  # as _render installs it
+    width, height, descent = renderer.get_text_width_height_descent("$u_d$", prop, ismath=True)
+    assert width > 0 and height > 0 and descent >= 0
