@@ -9,6 +9,8 @@ Measures, in one run on the paper vehicle:
   ``summary.json`` and figures; no HTML), both inside this process after a warm-up and as the
   wall time of a fresh ``aiauv simulate --no-html --quiet`` process (interpreter start, imports,
   loading the compiled kernels from the cache included);
+* a new installation's first run (empty numba cache): CPU time with the kernels shipped with the
+  package against compiling everything (:func:`aiauv_pin.bench_run.first_run`);
 * an accuracy table: the largest end-effector distance, over the whole path and the whole scenario
   duration (10 s with ``--quick``), between a run at ``dt`` and one at ``dt / 4``;
 * a user's compiled controller (``benchmarks/user_controller.py``, plain ``numba.njit`` outside the
@@ -525,6 +527,8 @@ def machine() -> dict:
         "cpus": os.cpu_count(),
         "load_average_at_start": load,
         "versions": versions,
+        # what numba compiles for: the portable level of the shipped kernels, or the host's CPU
+        "numba_cpu_name": os.environ.get("NUMBA_CPU_NAME", "host"),
     }
 
 
@@ -586,7 +590,7 @@ def run_bench(
 
 
 #: Whole-run measurements of :mod:`aiauv_pin.bench_run` (``aiauv bench --only PART ...``).
-WHOLE_RUN_PARTS = ("throughput", "end-to-end", "accuracy-per-cost")
+WHOLE_RUN_PARTS = ("throughput", "end-to-end", "first-run", "accuracy-per-cost")
 
 
 def run_parts(
@@ -604,6 +608,10 @@ def run_parts(
             )
         elif part == "end-to-end":
             out["end_to_end"] = bench_run.end_to_end(case, seconds, repeats=1 if quick else 5)
+        elif part == "first-run":
+            out["first_run"] = bench_run.first_run(
+                case, repeats=1 if quick else 3, compile_repeats=1 if quick else 2
+            )
         elif part == "accuracy-per-cost":
             out["accuracy_per_cost"] = bench_run.accuracy_per_cost(
                 case, 10.0 if quick else seconds, repeats=1 if quick else 3
@@ -620,7 +628,7 @@ def _native_lines(results: dict) -> list[str]:
         f"machine: {m.get('processor')}, {m.get('cpus')} CPUs, load average at start "
         f"{m.get('load_average_at_start')}; {m.get('platform')}; Python {m.get('python')}"
     )
-    lines.append(f"versions: {versions}")
+    lines.append(f"versions: {versions}; numba compiles for {m.get('numba_cpu_name', 'host')}")
     native = results.get("native") or {}
     if native:
         t, r = native["times"], native["ratios"]
@@ -798,7 +806,8 @@ def add_bench_parser(subparsers) -> None:
         metavar="PART",
         help="measure only these parts and update them in the JSON file (kernels: the dynamics, "
         "MuJoCo and scaling figures, no scenario runs; throughput: runs per minute of sweeps and "
-        "rollout; end-to-end: fresh 'aiauv simulate' processes; accuracy-per-cost: error against a "
+        "rollout; end-to-end: fresh 'aiauv simulate' processes; first-run: a new installation's first "
+        "run, shipped kernels against compiling everything; accuracy-per-cost: error against a "
         "converged reference per method and step)",
     )
     parser.set_defaults(handler=_run_bench_command)

@@ -1,4 +1,4 @@
-"""Benchmarks of whole runs (``aiauv bench --only ...``): batch throughput, end to end, accuracy per cost.
+"""Benchmarks of whole runs (``aiauv bench --only ...``): batches, end to end, first run, accuracy per cost.
 
 * :func:`throughput`: runs per minute of the 300 s paper scenario on this machine, interleaved in
   rounds: a sweep on the Dask cluster of earlier versions (one single-threaded worker process per
@@ -7,6 +7,8 @@
   both clusters are started and warmed up before the first round.
 * :func:`end_to_end`: wall time of fresh ``aiauv simulate`` processes (warm numba cache), with and
   without the playback page, interleaved.
+* :func:`first_run`: CPU and wall time of a new installation's first run (empty numba cache), with
+  the kernels shipped with the package and, interleaved, with everything compiled.
 * :func:`accuracy_per_cost`: the largest end-effector distance over the whole path between each
   method and step and a converged reference (RK4 at a step small enough that halving it changes
   the path by far less than the errors reported), and the CPU time of each run.
@@ -237,6 +239,71 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
     }
 
 
+# ---------------------------------------------------------------------- first run
+def first_run(case: str = "uniform", repeats: int = 3, compile_repeats: int = 2) -> dict:
+    """A new installation's first ``aiauv simulate --duration 1 --no-html``: CPU and wall time.
+
+    Each run is a fresh process with an empty numba cache (``NUMBA_CACHE_DIR``), as in a new
+    virtual environment, and numba's default settings (no ``NUMBA_CPU_*``): ``shipped`` unpacks
+    the kernels shipped with the package (:mod:`hydro.prebuilt`); ``compiled``, the comparator,
+    has them switched off (``AIAUV_PREBUILT_KERNELS=0``) and compiles everything. The two are
+    interleaved; ``compiled`` runs ``compile_repeats`` times only (about a minute each). CPU time
+    is the child's user and system time; ``functions_compiled`` counts the compiled functions
+    numba saved to its cache (``NUMBA_DEBUG_CACHE``).
+    """
+    import os
+    import resource
+
+    base_env = {
+        k: v
+        for k, v in os.environ.items()
+        if not k.startswith(("NUMBA_CPU_", "AIAUV_PREBUILT", "AIAUV_NATIVE"))
+    }
+    variants = {"shipped": {}, "compiled": {"AIAUV_PREBUILT_KERNELS": "0"}}
+    measured = {name: {"cpu_s": [], "wall_s": [], "functions_compiled": []} for name in variants}
+    with tempfile.TemporaryDirectory() as folder:
+        for repeat in range(repeats):
+            for name, extra in variants.items():
+                if name == "compiled" and repeat >= compile_repeats:
+                    continue
+                run = Path(folder) / f"{name}{repeat}"
+                env = {**base_env, **extra, "NUMBA_DEBUG_CACHE": "1"}
+                env["NUMBA_CACHE_DIR"] = str(run / "cache")
+                command = _simulate_command(case, 1.0, run / "out", html=False)
+                before = resource.getrusage(resource.RUSAGE_CHILDREN)
+                start = time.perf_counter()
+                done = subprocess.run(command, capture_output=True, text=True, env=env, cwd=folder)
+                wall = time.perf_counter() - start
+                after = resource.getrusage(resource.RUSAGE_CHILDREN)
+                if done.returncode != 0:
+                    from .errors import AiauvError
+
+                    said = (done.stderr.strip().splitlines() or ["no message"])[-1]
+                    raise AiauvError(f"first run ({name}) failed: {said}")
+                cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+                measured[name]["cpu_s"].append(cpu)
+                measured[name]["wall_s"].append(wall)
+                output = done.stdout + done.stderr
+                measured[name]["functions_compiled"].append(output.count("data saved"))
+    from hydro import prebuilt
+
+    return {
+        "case": case,
+        "command": "aiauv simulate --duration 1 --no-html (empty NUMBA_CACHE_DIR)",
+        "shipped_archive": prebuilt.archive_path().name,
+        **{
+            name: {
+                "cpu_s": _spread(values["cpu_s"]),
+                "wall_s": _spread(values["wall_s"]),
+                "functions_compiled": values["functions_compiled"],
+            }
+            for name, values in measured.items()
+        },
+        "cpu_ratio_shipped_to_compiled": statistics.median(measured["shipped"]["cpu_s"])
+        / statistics.median(measured["compiled"]["cpu_s"]),
+    }
+
+
 # ---------------------------------------------------------------------- accuracy per cost
 #: Largest end-effector distance [m] from the converged path over the whole 300 s run that the
 #: scenario's default step may have (issue 15: the default is the cheapest setting within it).
@@ -430,6 +497,15 @@ def format_parts(results: dict) -> list[str]:
         for name, label in (("no_html", "--no-html"), ("with_html", "with playback")):
             for part, values in e2e.get("breakdown", {}).get(name, {}).items():
                 spread(f"  {label}: {part[:-2]}", values, "s")
+    first = results.get("first_run")
+    if first:
+        for name, label in (("shipped", "shipped kernels"), ("compiled", "all compiled")):
+            spread(f"first run, empty cache, {label}: CPU", first[name]["cpu_s"], "s")
+            spread(f"first run, empty cache, {label}: wall", first[name]["wall_s"], "s")
+            compiled = ", ".join(str(n) for n in first[name]["functions_compiled"])
+            lines.append(f"{'  functions compiled':<48} {compiled}")
+        ratio = first["cpu_ratio_shipped_to_compiled"]
+        lines.append(f"{'first run CPU, shipped / all compiled':<48} {ratio:10.3f}x")
     acc = results.get("accuracy_per_cost")
     if acc:
         default = acc.get("default") or {}

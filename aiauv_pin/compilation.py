@@ -1,11 +1,12 @@
 """The one-time numba compilation: a notice while it runs, and a warm-up outside timed runs.
 
-numba compiles :mod:`aiauv_pin.fast`'s kernels on their first use in an installation (82 s of CPU
-time on a 2-core machine, numba 0.68, 2026-11) and caches them on disk (``cache=True``); later
-processes load them in well under a second. The command line prints :data:`COMPILE_NOTICE` when
-no cache of the compiled scenario loop is found, and runs a few steps of the scenario before the
-timed run (:func:`warm_up`), so that the real-time factor in ``summary.json`` measures the
-simulation and not the compilation.
+numba compiles :mod:`aiauv_pin.fast`'s kernels on their first use in an installation (about a
+minute of CPU time on a 2-core machine, numba 0.68, 2026-11) and caches them on disk
+(``cache=True``); later processes load them in well under a second. Where the package ships them
+(:mod:`hydro.prebuilt`), they are unpacked into that cache instead and nothing is compiled. The
+command line prints :data:`COMPILE_NOTICE` when no cache of the compiled scenario loop is found,
+and runs a few steps of the scenario before the timed run (:func:`warm_up`), so that the real-time
+factor in ``summary.json`` measures the simulation and not the compilation.
 """
 
 from __future__ import annotations
@@ -33,26 +34,21 @@ def _cache_folders() -> list[Path]:
 
 
 def _index_is_current(index: Path) -> bool:
-    """Whether a numba cache index was written for the current sources.
-
-    numba writes its version, then the pickled ``(source stamp, overloads)``; the stamp of this
-    project's functions is :func:`hydro.jit.source_hash` (content-keyed, see :mod:`hydro.jit`).
-    """
-    import pickle
-
+    """Whether a numba cache index was written for the current sources (:mod:`hydro.prebuilt`)."""
     from hydro.jit import source_hash
+    from hydro.prebuilt import index_stamp
 
-    try:
-        with index.open("rb") as stream:
-            pickle.load(stream)  # numba's version
-            stamp, _ = pickle.loads(stream.read())
-    except Exception:  # unreadable or foreign index: treat as missing
-        return False
-    return stamp == source_hash()
+    return index_stamp(index) == source_hash()
 
 
 def kernels_cached() -> bool:
-    """Whether numba's on-disk cache holds the compiled simulation loop for the current sources."""
+    """Whether numba's on-disk cache holds the compiled simulation loop for the current sources.
+
+    Defining the loop unpacks the kernels shipped with the package (:mod:`hydro.prebuilt`), so
+    the loop's module is imported first.
+    """
+    import aiauv_pin.fast.loop  # noqa: F401  (its definition seeds the cache)
+
     for folder in _cache_folders():
         if not folder.is_dir():
             continue

@@ -17,6 +17,9 @@ every function defined in this project's packages by one hash of all their ``.py
 once per process; :data:`COMPILED_SOURCES`), so an edit to any file with compiled code recompiles
 everything that may inline it, and no manual cache flush is ever needed. Compiled functions of the
 project must therefore live in those files (a test checks this).
+
+The same locators unpack the compiled kernels shipped with the package into numba's cache before
+numba looks there (:mod:`hydro.prebuilt`), so a new installation needs no compilation for them.
 """
 
 from __future__ import annotations
@@ -28,6 +31,8 @@ from functools import lru_cache
 from pathlib import Path
 from typing import TypeVar
 
+from . import prebuilt
+
 F = TypeVar("F", bound=Callable)
 
 #: The packages whose compiled functions share one content-keyed cache stamp.
@@ -38,6 +43,12 @@ PROJECT_PACKAGES = ("hydro", "control", "aiauv_pin")
 COMPILED_SOURCES = ("hydro", "control", "aiauv_pin/fast", "aiauv_pin/disturbances.py")
 
 _ROOT = Path(__file__).resolve().parent.parent
+
+#: True when numba compiles for the portable x86-64-v3 level, so that the kernels shipped in
+#: ``hydro/prebuilt`` can serve this process (see :mod:`hydro.prebuilt`); set before numba loads.
+PORTABLE_TARGET = os.environ.get("NUMBA_DISABLE_JIT", "0") in ("", "0") and (
+    prebuilt.choose_portable_target()
+)
 
 try:  # pragma: no cover - exercised by the no-numba test in a subprocess
     import numba
@@ -98,7 +109,10 @@ if _caching is not None:
         def from_function(cls, py_func, py_file):
             if not _in_project(py_file):
                 return None
-            return super().from_function(py_func, py_file)
+            locator = super().from_function(py_func, py_file)
+            if locator is not None:  # the shipped kernels of this folder, unpacked once
+                prebuilt.seed(locator.get_cache_path(), py_file, _ROOT, source_hash())
+            return locator
 
     class ProjectCacheLocator(_ProjectStampMixin, _numba_name("InTreeCacheLocator")):
         """Cache next to the sources (``__pycache__``), keyed on the project's content."""

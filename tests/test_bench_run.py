@@ -53,6 +53,25 @@ def test_format_parts_prints_medians_and_ranges():
     assert any("cheapest within 2 mm" in line and "is the default" in line for line in lines)
 
 
+def test_format_first_run():
+    results = {
+        "first_run": {
+            "shipped": {"cpu_s": _spread(4.0), "wall_s": _spread(3.5), "functions_compiled": [0]},
+            "compiled": {
+                "cpu_s": _spread(50.0),
+                "wall_s": _spread(48.0),
+                "functions_compiled": [41, 40],
+            },
+            "cpu_ratio_shipped_to_compiled": 0.08,
+        }
+    }
+    lines = bench_run.format_parts(results)
+    assert any("shipped kernels: CPU" in line and "4.00 s" in line for line in lines)
+    assert any("all compiled: CPU" in line and "(45.00-55.00)" in line for line in lines)
+    assert any("functions compiled" in line and line.endswith("41, 40") for line in lines)
+    assert any("shipped / all compiled" in line and "0.080x" in line for line in lines)
+
+
 def test_accuracy_against_a_converged_reference_falls_with_the_step():
     result = bench_run.accuracy_per_cost(
         duration=2.0,

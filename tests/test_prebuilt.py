@@ -1,0 +1,197 @@
+"""The compiled kernels shipped with the package (hydro.prebuilt, aiauv_pin.prebuilt)."""
+
+from __future__ import annotations
+
+import os
+import pickle
+import platform
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from hydro import prebuilt
+from hydro.jit import source_hash
+
+ROOT = Path(__file__).resolve().parent.parent
+#: The CPython versions archives are shipped for (README, Performance).
+SHIPPED = ("py310", "py311", "py312", "py313")
+
+V3 = dict.fromkeys(prebuilt.PORTABLE_CPU_FEATURES, True)
+
+
+def test_portable_target_decision():
+    assert prebuilt.portable_target_wanted({}, "x86_64", V3)
+    assert prebuilt.portable_target_wanted({"AIAUV_NATIVE_CPU": "0"}, "AMD64", V3)
+    assert not prebuilt.portable_target_wanted({"AIAUV_NATIVE_CPU": "1"}, "x86_64", V3)
+    assert not prebuilt.portable_target_wanted({"NUMBA_CPU_NAME": "generic"}, "x86_64", V3)
+    assert not prebuilt.portable_target_wanted({"NUMBA_CPU_FEATURES": "+avx"}, "x86_64", V3)
+    assert not prebuilt.portable_target_wanted({}, "aarch64", V3)
+    for feature in prebuilt.PORTABLE_CPU_FEATURES:  # an older CPU: every feature is needed
+        assert not prebuilt.portable_target_wanted({}, "x86_64", {**V3, feature: False})
+
+
+@pytest.mark.parametrize("tag", SHIPPED)
+def test_shipped_archive_is_current(tag):
+    """Fails after any change to a compiled source until ``python -m aiauv_pin.prebuilt`` runs."""
+    path = ROOT / "hydro" / "prebuilt" / f"{tag}.zip"
+    assert path.is_file(), f"{path} missing: build it with python -m aiauv_pin.prebuilt --python"
+    with zipfile.ZipFile(path) as archive:
+        manifest = prebuilt.Manifest.from_json(archive.read(prebuilt.MANIFEST).decode())
+        names = archive.namelist()
+    assert manifest.source_hash == source_hash(), (
+        f"{path.name} was built from other sources: rebuild with python -m aiauv_pin.prebuilt"
+    )
+    assert manifest.python_tag == tag
+    assert manifest.cpu_name == prebuilt.PORTABLE_CPU_NAME
+    pin = next(
+        line for line in (ROOT / "pyproject.toml").read_text().splitlines() if '"numba==' in line
+    )
+    assert f'"numba=={manifest.numba}"' in pin  # the pinned numba is the one it was built with
+    assert any(n.startswith("aiauv_pin/fast/loop.run_chunk-") and n.endswith(".nbi") for n in names)
+
+
+def _synthetic_archive(tmp_path: Path, stamp: str) -> prebuilt.Archive:
+    manifest = prebuilt.Manifest(stamp, "0", prebuilt.python_tag(), "triple", "x86-64-v3", ())
+    path = tmp_path / "archive.zip"
+    with zipfile.ZipFile(path, "w") as archive:
+        archive.writestr(prebuilt.MANIFEST, manifest.to_json())
+        for function in ("f", "g"):
+            index = pickle.dumps("0") + pickle.dumps((stamp, {"key": f"m.{function}-1.py3.1.nbc"}))
+            archive.writestr(f"hydro/m.{function}-1.py3.nbi", index)
+            archive.writestr(f"hydro/m.{function}-1.py3.1.nbc", f"code of {function}".encode())
+        archive.writestr("control/m.h-1.py3.nbi", pickle.dumps("0") + pickle.dumps((stamp, {})))
+    return prebuilt.Archive(path)
+
+
+def test_seeding_replaces_stale_and_keeps_current_entries(tmp_path):
+    archive = _synthetic_archive(tmp_path, "current")
+    assert archive.manifest.source_hash == "current"
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    kept = pickle.dumps("0") + pickle.dumps(("current", {"user": "m.f-1.py3.2.nbc"}))
+    (cache / "m.f-1.py3.nbi").write_bytes(kept)  # current: the user's own, left alone
+    (cache / "m.g-1.py3.nbi").write_bytes(pickle.dumps("0") + pickle.dumps(("old", {})))
+    assert prebuilt.seed_folder(archive, "hydro", cache, "current") == 1
+    assert (cache / "m.f-1.py3.nbi").read_bytes() == kept
+    assert not (cache / "m.f-1.py3.1.nbc").exists()
+    assert prebuilt.index_stamp(cache / "m.g-1.py3.nbi") == "current"
+    assert (cache / "m.g-1.py3.1.nbc").read_bytes() == b"code of g"
+    # the other folder's entry is not copied here, and no temporary file is left
+    assert sorted(p.name for p in cache.iterdir()) == [
+        "m.f-1.py3.nbi",
+        "m.g-1.py3.1.nbc",
+        "m.g-1.py3.nbi",
+    ]
+    assert prebuilt.seed_folder(archive, "hydro", cache, "current") == 0  # all current now
+
+
+def test_interrupted_seeding_leaves_no_index_without_its_data(tmp_path, monkeypatch):
+    archive = _synthetic_archive(tmp_path, "current")
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    written = []
+
+    def fail_on_second(path, data):
+        if written:
+            raise OSError("disk full")
+        written.append(path.name)
+        path.write_bytes(data)
+
+    monkeypatch.setattr(prebuilt, "_write_atomically", fail_on_second)
+    with pytest.raises(OSError):
+        prebuilt.seed_folder(archive, "hydro", cache, "current")
+    assert written == ["m.f-1.py3.1.nbc"]  # data first: the index naming it never appeared
+    assert not list(cache.glob("*.nbi"))
+
+
+def test_unreadable_archive_warns_once_and_is_not_used(tmp_path, monkeypatch):
+    broken = tmp_path / "py3.zip"
+    broken.write_bytes(b"PK\x03\x04 not a zip archive")
+    monkeypatch.setattr(prebuilt, "archive_path", lambda: broken)
+    monkeypatch.delenv("AIAUV_PREBUILT_KERNELS", raising=False)
+    prebuilt._usable_archive.cache_clear()
+    try:
+        with pytest.warns(prebuilt.PrebuiltCacheWarning, match="unreadable"):
+            assert prebuilt._usable_archive("stamp") is None
+        assert prebuilt.status().startswith("unreadable")
+    finally:
+        prebuilt._usable_archive.cache_clear()
+
+
+def test_manifest_mismatches_are_named(monkeypatch):
+    numba = pytest.importorskip("numba")
+    import llvmlite.binding as llvm
+
+    monkeypatch.setenv("NUMBA_CPU_NAME", "x86-64-v3")
+    monkeypatch.setenv("NUMBA_CPU_FEATURES", "")
+    good = prebuilt.Manifest(
+        "s", numba.__version__, prebuilt.python_tag(), llvm.get_process_triple(), "x86-64-v3", ()
+    )
+    assert good.mismatch("s") is None
+    assert good.mismatch("other") == "built from other sources"
+    cases = {
+        "numba": "built with numba 0.1",
+        "python_tag": "built for py27",
+        "triple": "built for sparc",
+        "cpu_name": "built for CPU generic",
+    }
+    values = {"numba": "0.1", "python_tag": "py27", "triple": "sparc", "cpu_name": "generic"}
+    import dataclasses
+
+    for field, start in cases.items():
+        reason = dataclasses.replace(good, **{field: values[field]}).mismatch("s")
+        assert reason is not None and reason.startswith(start), (field, reason)
+    monkeypatch.setenv("NUMBA_CPU_FEATURES", "+avx")  # the CPU's name alone does not fix the code
+    assert good.mismatch("s").startswith("built for CPU x86-64-v3")
+    with pytest.raises(ValueError, match="format"):
+        prebuilt.Manifest.from_json('{"format": 99}')
+
+
+def _shipped_kernels_serve_this_process() -> str | None:
+    if platform.machine().lower() not in ("x86_64", "amd64") or not sys.platform.startswith(
+        "linux"
+    ):
+        return "kernels are shipped for x86-64 Linux only"
+    if os.environ.get("NUMBA_CPU_NAME", "x86-64-v3") != "x86-64-v3":
+        return "NUMBA_CPU_NAME set by the user"
+    if not prebuilt.archive_path().is_file():
+        return f"no archive shipped for {prebuilt.python_tag()}"
+    return None
+
+
+@pytest.mark.parametrize(
+    "arguments",
+    [
+        ["simulate", "--duration", "1", "--no-html"],  # the quick start's command
+        ["simulate", "--duration", "0.2", "--no-html", "--method", "rk4", "--case", "stabilised"],
+    ],
+)
+def test_a_new_installation_compiles_nothing(tmp_path, arguments):
+    """An empty numba cache, as in a new installation: the shipped kernels serve the first run."""
+    pytest.importorskip("numba")
+    reason = _shipped_kernels_serve_this_process()
+    if reason is not None:
+        pytest.skip(reason)
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in ("NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES", "AIAUV_NATIVE_CPU")
+        and not k.startswith("AIAUV_PREBUILT")
+    }
+    env.update(NUMBA_CACHE_DIR=str(tmp_path / "cache"), NUMBA_DEBUG_CACHE="1")
+    done = subprocess.run(
+        [sys.executable, "-m", "aiauv_pin", *arguments, "--out", str(tmp_path / "out")],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr
+    output = done.stdout + done.stderr
+    assert "compiling kernels" not in output
+    assert "data saved" not in output  # numba saves what it compiled: nothing
+    assert "data loaded" in output
+    assert (tmp_path / "out" / "summary.json").is_file()
