@@ -116,19 +116,18 @@ def choose_portable_target() -> bool:
         return False
     if not wanted:
         return os.environ.get("NUMBA_CPU_NAME") == PORTABLE_CPU_NAME
-    numba_module = sys.modules.get("numba")
-    if numba_module is not None:
-        from numba.core import config
+    loaded = "numba" in sys.modules  # then numba read its settings already
+    if loaded:
         from numba.core.registry import cpu_target
 
         if "_toplevel_target_context" in vars(cpu_target):
             return False  # numba's code generator exists: its CPU is fixed
-        os.environ["NUMBA_CPU_NAME"] = PORTABLE_CPU_NAME
-        os.environ["NUMBA_CPU_FEATURES"] = ""
-        config.reload_config()
-        return True
     os.environ["NUMBA_CPU_NAME"] = PORTABLE_CPU_NAME
     os.environ["NUMBA_CPU_FEATURES"] = ""  # the features of the CPU name, none of the host's
+    if loaded:
+        from numba.core import config
+
+        config.reload_config()
     return True
 
 
@@ -218,7 +217,9 @@ class Archive:
                     self.files.setdefault(folder, {})[name] = info
 
 
-_state: dict[str, object] = {"archive": None, "status": "not consulted", "seeded": set()}
+#: This process's state: what became of the archive, and the (cache folder, source folder) pairs
+#: already seeded.
+_state: dict[str, object] = {"status": "not consulted", "seeded": set()}
 
 
 def status() -> str:

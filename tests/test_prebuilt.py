@@ -155,8 +155,10 @@ def _shipped_kernels_serve_this_process() -> str | None:
         "linux"
     ):
         return "kernels are shipped for x86-64 Linux only"
-    if os.environ.get("NUMBA_CPU_NAME", "x86-64-v3") != "x86-64-v3":
-        return "NUMBA_CPU_NAME set by the user"
+    import hydro.jit
+
+    if not hydro.jit.PORTABLE_TARGET:
+        return "numba does not compile for x86-64-v3 here (an older CPU, or the user's setting)"
     if not prebuilt.archive_path().is_file():
         return f"no archive shipped for {prebuilt.python_tag()}"
     return None
@@ -195,3 +197,26 @@ def test_a_new_installation_compiles_nothing(tmp_path, arguments):
     assert "data saved" not in output  # numba saves what it compiled: nothing
     assert "data loaded" in output
     assert (tmp_path / "out" / "summary.json").is_file()
+
+
+@pytest.mark.parametrize(
+    ("before", "portable"),
+    [("import numba", True), ("import numba; numba.njit(lambda x: x + 1)(1)", False)],
+)
+def test_the_target_is_chosen_only_while_numba_has_compiled_nothing(before, portable):
+    """numba imported first: its settings are re-read; something compiled first: left alone."""
+    pytest.importorskip("numba")
+    import hydro.jit
+
+    if not hydro.jit.PORTABLE_TARGET:
+        pytest.skip("numba does not compile for x86-64-v3 here")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_CPU_", "AIAUV_"))}
+    code = (
+        f"{before}\nimport hydro.jit\nfrom numba.core import config\n"
+        "print(hydro.jit.PORTABLE_TARGET, config.CPU_NAME)"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    expected = f"{portable} {prebuilt.PORTABLE_CPU_NAME if portable else None}"
+    assert done.stdout.strip() == expected
