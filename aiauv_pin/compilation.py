@@ -34,11 +34,19 @@ def _cache_folders() -> list[Path]:
 
 
 def _index_is_current(index: Path) -> bool:
-    """Whether a numba cache index was written for the current sources (:mod:`hydro.prebuilt`)."""
-    from hydro.jit import source_hash
-    from hydro.prebuilt import index_stamp
+    """Whether a numba cache index was written for the current sources and holds code for this
+    process's CPU target (numba keys each entry on its code generator's magic tuple: triple, CPU
+    name and features; :func:`hydro.prebuilt.read_index`)."""
+    from numba.core.registry import cpu_target
 
-    return index_stamp(index) == source_hash()
+    from hydro.jit import source_hash
+    from hydro.prebuilt import read_index
+
+    read = read_index(index)
+    if read is None or read[0] != source_hash():
+        return False
+    target = cpu_target.target_context.codegen().magic_tuple()
+    return any(isinstance(key, tuple) and key[1:2] == (target,) for key in read[1])
 
 
 def kernels_cached() -> bool:

@@ -131,18 +131,26 @@ def choose_portable_target() -> bool:
     return True
 
 
-def index_stamp(index: Path):
-    """The source stamp a numba cache index was written for, or ``None`` if unreadable.
+def read_index(index: Path) -> tuple[object, dict] | None:
+    """A numba cache index: ``(source stamp, overloads)``, or ``None`` if unreadable.
 
-    numba's index format: its version (pickled), then the pickled ``(source stamp, overloads)``.
+    numba's index format: its version (pickled), then the pickled ``(source stamp, overloads)``;
+    each overload's key is ``(signature, the code generator's magic tuple (triple, CPU name,
+    features), bytecode hashes)`` and its value the name of the data file.
     """
     try:
         with index.open("rb") as stream:
             pickle.load(stream)
-            stamp, _ = pickle.loads(stream.read())
+            stamp, overloads = pickle.loads(stream.read())
     except Exception:  # missing, truncated or foreign: not current
         return None
-    return stamp
+    return stamp, overloads
+
+
+def index_stamp(index: Path):
+    """The source stamp a numba cache index was written for, or ``None`` if unreadable."""
+    read = read_index(index)
+    return None if read is None else read[0]
 
 
 @dataclasses.dataclass(frozen=True)

@@ -136,8 +136,18 @@ def test_compile_notice_only_without_a_cache(tmp_path, monkeypatch, capsys):
     assert compilation.announce_compilation() is True  # an index of other sources is no cache
     capsys.readouterr()
     index.write_bytes(pickle.dumps("0.0") + pickle.dumps((source_hash(), {})))
-    assert compilation.announce_compilation() is False
-    assert capsys.readouterr().err == ""
+    assert compilation.announce_compilation() is True  # current, but no code in it
+    capsys.readouterr()
+    from numba.core.registry import cpu_target
+
+    target = cpu_target.target_context.codegen().magic_tuple()
+    other_cpu = (target[0], "some-other-cpu", "+feature")
+    for key_target, compiles in ((other_cpu, True), (target, False)):
+        # numba's key: (signature, code generator's magic tuple, bytecode hashes)
+        overloads = {(("float64",), key_target, ("a", "b")): "loop.run_chunk-20.py311.1.nbc"}
+        index.write_bytes(pickle.dumps("0.0") + pickle.dumps((source_hash(), overloads)))
+        assert compilation.announce_compilation() is compiles, key_target
+        assert (capsys.readouterr().err.strip() == compilation.COMPILE_NOTICE) is compiles
 
 
 def test_simulate_records_setup_time_apart_from_the_run(tmp_path, capsys):
