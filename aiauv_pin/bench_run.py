@@ -251,14 +251,11 @@ def first_run(case: str = "uniform", repeats: int = 3, compile_repeats: int = 2)
     is the child's user and system time; ``functions_compiled`` counts the compiled functions
     numba saved to its cache (``NUMBA_DEBUG_CACHE``).
     """
-    import os
     import resource
 
-    base_env = {
-        k: v
-        for k, v in os.environ.items()
-        if not k.startswith(("NUMBA_CPU_", "AIAUV_PREBUILT", "AIAUV_NATIVE"))
-    }
+    from .prebuilt import default_target_environment
+
+    base_env = default_target_environment()
     variants = {"shipped": {}, "compiled": {"AIAUV_PREBUILT_KERNELS": "0"}}
     measured = {name: {"cpu_s": [], "wall_s": [], "functions_compiled": []} for name in variants}
     with tempfile.TemporaryDirectory() as folder:

@@ -25,7 +25,7 @@ import zipfile
 from pathlib import Path
 
 from hydro import prebuilt
-from hydro.jit import COMPILED_SOURCES, source_hash
+from hydro.jit import _project_files, source_hash
 
 #: What the build runs (``aiauv`` command lines, and the README's batch rollout): the quick start
 #: and the commands a new user tries next. Each simulates 1 s; the compiled code does not depend on
@@ -40,14 +40,25 @@ WORKLOADS = (
 _ROOT = Path(__file__).resolve().parent.parent
 
 
+#: The settings that choose numba's CPU target or the shipped kernels (:mod:`hydro.prebuilt`).
+TARGET_SETTINGS = (
+    "NUMBA_CPU_NAME",
+    "NUMBA_CPU_FEATURES",
+    "AIAUV_NATIVE_CPU",
+    "AIAUV_PREBUILT_KERNELS",
+)
+
+
+def default_target_environment(environ=None) -> dict[str, str]:
+    """``environ`` (default: this process's) without :data:`TARGET_SETTINGS`: what a new user's
+    process has, for child processes that must choose the target as a new installation does."""
+    environ = os.environ if environ is None else environ
+    return {k: v for k, v in environ.items() if k not in TARGET_SETTINGS}
+
+
 def compiled_folders() -> list[str]:
     """The source folders (relative to the project root) that hold compiled functions."""
-    folders = set()
-    for source in COMPILED_SOURCES:
-        path = _ROOT / source
-        files = sorted(path.rglob("*.py")) if path.is_dir() else [path]
-        folders.update(f.parent.relative_to(_ROOT).as_posix() for f in files)
-    return sorted(folders)
+    return sorted({f.parent.relative_to(_ROOT).as_posix() for f in _project_files()})
 
 
 def _rollout_workload() -> None:
@@ -140,11 +151,7 @@ def build_here(out_dir: Path) -> Path:
     archive = out_dir / f"{prebuilt.python_tag()}.zip"
     with tempfile.TemporaryDirectory(prefix="aiauv-prebuilt-") as temporary:
         cache_dir = Path(temporary) / "cache"
-        env = {
-            k: v
-            for k, v in os.environ.items()
-            if k not in ("NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES", "AIAUV_NATIVE_CPU")
-        }
+        env = default_target_environment()
         env.update(NUMBA_CACHE_DIR=str(cache_dir), AIAUV_PREBUILT_KERNELS="0")
         code = [sys.executable, "-m", "aiauv_pin.prebuilt", "--workloads", temporary]
         subprocess.run(code, env=env, check=True)

@@ -225,9 +225,9 @@ class Archive:
                     self.files.setdefault(folder, {})[name] = info
 
 
-#: This process's state: what became of the archive, and the (cache folder, source folder) pairs
-#: already seeded.
-_state: dict[str, object] = {"status": "not consulted", "seeded": set()}
+#: This process's state: what became of the archive, the (cache folder, source folder) pairs
+#: already seeded, and whether a copy failed (then nothing more is unpacked).
+_state: dict[str, object] = {"status": "not consulted", "seeded": set(), "failed": False}
 
 
 def status() -> str:
@@ -307,8 +307,9 @@ def seed_folder(archive: Archive, folder: str, cache_path: Path, source_hash: st
 def seed(cache_path: str, source_file: str, root: Path, source_hash: str) -> None:
     """Unpack the shipped entries of ``source_file``'s folder into ``cache_path`` (once each).
 
-    Called by :mod:`hydro.jit`'s cache locators when a compiled function is defined. Errors are
-    reported once as :class:`PrebuiltCacheWarning`; numba then compiles as usual.
+    Called by :mod:`hydro.jit`'s cache locators when a compiled function is defined. The first
+    error is reported as :class:`PrebuiltCacheWarning` and ends the unpacking for this process;
+    numba then compiles what it does not find.
     """
     try:
         folder = Path(source_file).resolve().parent.relative_to(root).as_posix()
@@ -316,7 +317,7 @@ def seed(cache_path: str, source_file: str, root: Path, source_hash: str) -> Non
         return
     key = (cache_path, folder)
     seeded: set = _state["seeded"]  # type: ignore[assignment]
-    if key in seeded:
+    if key in seeded or _state["failed"]:
         return
     seeded.add(key)
     archive = _usable_archive(source_hash)
@@ -326,6 +327,7 @@ def seed(cache_path: str, source_file: str, root: Path, source_hash: str) -> Non
         seed_folder(archive, folder, Path(cache_path), source_hash)
     except (OSError, RuntimeError, zipfile.BadZipFile, KeyError) as error:
         _state["status"] = f"seeding failed ({error})"
+        _state["failed"] = True
         warnings.warn(
             f"aiauv: could not unpack the shipped compiled kernels into {cache_path} ({error}); "
             "compiling instead",

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import pickle
 import platform
 import subprocess
@@ -12,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from aiauv_pin.prebuilt import default_target_environment
 from hydro import prebuilt
 from hydro.jit import source_hash
 
@@ -177,12 +177,7 @@ def test_a_new_installation_compiles_nothing(tmp_path, arguments):
     reason = _shipped_kernels_serve_this_process()
     if reason is not None:
         pytest.skip(reason)
-    env = {
-        k: v
-        for k, v in os.environ.items()
-        if k not in ("NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES", "AIAUV_NATIVE_CPU")
-        and not k.startswith("AIAUV_PREBUILT")
-    }
+    env = default_target_environment()
     env.update(NUMBA_CACHE_DIR=str(tmp_path / "cache"), NUMBA_DEBUG_CACHE="1")
     done = subprocess.run(
         [sys.executable, "-m", "aiauv_pin", *arguments, "--out", str(tmp_path / "out")],
@@ -210,7 +205,7 @@ def test_the_target_is_chosen_only_while_numba_has_compiled_nothing(before, port
 
     if not hydro.jit.PORTABLE_TARGET:
         pytest.skip("numba does not compile for x86-64-v3 here")
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_CPU_", "AIAUV_"))}
+    env = default_target_environment()
     code = (
         f"{before}\nimport hydro.jit\nfrom numba.core import config\n"
         "print(hydro.jit.PORTABLE_TARGET, config.CPU_NAME)"
@@ -220,3 +215,28 @@ def test_the_target_is_chosen_only_while_numba_has_compiled_nothing(before, port
     )
     expected = f"{portable} {prebuilt.PORTABLE_CPU_NAME if portable else None}"
     assert done.stdout.strip() == expected
+
+
+def test_the_first_failed_copy_warns_and_ends_the_unpacking(tmp_path, monkeypatch):
+    archive = _synthetic_archive(tmp_path, "current")
+    monkeypatch.setattr(prebuilt, "_usable_archive", lambda source_hash: archive)
+    monkeypatch.setitem(prebuilt._state, "seeded", set())
+    monkeypatch.setitem(prebuilt._state, "failed", False)
+    monkeypatch.setitem(prebuilt._state, "status", "not consulted")
+    calls = []
+
+    def disk_full(*arguments):
+        calls.append(arguments[1])
+        raise OSError("disk full")
+
+    monkeypatch.setattr(prebuilt, "seed_folder", disk_full)
+    root = tmp_path / "root"
+    with pytest.warns(prebuilt.PrebuiltCacheWarning, match="disk full"):
+        prebuilt.seed(str(tmp_path / "cache"), str(root / "hydro" / "m.py"), root, "current")
+    assert prebuilt.status() == "seeding failed (disk full)"
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no second warning, no second attempt
+        prebuilt.seed(str(tmp_path / "cache"), str(root / "control" / "m.py"), root, "current")
+    assert calls == ["hydro"]
