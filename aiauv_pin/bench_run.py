@@ -253,7 +253,7 @@ def first_run(case: str = "uniform", repeats: int = 3, compile_repeats: int = 2)
     """
     import resource
 
-    from .prebuilt import default_target_environment
+    from .compilation import default_target_environment
 
     base_env = default_target_environment()
     variants = {"shipped": {}, "compiled": {"AIAUV_PREBUILT_KERNELS": "0"}}

@@ -21,6 +21,22 @@ from pathlib import Path
 COMPILE_NOTICE = "aiauv: compiling kernels once for this installation (about a minute of CPU time)"
 
 
+#: The settings that choose numba's CPU target or the shipped kernels (:mod:`hydro.prebuilt`).
+TARGET_SETTINGS = (
+    "NUMBA_CPU_NAME",
+    "NUMBA_CPU_FEATURES",
+    "AIAUV_NATIVE_CPU",
+    "AIAUV_PREBUILT_KERNELS",
+)
+
+
+def default_target_environment(environ=None) -> dict[str, str]:
+    """``environ`` (default: this process's) without :data:`TARGET_SETTINGS`: what a new user's
+    process has, for child processes that must choose the target as a new installation does."""
+    environ = os.environ if environ is None else environ
+    return {k: v for k, v in environ.items() if k not in TARGET_SETTINGS}
+
+
 def _cache_folders() -> list[Path]:
     """Where numba may keep this package's cache (its locators, in order)."""
     if os.environ.get("NUMBA_CACHE_DIR"):

@@ -27,6 +27,8 @@ from pathlib import Path
 from hydro import prebuilt
 from hydro.jit import _project_files, source_hash
 
+from .compilation import default_target_environment
+
 #: What the build runs (``aiauv`` command lines, and the README's batch rollout): the quick start
 #: and the commands a new user tries next. Each simulates 1 s; the compiled code does not depend on
 #: the duration.
@@ -38,22 +40,6 @@ WORKLOADS = (
 )
 
 _ROOT = Path(__file__).resolve().parent.parent
-
-
-#: The settings that choose numba's CPU target or the shipped kernels (:mod:`hydro.prebuilt`).
-TARGET_SETTINGS = (
-    "NUMBA_CPU_NAME",
-    "NUMBA_CPU_FEATURES",
-    "AIAUV_NATIVE_CPU",
-    "AIAUV_PREBUILT_KERNELS",
-)
-
-
-def default_target_environment(environ=None) -> dict[str, str]:
-    """``environ`` (default: this process's) without :data:`TARGET_SETTINGS`: what a new user's
-    process has, for child processes that must choose the target as a new installation does."""
-    environ = os.environ if environ is None else environ
-    return {k: v for k, v in environ.items() if k not in TARGET_SETTINGS}
 
 
 def compiled_folders() -> list[str]:

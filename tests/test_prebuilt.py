@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from aiauv_pin.prebuilt import default_target_environment
+from aiauv_pin.compilation import default_target_environment
 from hydro import prebuilt
 from hydro.jit import source_hash
 
