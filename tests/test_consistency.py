@@ -252,6 +252,27 @@ def test_cli_physics_table_for_the_paper_vehicle(capfd):
     assert any(line.startswith("trim roll +0.00 deg, pitch +0.00 deg") for line in lines)
 
 
+def test_trim_line_prints_what_rounds_to_zero_as_plus_zero():
+    # the paper vehicle's trim is zero up to rounding errors whose sign differs between platforms
+    # (pitch 5.2e-15 rad with Python 3.11's wheels, -0.0 with 3.13's, printed "-0.00 deg")
+    tiny = consistency.Trim(
+        roll=-1e-17,
+        pitch=-1e-18,
+        net_buoyancy=-1e-13,
+        weight=900.0,
+        center_of_gravity=np.zeros(3),
+        center_of_buoyancy=np.array([0.0, 0.0, 0.01]),
+        warnings=(),
+    )
+    assert tiny.describe() == (
+        "trim roll +0.00 deg, pitch +0.00 deg; net buoyancy -1e-13 N (+0.00 % of the weight)"
+    )
+    tilted = tiny._replace(roll=math.radians(-1.236), pitch=math.radians(2.0), net_buoyancy=-9.0)
+    assert tilted.describe() == (
+        "trim roll -1.24 deg, pitch +2.00 deg; net buoyancy -9 N (-1.00 % of the weight)"
+    )
+
+
 def test_cli_physics_fails_on_negative_damping(tmp_path, capfd):
     assert main(["check", "--physics", str(negative_damping_urdf(tmp_path))]) == 1
     out, err = capfd.readouterr()
