@@ -483,31 +483,35 @@ def main(argv: list[str] | None = None) -> int:
     arguments = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(arguments[0] if arguments else None)
     args = parser.parse_args(arguments)
-    previous = warnings.showwarning
-    warnings.showwarning = _show_warning
-    try:
-        return int(args.handler(args) or 0)
-    except KeyboardInterrupt:
-        print("aiauv: interrupted", file=sys.stderr)
-        return 130
-    except (AiauvError, ValueError, OSError, MemoryError, RecursionError) as exc:
-        message = " ".join(str(exc).split()) or exc.__class__.__name__
-        if isinstance(exc, (MemoryError, RecursionError)):
-            message = f"{exc.__class__.__name__}: {message} (input too large or too deep)"
-        print(f"aiauv: error: {message}", file=sys.stderr)
-        return EXIT_FAILED
-    except Exception as exc:
-        if os.environ.get("AIAUV_DEBUG"):
-            raise
-        message = " ".join(str(exc).split())
-        print(
-            f"aiauv: error: internal error ({exc.__class__.__name__}: {message}); "
-            "rerun with AIAUV_DEBUG=1 for the traceback",
-            file=sys.stderr,
-        )
-        return EXIT_FAILED
-    finally:
-        warnings.showwarning = previous
+    with warnings.catch_warnings():  # restores the filters and showwarning on return
+        # Deprecations are for the developers of the code that issues them, not for the user of
+        # the command: on Python 3.10, importing xacro warned that its enum's private names "will
+        # be normal attributes in 3.11", which became a second line before a one-line error
+        # wherever warnings are shown (under pytest, with PYTHONWARNINGS)
+        warnings.simplefilter("ignore", DeprecationWarning)
+        warnings.simplefilter("ignore", PendingDeprecationWarning)
+        warnings.showwarning = _show_warning
+        try:
+            return int(args.handler(args) or 0)
+        except KeyboardInterrupt:
+            print("aiauv: interrupted", file=sys.stderr)
+            return 130
+        except (AiauvError, ValueError, OSError, MemoryError, RecursionError) as exc:
+            message = " ".join(str(exc).split()) or exc.__class__.__name__
+            if isinstance(exc, (MemoryError, RecursionError)):
+                message = f"{exc.__class__.__name__}: {message} (input too large or too deep)"
+            print(f"aiauv: error: {message}", file=sys.stderr)
+            return EXIT_FAILED
+        except Exception as exc:
+            if os.environ.get("AIAUV_DEBUG"):
+                raise
+            message = " ".join(str(exc).split())
+            print(
+                f"aiauv: error: internal error ({exc.__class__.__name__}: {message}); "
+                "rerun with AIAUV_DEBUG=1 for the traceback",
+                file=sys.stderr,
+            )
+            return EXIT_FAILED
 
 
 def console_main() -> None:

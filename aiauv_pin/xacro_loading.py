@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
@@ -41,15 +40,8 @@ def _one_line(error: BaseException) -> str:
 def _patched_xacro(search_path: Sequence[Path]) -> Iterator[object]:
     """The xacro module with ``$(find)`` on our search path and safe file parsing, then restored."""
     try:
-        with warnings.catch_warnings():
-            # on Python 3.10, importing xacro 2.x warns that its enum's private names "will be
-            # normal attributes in 3.11" (a DeprecationWarning meant for xacro's developers; where
-            # warnings are shown, e.g. under pytest, the CLI printed it as a second line)
-            warnings.filterwarnings(
-                "ignore", message="private variables", category=DeprecationWarning
-            )
-            import xacro
-            from xacro import substitution_args
+        import xacro
+        from xacro import substitution_args
     except ImportError:
         raise VehicleLoadError(
             "reading .xacro files needs the xacro package (pip install xacro)"

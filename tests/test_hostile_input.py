@@ -325,3 +325,38 @@ def test_a_mesh_the_playback_cannot_read_is_refused_before_the_run(tmp_path, cap
     code, _, err = run_cli(capfd, [*argv, "--out", out, "--quiet", "--no-html"])
     assert code == 0, err
     assert (out / "summary.json").exists()
+
+
+def test_cli_prints_warnings_for_the_user_but_not_libraries_deprecations(
+    tmp_path, capfd, monkeypatch
+):
+    # a library's deprecation (on Python 3.10, xacro's import-time "private variables ... will be
+    # normal attributes in 3.11") is shown under pytest's filters; the command must still say its
+    # error in one line, while a warning meant for the user (a UserWarning) keeps its own line
+    import warnings
+
+    from aiauv_pin import annotation
+    from aiauv_pin.errors import VehicleLoadError
+
+    def failing_annotate(*args, **kwargs):
+        warnings.warn("an old keyword", DeprecationWarning, stacklevel=1)
+        warnings.warn("a parameter for the developers", PendingDeprecationWarning, stacklevel=1)
+        raise VehicleLoadError("vehicle.urdf: refused: XML with a DTD/entities")
+
+    monkeypatch.setattr(annotation, "annotate_file", failing_annotate)
+    path = tmp_path / "vehicle.urdf"
+    path.write_text("<robot/>", encoding="utf-8")
+    code, _, err = run_cli(capfd, ["annotate", path, "-o", tmp_path / "out.urdf"])
+    assert_one_line_error(code, err, "refused", "DTD")
+
+    def warning_annotate(*args, **kwargs):
+        warnings.warn("link 'x' has no collision shape", UserWarning, stacklevel=1)
+        raise VehicleLoadError("vehicle.urdf: refused")
+
+    monkeypatch.setattr(annotation, "annotate_file", warning_annotate)
+    code, _, err = run_cli(capfd, ["annotate", path, "-o", tmp_path / "out.urdf"])
+    assert err.splitlines() == [
+        "aiauv: warning: link 'x' has no collision shape",
+        "aiauv: error: vehicle.urdf: refused",
+    ]
+    assert code not in (0, None)
