@@ -12,7 +12,7 @@ The main entry points::
 from typing import TYPE_CHECKING
 
 from .errors import AiauvError, SimulationDiverged, VehicleLoadError
-from .integrators import rk4_step, semi_implicit_euler_step
+from .integrators import midpoint_step, rk4_step, semi_implicit_euler_step
 from .loading import BUNDLED_CASES, bundled_urdf, load_vehicle
 from .rollout import Rollout, rollout
 from .simulation import Trajectory, simulate
@@ -50,6 +50,7 @@ __all__ = [
     "bundled_urdf",
     "linearize",
     "load_vehicle",
+    "midpoint_step",
     "rk4_step",
     "rollout",
     "semi_implicit_euler_step",

@@ -10,8 +10,9 @@
 * :func:`first_run`: CPU and wall time of a new installation's first run (empty numba cache), with
   the kernels shipped with the package and, interleaved, with everything compiled.
 * :func:`accuracy_per_cost`: the largest end-effector distance over the whole path between each
-  method and step and a converged reference (RK4 at a step small enough that halving it changes
-  the path by far less than the errors reported), and the CPU time of each run.
+  method and step and a converged reference (RK4 at a small step and at twice it, extrapolated to
+  a zero step, checked against the midpoint method at the small step), and the CPU time of each
+  run.
 
 Every figure is reported as the median and range of its repeats (the machine is shared).
 """
@@ -57,13 +58,21 @@ def _warm(duration: float) -> str:
 #: The sparse rollout's log period in steps: every 10th step, the CSV's 0.04 s at the default step.
 ROLLOUT_SPARSE_LOG = 10
 
+#: The midpoint method's step in the batches [s]: the largest divisor of the CSV's 0.04 s within
+#: its stability on the paper's vehicles (0.025 s holds, 0.03 s does not on the uniform one), and
+#: its sparse log period in steps (0.04 s).
+ROLLOUT_MIDPOINT_DT = 0.02
+ROLLOUT_MIDPOINT_SPARSE_LOG = 2
+
 
 def throughput(
     case: str = "uniform", duration: float = 300.0, runs: int = 8, rounds: int = 3, cores: int = 2
 ) -> dict:
     """Runs per minute of ``runs`` paper-scenario runs (cross-track gain varied): the sweep in
     processes and in threads, and :func:`aiauv_pin.rollout` logging every step (its default) and
-    every :data:`ROLLOUT_SPARSE_LOG` th step (the CSV's 0.04 s at the default step)."""
+    every :data:`ROLLOUT_SPARSE_LOG` th step (the CSV's 0.04 s at the default step); and the same
+    rollouts with the midpoint method at :data:`ROLLOUT_MIDPOINT_DT` (not the default: see the
+    README's accuracy per cost)."""
     import logging
 
     from dask.distributed import Client, LocalCluster
@@ -104,6 +113,8 @@ def throughput(
         "sweep_threads": [],
         "rollout": [],
         "rollout_sparse_log": [],
+        "rollout_midpoint": [],
+        "rollout_midpoint_sparse_log": [],
     }
     try:
         for cluster in clusters.values():
@@ -114,6 +125,16 @@ def throughput(
                 assert set(statuses) == {"complete"}, statuses
         rollout(
             vehicle, q0, v0, 1.0, scenario.dt, laws()[:cores], method=scenario.method, threads=cores
+        )
+        rollout(
+            vehicle,
+            q0,
+            v0,
+            1.0,
+            ROLLOUT_MIDPOINT_DT,
+            laws()[:cores],
+            method="midpoint",
+            threads=cores,
         )
         for _ in range(rounds):
             for name, cluster in clusters.items():
@@ -131,7 +152,17 @@ def throughput(
                     raise RuntimeError(
                         f"{name}: expected {runs} complete runs, got {report.counts}"
                     )
-            for name, log_every in (("rollout", 1), ("rollout_sparse_log", ROLLOUT_SPARSE_LOG)):
+            for name, method, dt, log_every in (
+                ("rollout", scenario.method, scenario.dt, 1),
+                ("rollout_sparse_log", scenario.method, scenario.dt, ROLLOUT_SPARSE_LOG),
+                ("rollout_midpoint", "midpoint", ROLLOUT_MIDPOINT_DT, 1),
+                (
+                    "rollout_midpoint_sparse_log",
+                    "midpoint",
+                    ROLLOUT_MIDPOINT_DT,
+                    ROLLOUT_MIDPOINT_SPARSE_LOG,
+                ),
+            ):
                 controllers = laws()
                 start = time.perf_counter()
                 batch = rollout(
@@ -139,9 +170,9 @@ def throughput(
                     q0,
                     v0,
                     duration,
-                    scenario.dt,
+                    dt,
                     controllers,
-                    method=scenario.method,
+                    method=method,
                     threads=cores,
                     log_every=log_every,
                 )
@@ -161,6 +192,8 @@ def throughput(
         "rounds": rounds,
         "cores": cores,
         "rollout_sparse_log_every": ROLLOUT_SPARSE_LOG,
+        "rollout_midpoint_dt_s": ROLLOUT_MIDPOINT_DT,
+        "rollout_midpoint_sparse_log_every": ROLLOUT_MIDPOINT_SPARSE_LOG,
     }
     for name, walls in times.items():
         results[name] = {
@@ -322,6 +355,10 @@ def accuracy_per_cost(
         ("euler", 0.004),
         ("euler", 0.0025),
         ("euler", 0.001),
+        ("midpoint", 0.04),
+        ("midpoint", 0.02),
+        ("midpoint", 0.01),
+        ("midpoint", 0.004),
     ),
     reference_dt: float = 0.0005,
     repeats: int = 3,
@@ -329,10 +366,17 @@ def accuracy_per_cost(
     controller: str = "paper",
     current: tuple[float, float, float] = (0.0, 0.0, 0.0),
 ) -> dict:
-    """End-effector error of each (method, step) against RK4 at ``reference_dt`` and at twice it.
+    """End-effector error of each (method, step) against a converged reference.
 
-    The controller is sampled at every integration step (the scenario's default), so the errors
-    include the effect of the sampling; the two references bound how converged the reference is.
+    The controller is sampled at every integration step (the scenario's default; the midpoint
+    method samples it at the middle of each step), so the errors include the effect of the
+    sampling. Holding the controller over a step makes RK4's error first order in its step, so the
+    reference is Richardson's extrapolation to a zero step of RK4 at ``reference_dt`` and at twice
+    it, ``2 p(h) - p(2h)`` (e.g. Hairer, Norsett and Wanner 1993, Sec. II.9), which removes that
+    first-order term (RK4 at ``reference_dt`` alone is ``u_d reference_dt / 2`` behind it along the
+    path). ``reference_convergence_m`` is its largest distance from an independent estimate, the
+    midpoint method (second order with the controller sampled at the middle of each step) at
+    ``reference_dt``; ``reference_correction_m`` the size of the extrapolation, ``|p(h) - p(2h)|``.
     Paths are compared every ``grid`` seconds [s] (a multiple of every step).
     Costs are CPU seconds of the compiled run (median of ``repeats``, interleaved).
 
@@ -386,13 +430,17 @@ def accuracy_per_cost(
             current=scenario.water,
             log_every=max(1, round(grid / dt)),
         )
-        if "p" in run.info:
-            return run.t, run.info["p"]
+        # the end-effector of the logged state: with the midpoint method a row's diagnostics (the
+        # controller's measured p) are those of the sample half a step earlier
         frame = vehicle.frame_id(tip_frame(vehicle))
         return run.t, vehicle.fast.frame_positions(np.asarray(run.q), frame)
 
-    reference_t, reference_p = path("rk4", reference_dt)
-    check_t, check_p = path("rk4", 2 * reference_dt)
+    reference_t, fine_p = path("rk4", reference_dt)
+    coarse_t, coarse_p = path("rk4", 2 * reference_dt)
+    check_t, check_p = path("midpoint", reference_dt)
+    if not (np.allclose(coarse_t, reference_t, atol=1e-9) and np.allclose(check_t, reference_t)):
+        raise RuntimeError("accuracy: the reference runs' log times differ")
+    reference_p = 2.0 * fine_p - coarse_p  # Richardson: the first-order term removed
 
     def difference_to_reference(t: np.ndarray, p: np.ndarray) -> np.ndarray:
         """End-effector position minus the reference's at the same times [m] (n x 3)."""
@@ -449,8 +497,9 @@ def accuracy_per_cost(
         "controller": controller,
         "current_m_s": [float(c) for c in current],
         "duration_s": duration,
-        "reference": {"method": "rk4", "dt": reference_dt},
+        "reference": {"method": "rk4", "dt": reference_dt, "extrapolated_from": 2 * reference_dt},
         "reference_convergence_m": error_against_reference(check_t, check_p),
+        "reference_correction_m": float(np.linalg.norm(fine_p - coarse_p, axis=1).max()),
         "target_m": ACCURACY_TARGET,
         "rows": rows,
         "default": {"method": default[0], "dt": default[1]},
@@ -484,6 +533,14 @@ def format_parts(results: dict) -> list[str]:
             spread(
                 f"{head}: rollout(), log every {tp['rollout_sparse_log_every']}th step",
                 tp["rollout_sparse_log"]["runs_per_minute"],
+                "",
+            )
+        if "rollout_midpoint" in tp:
+            midpoint = f"{head}: rollout(), midpoint dt={tp['rollout_midpoint_dt_s']:g}"
+            spread(midpoint, tp["rollout_midpoint"]["runs_per_minute"], "")
+            spread(
+                f"{midpoint}, log every {tp['rollout_midpoint_sparse_log_every']}nd step",
+                tp["rollout_midpoint_sparse_log"]["runs_per_minute"],
                 "",
             )
     e2e = results.get("end_to_end")

@@ -68,9 +68,10 @@ def _add_simulate(subparsers) -> None:
     )
     parser.add_argument(
         "--method",
-        choices=("rk4", "euler"),
+        choices=("rk4", "euler", "midpoint"),
         default=None,
-        help=f"integrator: semi-implicit Euler or RK4 (Munthe-Kaas) ({DEFAULT_METHOD})",
+        help="integrator: semi-implicit Euler, RK4 (Munthe-Kaas), or the midpoint method with "
+        f"the controller sampled inside each step ({DEFAULT_METHOD})",
     )
     parser.add_argument(
         "--current",

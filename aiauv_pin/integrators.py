@@ -13,6 +13,15 @@ v4))``, mixes vectors of different tangent spaces and is only second order for a
 
 :func:`semi_implicit_euler_step` is the symplectic Euler method (order 1): ``v`` first, then ``q`` with
 the new ``v``.
+
+:func:`midpoint_step` is the explicit midpoint rule (order 2; Hairer, Norsett and Wanner 1993, Sec.
+II.1) in two halves, :func:`midpoint_stage` (the state at ``t + dt/2``) and :func:`midpoint_final`,
+so that a simulation can sample its controller at the stage. On the group the step is ``q_{n+1} =
+q_n * exp(dt v_1)`` with ``v_1`` the stage velocity, which is the step's Magnus increment to second
+order (Iserles, Munthe-Kaas, Norsett and Zanna 2000, "Lie-group methods", Sec. 4). Given dynamics
+with a joint servo made implicit over ``dt`` (as :func:`aiauv_pin.simulate` gives them), both
+stages use that servo-implicit acceleration, as the compiled kernels do
+(:func:`aiauv_pin.fast.kernels.midpoint_stage_into`).
 """
 
 from __future__ import annotations
@@ -107,5 +116,56 @@ def semi_implicit_euler_step(
     return pin.integrate(model, q, dt * v_next), v_next
 
 
+def midpoint_stage(
+    model: pin.Model,
+    dynamics: Dynamics,
+    q: np.ndarray,
+    v: np.ndarray,
+    dt: float,
+    t: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The midpoint method's stage: ``v_1 = v + dt/2 f(q, v)``, ``q_1 = q * exp(dt/2 v_1)``.
+
+    Returns:
+        ``(q_1, v_1)``, the state at ``t + dt/2``.
+    """
+    half = 0.5 * dt
+    v_mid = v + half * _timed(dynamics, t)(q, v, 0.0 if t is None else t)
+    return pin.integrate(model, q, half * v_mid), v_mid
+
+
+def midpoint_final(
+    model: pin.Model,
+    dynamics: Dynamics,
+    q: np.ndarray,
+    v: np.ndarray,
+    q_mid: np.ndarray,
+    v_mid: np.ndarray,
+    dt: float,
+    t: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The midpoint method's completion from its stage ``(q_mid, v_mid)`` (:func:`midpoint_stage`):
+    ``v' = v + dt f(q_1, v_1)`` (at ``t + dt/2``), ``q' = q * exp(dt v_1)``."""
+    t_mid = (0.0 if t is None else t) + 0.5 * dt
+    v_next = v + dt * _timed(dynamics, t)(q_mid, v_mid, t_mid)
+    return pin.integrate(model, q, dt * v_mid), v_next
+
+
+def midpoint_step(
+    model: pin.Model,
+    dynamics: Dynamics,
+    q: np.ndarray,
+    v: np.ndarray,
+    dt: float,
+    t: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """One step of the midpoint method (order 2): :func:`midpoint_stage`, then :func:`midpoint_final`."""
+    q_mid, v_mid = midpoint_stage(model, dynamics, q, v, dt, t)
+    return midpoint_final(model, dynamics, q, v, q_mid, v_mid, dt, t)
+
+
 #: Integrators by name, as accepted by :func:`aiauv_pin.simulate`.
-INTEGRATORS = {"rk4": rk4_step, "euler": semi_implicit_euler_step}
+INTEGRATORS = {"rk4": rk4_step, "euler": semi_implicit_euler_step, "midpoint": midpoint_step}
+
+#: Methods whose simulation samples the controller inside each step (at the stage ``t + dt/2``).
+SAMPLES_INSIDE_STEP = ("midpoint",)

@@ -36,6 +36,7 @@ WORKLOADS = (
     ("simulate", "--duration", "1"),
     ("simulate", "--duration", "1", "--no-html", "--method", "rk4"),
     ("simulate", "--duration", "1", "--no-html", "--case", "stabilised"),
+    ("simulate", "--duration", "1", "--no-html", "--method", "midpoint", "--dt", "0.02"),
     ("rollout",),
 )
 
@@ -48,7 +49,8 @@ def compiled_folders() -> list[str]:
 
 
 def _rollout_workload() -> None:
-    """The README's batch rollout, shortened (two gains, 1 s)."""
+    """The README's batch rollout, shortened (two gains, 1 s), and the same with the midpoint
+    method at 0.02 s (the batches of ``aiauv bench --only throughput``)."""
     import dataclasses
 
     import aiauv_pin
@@ -64,7 +66,10 @@ def _rollout_workload() -> None:
         ).compiled()
         for k in (0.05, 0.1)
     ]
-    aiauv_pin.rollout(vehicle, q0, v0, scenario.duration, scenario.dt, laws, log_every=10)
+    aiauv_pin.rollout(
+        vehicle, q0, v0, scenario.duration, scenario.dt, laws, method=scenario.method, log_every=10
+    )
+    aiauv_pin.rollout(vehicle, q0, v0, scenario.duration, 0.02, laws, method="midpoint")
 
 
 def _run_workloads(out: Path) -> None:

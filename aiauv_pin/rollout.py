@@ -185,7 +185,7 @@ def rollout(
             run gets a private copy of its parameters and state, reset first), a sequence of N of
             them (e.g. N parameter sets; they must log the same ``info_shapes``), or ``None``
             (passive).
-        method: ``"rk4"`` or ``"euler"``.
+        method: ``"rk4"``, ``"euler"`` or ``"midpoint"`` (:func:`aiauv_pin.simulate`).
         current: ``None``, a world velocity (3,) or (N, 3) [m/s], a
             :class:`hydro.currents.Current`, or a sequence of N of them.
         disturbance: A compiled :class:`~aiauv_pin.disturbances.Disturbance` (every run).

@@ -68,7 +68,7 @@ class Scenario:
         initial_offset: End-effector start ``(p_y, p_z)`` [m] with ``p_x = 0``, used when
             ``start_position`` is not given.
         initial_surge: Initial forward speed of the straight vehicle [m/s].
-        method: Integrator, ``"rk4"`` or ``"euler"``.
+        method: Integrator, ``"rk4"``, ``"euler"`` or ``"midpoint"`` (:func:`aiauv_pin.simulate`).
         current: Water velocity: a constant world velocity (3) [m/s] or a
             :class:`hydro.currents.Current`.
         gains: Controller gains; ``None`` means the paper's for the case.
@@ -387,11 +387,18 @@ def add_path_errors(vehicle: Vehicle, scenario: Scenario, trajectory: Trajectory
 
     A passive run (or a user's controller) logs no path quantities; they are computed here from
     the logged configurations (:meth:`Vehicle.frame_placement`, :meth:`control.paths.Path.closest`).
+    So are they for the midpoint method, whose rows hold the controller's measurement at the
+    middle of their step (:func:`aiauv_pin.simulate`): the files then show the rows' own.
     """
     from control.laws import path_errors_of_positions
 
+    from .integrators import SAMPLES_INSIDE_STEP
+
     info = trajectory.info
     n = len(trajectory.t)
+    if scenario.method in SAMPLES_INSIDE_STEP:
+        for key in ("p", "cross_track", "path_s"):
+            info.pop(key, None)
     if "p" not in info:
         frame = vehicle.frame_id(tip_frame(vehicle))
         if vehicle.fast is not None:

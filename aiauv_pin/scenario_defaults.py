@@ -5,7 +5,8 @@ without loading the simulation; :class:`aiauv_pin.scenario.Scenario` takes its d
 Why these values: :mod:`aiauv_pin.scenario` (module docstring) and ``benchmarks/default_step.py``.
 """
 
-#: Integrator of the scenario: semi-implicit Euler (``"euler"``) or RK4-Munthe-Kaas (``"rk4"``).
+#: Integrator of the scenario: semi-implicit Euler (``"euler"``), RK4-Munthe-Kaas (``"rk4"``) or the
+#: midpoint method (``"midpoint"``).
 DEFAULT_METHOD = "euler"
 #: Integration step of the scenario [s]: the cheapest within 2 mm of the converged path (issue 15).
 DEFAULT_DT = 0.004

@@ -6,7 +6,7 @@ The format (every key optional; without a file ``aiauv simulate`` runs the paper
     vehicle = "my.urdf"          # or your own URDF (relative to this file)
     duration = 120.0             # [s]
     dt = 0.004                   # [s]
-    method = "euler"             # semi-implicit Euler, or "rk4"
+    method = "euler"             # semi-implicit Euler, "rk4" or "midpoint"
     control_period = 0.02        # [s], a whole multiple of dt (default: every step)
     continuous_joints = true     # joint PD (eq. 24) as a servo at every stage
     added_mass = "exact"         # or "lagged" (UUV Simulator / gz-sim scheme; Python controller)

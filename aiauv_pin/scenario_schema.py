@@ -29,7 +29,7 @@ from .lagged import ADDED_MASS_SCHEMES
 from .scenario import CASES, CONTROLLERS
 
 #: Integrators of :func:`aiauv_pin.simulate`.
-METHODS = ("rk4", "euler")
+METHODS = ("rk4", "euler", "midpoint")
 #: Components of a vector in world axes.
 XYZ = ("x", "y", "z")
 

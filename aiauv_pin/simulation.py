@@ -29,7 +29,7 @@ from .arguments import (
 from .controllers import CompiledController
 from .disturbances import Disturbance
 from .errors import ArgumentError, SimulationDiverged
-from .integrators import INTEGRATORS
+from .integrators import INTEGRATORS, SAMPLES_INSIDE_STEP, midpoint_final, midpoint_stage
 from .lagged import LaggedAddedMass, check_filter, check_scheme
 from .step_stability import warn_if_step_near_limit
 from .vehicle import Vehicle
@@ -215,6 +215,11 @@ def check_run_arguments(
                 f"got {control_period!r}"
             )
         steps_per_control = max(1, round(ratio))
+    if method in SAMPLES_INSIDE_STEP and steps_per_control != 1:
+        raise ArgumentError(
+            f"method {method!r} samples the controller inside every step: control_period must "
+            f"equal dt = {dt:g} s, got {control_period!r}"
+        )
     return n_steps, steps_per_control
 
 
@@ -243,7 +248,10 @@ def simulate(
 
     The controller is called at the start of every control period (default: every step); its output is
     held until the next call (zero-order hold, as a digital controller would apply it). Rows logged
-    between two calls repeat the last call's output and diagnostics.
+    between two calls repeat the last call's output and diagnostics. The midpoint method instead
+    calls it inside every step, at its stage ``t + dt/2``, and at the end, not at ``t = 0`` (see
+    :mod:`aiauv_pin.fast.loop`): a row at ``t`` then holds the output applied over ``[t, t + dt]``
+    and the diagnostics of that call at ``t + dt/2``.
 
     Args:
         vehicle: The vehicle.
@@ -255,8 +263,13 @@ def simulate(
             :class:`aiauv_pin.controllers.CompiledController` (the whole run then executes in
             compiled code, in chunks of ``chunk_seconds`` of simulated time between which the
             progress bar and ``on_log`` run), or ``None`` (no input).
-        method: ``"rk4"`` (Runge-Kutta-Munthe-Kaas, order 4) or ``"euler"`` (semi-implicit, order 1;
-            a :class:`JointServo` is implicit in it, so the servo bounds no step).
+        method: ``"rk4"`` (Runge-Kutta-Munthe-Kaas, order 4), ``"euler"`` (semi-implicit, order 1;
+            a :class:`JointServo` is implicit in it, so the servo bounds no step) or
+            ``"midpoint"`` (:func:`aiauv_pin.integrators.midpoint_step`, two evaluations, the
+            servo implicit in both, the controller called at the middle of each step: its
+            sampling then costs second-order error instead of a lag of ``dt / 2``; needs
+            ``control_period = dt``; the sampled controller loop bounds its step, see the
+            README's accuracy per cost).
         current: Water velocity: ``None`` (still water), a constant world velocity (3,) [m/s], or a
             :class:`hydro.currents.Current` (time- and space-varying, compiled), sampled at every
             body at every integrator stage.
@@ -376,8 +389,9 @@ def simulate(
         (lambda qq, vv: servo.torque(vehicle, qq, vv)) if isinstance(servo, JointServo) else servo
     )
 
-    # semi-implicit Euler makes a JointServo implicit (control.laws.joint_pd_implicit_terms)
-    implicit_servo = method == "euler" and isinstance(servo, JointServo)
+    # semi-implicit Euler and the midpoint method make a JointServo implicit over the step
+    # (control.laws.joint_pd_implicit_terms)
+    implicit_servo = method in ("euler", "midpoint") and isinstance(servo, JointServo)
 
     def dynamics_with(tau: np.ndarray):
         def dynamics(qq, vv, tt):
@@ -440,29 +454,84 @@ def simulate(
             q, v = q_new, v_new
         return n
 
+    def sample(t: float, qq: np.ndarray, vv: np.ndarray) -> tuple[np.ndarray, Mapping]:
+        tau, info = _split(controller(t, qq, vv))
+        if tau.shape != (model.nv,):  # never hand a short array to a kernel
+            raise ArgumentError(
+                f"controller must return tau of shape ({model.nv},), got {tau.shape}"
+            )
+        return tau, info
+
+    def sample_at_stage(t0: float):
+        """The midpoint method's stage from ``(t0, q, v)`` and the controller sampled there, as the
+        compiled loop does (:func:`aiauv_pin.fast.loop.sample_inside_step`); ``(q_1, v_1, lagged
+        force)``, or ``None`` if the stage is not finite."""
+        nonlocal tau, info
+        # the lagged added-mass force, computed once per step and held over it (as in advance)
+        force = None if lag is None else lag.generalized_force(q, v, dt, current, t0)
+        if force is not None and not np.all(np.isfinite(force)):
+            return None
+        held = tau if force is None else tau + force
+        try:
+            q_mid, v_mid = midpoint_stage(model, dynamics_with(held), q, v, dt, t0)
+        except np.linalg.LinAlgError:
+            return None
+        if not (np.all(np.isfinite(q_mid)) and np.all(np.isfinite(v_mid))):
+            return None
+        tau, info = sample(t0 + 0.5 * dt, q_mid, v_mid)
+        return q_mid, v_mid, force
+
+    def complete_sampled(t0: float, stage) -> bool:
+        """The midpoint step from ``t0`` completed from ``stage`` with the sampled output; whether
+        it stayed finite."""
+        nonlocal q, v
+        q_mid, v_mid, force = stage
+        held = tau if force is None else tau + force
+        try:
+            q_new, v_new = midpoint_final(model, dynamics_with(held), q, v, q_mid, v_mid, dt, t0)
+        except np.linalg.LinAlgError:
+            return False
+        if not (np.all(np.isfinite(q_new)) and np.all(np.isfinite(v_new))):
+            return False
+        q, v = q_new, v_new
+        return True
+
     bar = None
     if progress:
         from tqdm.auto import tqdm
 
         bar = tqdm(total=n_steps, unit="step", desc=f"simulate {duration:g} s", leave=False)
 
+    # the midpoint method samples the controller inside every step and at the end (fast.loop)
+    inside = method in SAMPLES_INSIDE_STEP and controller is not None
     logged = 0
     tau, info = zero_tau, {}
     try:
         k = 0
         while True:
             t = k * dt
-            if k % steps_per_control == 0 and controller is not None:
-                tau, info = _split(controller(t, q, v))
-                if tau.shape != (model.nv,):  # never hand a short array to a kernel
-                    raise ArgumentError(
-                        f"controller must return tau of shape ({model.nv},), got {tau.shape}"
-                    )
+            stage = None
+            if (
+                k % steps_per_control == 0
+                and controller is not None
+                and (not inside or k == n_steps)
+            ):
+                tau, info = sample(t, q, v)
+            elif inside:  # the output applied over this step, sampled at its middle
+                stage = sample_at_stage(t)
             if k % log_every == 0 or k == n_steps:
                 log(logged, t, tau, info)
                 logged += 1
             if k == n_steps:
                 break
+            if inside:
+                if stage is None or not complete_sampled(t, stage):
+                    trajectory = _trajectory(t_log, q_log, v_log, tau_log, info_log, logged)
+                    raise diverged(trajectory, k + 1, dt)
+                k += 1
+                if bar is not None:
+                    bar.update(1)
+                continue
             # run up to the next controller call or log point
             n = min(
                 steps_per_control - k % steps_per_control if controller is not None else n_steps,

@@ -36,8 +36,10 @@ NEAR_TARGET = (
     ("euler", 0.005),
     ("euler", 0.004),
     ("euler", 0.0025),
+    ("midpoint", 0.02),
+    ("midpoint", 0.01),
 )
-AROUND_DEFAULT = (("rk4", 0.01), ("euler", 0.005), ("euler", 0.004))
+AROUND_DEFAULT = (("rk4", 0.01), ("euler", 0.005), ("euler", 0.004), ("midpoint", 0.02))
 CONFIGURATIONS = (
     ("uniform", "paper", STILL, NEAR_TARGET),
     ("stabilised", "paper", STILL, NEAR_TARGET),

@@ -27,6 +27,10 @@ def test_format_parts_prints_medians_and_ranges():
             "rollout": {"runs_per_minute": _spread(150.0)},
             "rollout_sparse_log": {"runs_per_minute": _spread(200.0)},
             "rollout_sparse_log_every": 10,
+            "rollout_midpoint": {"runs_per_minute": _spread(500.0)},
+            "rollout_midpoint_sparse_log": {"runs_per_minute": _spread(520.0)},
+            "rollout_midpoint_dt_s": 0.02,
+            "rollout_midpoint_sparse_log_every": 2,
         },
         "accuracy_per_cost": {
             "rows": [
@@ -48,6 +52,13 @@ def test_format_parts_prints_medians_and_ranges():
         "rollout()" in line and "150.00" in line and "(135.00-165.00)" in line for line in lines
     )
     assert any("log every 10th step" in line and "200.00" in line for line in lines)
+    assert any(
+        "midpoint dt=0.02 " in line and "500.00" in line and "log every" not in line
+        for line in lines
+    )
+    assert any(
+        "midpoint dt=0.02, log every 2nd step" in line and "520.00" in line for line in lines
+    )
     assert any("rk4 dt=0.02" in line and "diverges" in line for line in lines)
     assert any("euler dt=0.004 (default)" in line and "1.900 mm" in line for line in lines)
     assert any("cheapest within 2 mm" in line and "is the default" in line for line in lines)

@@ -112,8 +112,22 @@ def _same_trajectory(got, expected, tol) -> None:
             dt=0.01,
         ),
         dict(case="uniform", continuous_joints=False, method="euler", dt=0.005),
+        dict(case="uniform", method="midpoint", dt=0.02),
+        dict(
+            case="stabilised",
+            continuous_joints=False,
+            current=(0.1, -0.05, 0.02),
+            method="midpoint",
+            dt=0.005,
+        ),
     ],
-    ids=["paper", "held_with_current_rk4", "sampled_joints_euler"],
+    ids=[
+        "paper",
+        "held_with_current_rk4",
+        "sampled_joints_euler",
+        "midpoint",
+        "midpoint_sampled_joints_current",
+    ],
 )
 def test_compiled_scenario_matches_python_controller(numba_vehicle, options):
     scenario = PaperScenario(duration=2.0, **options)
@@ -124,12 +138,13 @@ def test_compiled_scenario_matches_python_controller(numba_vehicle, options):
     _same_trajectory(compiled.trajectory, python.trajectory, dict(rtol=1e-9, atol=1e-11))
 
 
-def test_compiled_scenario_matches_pinocchio_reference():
+@pytest.mark.parametrize("method", ["euler", "midpoint"])
+def test_compiled_scenario_matches_pinocchio_reference(method):
     reference = aiauv_pin.load_vehicle()
     reference.backend = "pinocchio"
     fast = aiauv_pin.load_vehicle()
     fast.backend = "numba"
-    scenario = PaperScenario(duration=1.5)
+    scenario = PaperScenario(duration=1.5, method=method)
     expected = run_paper_scenario(reference, scenario)
     assert not expected.extra["compiled_controller"]
     got = run_paper_scenario(fast, scenario)
@@ -240,3 +255,33 @@ def test_plot_envelope_keeps_each_buckets_extremes_in_time_order(rng):
         assert y_kept[inside].min() == y[start : start + size].min()
     _, short_y = envelope(t[:150], y[:150], buckets=100)
     assert np.array_equal(short_y, y[:150])
+
+
+def test_midpoint_samples_the_controller_at_each_stage_and_the_end(numba_vehicle):
+    """The midpoint method samples inside each step at t + dt/2, and at the end, not at t = 0; a
+    row at t holds the output applied over [t, t + dt] and the diagnostics of its sample at
+    t + dt/2, the last row those of the sample at its own time. Compiled and Python loops alike."""
+    dt, n = 0.01, 7
+    q0 = numba_vehicle.neutral_configuration()
+    stages = [(k + 0.5) * dt for k in range(n)]
+
+    calls = []
+
+    def controller(t, q, v):
+        calls.append(t)
+        return np.full(numba_vehicle.nv, t), {"sampled_at": t}
+
+    run = aiauv_pin.simulate(
+        numba_vehicle, q0, np.zeros(numba_vehicle.nv), n * dt, dt, controller, method="midpoint"
+    )
+    assert calls == pytest.approx([*stages, n * dt], abs=1e-15)
+    np.testing.assert_allclose(run.info["sampled_at"], [*stages, n * dt], atol=1e-15)
+    np.testing.assert_allclose(run.tau[:, 0], [*stages, n * dt], atol=1e-15)
+
+    # the compiled loop logs the same way: the row's output is that of the step it starts
+    scenario = PaperScenario(duration=n * dt, dt=dt, method="midpoint")
+    compiled = run_paper_scenario(numba_vehicle, scenario)
+    python = run_paper_scenario(numba_vehicle, scenario, compiled=False)
+    _same_trajectory(compiled.trajectory, python.trajectory, dict(rtol=1e-9, atol=1e-11))
+    assert np.all(np.isfinite(compiled.trajectory.info["u"]))
+    assert np.any(compiled.trajectory.tau[0] != 0.0)

@@ -161,7 +161,11 @@ def _tumbling_errors(vehicle, method, steps):
 
 @pytest.mark.parametrize(
     ("method", "steps", "order"),
-    [("rk4", [32, 64, 128], 4.0), ("euler", [256, 512, 1024], 1.0)],
+    [
+        ("rk4", [32, 64, 128], 4.0),
+        ("euler", [256, 512, 1024], 1.0),
+        ("midpoint", [128, 256, 512], 2.0),
+    ],
 )
 def test_integrator_convergence_order_on_tumbling_body(single_body, method, steps, order):
     path, _ = single_body

@@ -34,18 +34,21 @@ def _controller(vehicle, k_e):
     return VehiclePathFollowing(vehicle, replace(gains, k_e=(k_e, k_e))).compiled()
 
 
-def test_every_run_equals_simulate_bit_for_bit_with_any_thread_count(vehicle):
+@pytest.mark.parametrize("method", ["rk4", "midpoint"])
+def test_every_run_equals_simulate_bit_for_bit_with_any_thread_count(vehicle, method):
     offsets = [(2.0, 2.0), (1.0, -0.5), (-1.5, 0.3)]
     gains = [0.05, 0.08, 0.1]
     q0, v0 = _starts(vehicle, offsets)
     laws = [_controller(vehicle, k) for k in gains]
     batches = [
-        aiauv_pin.rollout(vehicle, q0, v0, DURATION, DT, laws, threads=threads)
+        aiauv_pin.rollout(vehicle, q0, v0, DURATION, DT, laws, method=method, threads=threads)
         for threads in (1, 3)
     ]
     for i, k_e in enumerate(gains):
         law = _controller(vehicle, k_e)
-        single = aiauv_pin.simulate(vehicle, q0[i], v0[i], DURATION, DT, law, servo=law.servo)
+        single = aiauv_pin.simulate(
+            vehicle, q0[i], v0[i], DURATION, DT, law, method=method, servo=law.servo
+        )
         for batch in batches:
             assert batch.status[i] == "complete" and batch.steps[i] == 100
             np.testing.assert_array_equal(batch.t, single.t)
@@ -88,6 +91,10 @@ def test_a_diverging_run_stops_alone(vehicle):
         ({"threads": 0}, "threads must be a whole number >= 1"),
         ({"dt": -1.0}, "dt"),
         ({"method": "rk5"}, "unknown method"),
+        (
+            {"method": "midpoint", "control_period": 2 * DT},
+            "samples the controller inside every step: control_period must equal dt",
+        ),
         ({"duration": 1e8}, r"GiB .*log less often"),  # 2 logs of 1e10 samples, before allocating
     ],
 )

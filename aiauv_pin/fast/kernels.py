@@ -47,7 +47,7 @@ from .records import FREE_FLYER, REVOLUTE, Workspace
 from .rotations import quaternion_rotation
 
 #: Integration methods understood by :func:`step` and :func:`run_steps`.
-RK4, EULER = 0, 1
+RK4, EULER, MIDPOINT = 0, 1, 2
 
 
 # ---------------------------------------------------------------------- small linear algebra
@@ -1082,10 +1082,59 @@ def euler_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
 
 
 @compiled(fastmath=True, borrows_only=True)
+def midpoint_stage_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
+    """First stage of the servo-implicit midpoint method: the state at ``t + dt/2``.
+
+    ``v_1 = v + dt/2 a_0``, ``q_1 = q * exp(dt/2 v_1)``, with ``a_0`` the acceleration of
+    :func:`euler_into` (the joint servo implicit over the whole step ``dt``,
+    :func:`control.laws.joint_pd_implicit_terms`). The compiled loop samples the controller at this
+    state (:func:`aiauv_pin.fast.loop.run_chunk`); :func:`midpoint_final_into` completes the step.
+    """
+    a = W.acc1
+    xi = W.xi
+    acceleration_into(model, env, servo, t, q, v, tau, W, a, dt)
+    half = 0.5 * dt
+    for i in range(v.shape[0]):
+        v_out[i] = v[i] + half * a[i]
+        xi[i] = half * v_out[i]
+    integrate(q, xi, q_out)
+
+
+@compiled(fastmath=True, borrows_only=True)
+def midpoint_final_into(model, env, servo, t, q, v, q_mid, v_mid, tau, dt, W, q_out, v_out):
+    """Second stage of the servo-implicit midpoint method, from the stage ``(q_mid, v_mid)`` of
+    :func:`midpoint_stage_into`: ``v' = v + dt a_1``, ``q' = q * exp(dt v_1)``.
+
+    ``a_1`` is the acceleration at the stage (time ``t + dt/2``, input ``tau``), the joint servo
+    implicit over ``dt`` as in :func:`euler_into`. Without a servo it is the explicit midpoint rule
+    (order 2; Hairer, Norsett and Wanner 1993, Sec. II.1) on the group, ``dt v_1`` approximating the
+    step's Magnus increment to second order (Iserles et al. 2000, Sec. 4); the servo's implicit
+    terms make its error first order with a small constant, and keep a stiff servo stable
+    (:func:`aiauv_pin.step_stability.amplification`).
+    """
+    a = W.acc2
+    xi = W.xi
+    acceleration_into(model, env, servo, t + 0.5 * dt, q_mid, v_mid, tau, W, a, dt)
+    for i in range(v.shape[0]):
+        v_out[i] = v[i] + dt * a[i]
+        xi[i] = dt * v_mid[i]
+    integrate(q, xi, q_out)
+
+
+@compiled(fastmath=True, borrows_only=True)
+def midpoint_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
+    """One step of the servo-implicit midpoint method with ``tau`` held over it (both stages)."""
+    midpoint_stage_into(model, env, servo, t, q, v, tau, dt, W, W.q_stage, W.v_stage)
+    midpoint_final_into(model, env, servo, t, q, v, W.q_stage, W.v_stage, tau, dt, W, q_out, v_out)
+
+
+@compiled(fastmath=True, borrows_only=True)
 def step_into(model, env, servo, t, q, v, tau, dt, method, W, q_out, v_out):
-    """One step of ``method`` (:data:`RK4` or :data:`EULER`) into ``q_out, v_out``."""
+    """One step of ``method`` (:data:`RK4`, :data:`EULER` or :data:`MIDPOINT`) into ``q_out, v_out``."""
     if method == RK4:
         rk4_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out)
+    elif method == MIDPOINT:
+        midpoint_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out)
     else:
         euler_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out)
 
@@ -1102,11 +1151,19 @@ class RK4Method(NamedTuple):
     code: int = RK4
 
 
+class MidpointMethod(NamedTuple):
+    """The servo-implicit midpoint method for :func:`integrator_step`: chosen when the caller is
+    compiled. The compiled loop samples the controller at its stage (:func:`midpoint_stage_into`)."""
+
+    code: int = MIDPOINT
+
+
 def integrator_step(method, model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
-    """One step of ``method`` into ``q_out, v_out``: an :class:`EulerMethod` or :class:`RK4Method`
-    (compiled, the integrator is chosen by its type when the caller is compiled, so a loop
-    compiled for one method does not compile the other: 7 s of a first Euler run, issue 15), or a
-    code (:data:`RK4`, :data:`EULER`) chosen at run time by :func:`step_into`."""
+    """One step of ``method`` into ``q_out, v_out``: an :class:`EulerMethod`, :class:`RK4Method` or
+    :class:`MidpointMethod` (compiled, the integrator is chosen by its type when the caller is
+    compiled, so a loop compiled for one method does not compile the others: 7 s of a first Euler
+    run, issue 15), or a code (:data:`RK4`, :data:`EULER`, :data:`MIDPOINT`) chosen at run time by
+    :func:`step_into`."""
     code = method if isinstance(method, int) else method.code
     step_into(model, env, servo, t, q, v, tau, dt, code, W, q_out, v_out)
 
@@ -1130,6 +1187,12 @@ if NUMBA_AVAILABLE:
                 rk4_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out)
 
             return rk4
+        if chosen is MidpointMethod:
+
+            def midpoint(method, model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
+                midpoint_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out)
+
+            return midpoint
         if isinstance(method, types.Integer):
 
             def by_code(method, model, env, servo, t, q, v, tau, dt, W, q_out, v_out):

@@ -20,7 +20,11 @@ from .records import Environment, Servo
 
 #: ``(method name -> marker)`` for :func:`kernels.integrator_step`: the compiled loop is compiled
 #: for one integrator only.
-METHOD_MARKERS = {"rk4": kernels.RK4Method(), "euler": kernels.EulerMethod()}
+METHOD_MARKERS = {
+    "rk4": kernels.RK4Method(),
+    "euler": kernels.EulerMethod(),
+    "midpoint": kernels.MidpointMethod(),
+}
 
 #: ``(method name -> code)`` understood by :func:`kernels.step_into` and :func:`kernels.run_steps`
 #: (each marker's code).
