@@ -12,16 +12,19 @@ leaves open, documented here and in the README:
   logged at the controller's rate) and the joint PD (eq. 24) runs as a continuous servo evaluated at
   every integrator stage (see :class:`aiauv_pin.paper_controller.VehiclePathFollowing`);
 * semi-implicit Euler with ``dt = 0.004`` s (:mod:`aiauv_pin.scenario_defaults`), issue 15's rule:
-  the cheapest setting whose end-effector path stays within 2 mm of a converged reference (RK4 at
-  0.5 ms) over the whole 300 s run. On both bundled vehicles it is 1.87 mm off; RK4 at 0.01 s
-  (the default before) 2.42-2.43 mm, RK4 at 0.008 s 1.91-1.92 mm. Euler at 0.004 s costs 0.88x RK4
-  at 0.01 s and RK4 at 0.008 s 1.26x (``aiauv bench``, 2026-11-23): Euler takes 2.5 times as many
-  steps, but each costs one evaluation and one controller sample against RK4's four evaluations.
-  Holding the controller over a step makes the error first order in ``dt`` for both methods, so
-  RK4's order buys nothing here. Euler's joint servo is implicit, so a larger step only costs
-  accuracy (4.9 mm at 0.01 s, 2 cm at 0.04 s). Measured by ``benchmarks/default_step.py``
-  (``benchmarks/default_step.json``); ``aiauv bench --only accuracy-per-cost`` says whether the
-  default is still the cheapest within 2 mm;
+  the cheapest setting whose end-effector path stays within 2 mm of a converged reference
+  (Richardson's extrapolation of RK4 at 0.5 and 1 ms) over the whole 300 s run, with a caveat. It
+  is at the line: 1.996 mm off on the uniform vehicle and 2.000 mm on the stabilised one (2.74 and
+  2.04 mm in a 0.1/0.1 m/s current); RK4 at 0.01 s (the default before) 2.53-2.59 mm. Euler at
+  0.004 s costs 0.83x RK4 at 0.01 s (``aiauv bench``, 2026-11-23): 2.5 times as many steps, each
+  one evaluation and one controller sample against RK4's four evaluations. Holding the controller
+  from the start of each step makes the error first order in ``dt`` for both. The midpoint method
+  at 0.02 s is 0.21-0.36 mm off for 0.33x, and is not the default: its sampled controller loop
+  rings at the start of the run, its joints' work is 63 % too large, and it oscillates with
+  gains only 1.3 times the paper's (:mod:`aiauv_pin.step_stability`). Euler's joint servo is
+  implicit, so a larger step only costs accuracy (5.0 mm at 0.01 s, 2 cm at 0.04 s). Measured by
+  ``benchmarks/default_step.py`` (``benchmarks/default_step.json``); ``aiauv bench --only
+  accuracy-per-cost`` says whether the default is still the cheapest within 2 mm;
 * ``timeseries.csv`` holds one row every ``csv_period = 0.04`` s (every tenth step, 25 per second
   like the playback's frames); the summary's integrals and settling times use every step;
 * the base-angle saturation ``q_max`` is :class:`control.path_following.PathFollowingGains`' default.
@@ -48,6 +51,7 @@ from .lagged import check_filter, check_scheme
 from .paper_controller import END_EFFECTOR, VehiclePathFollowing, compiled_path_following_reason
 from .scenario_defaults import DEFAULT_CSV_PERIOD, DEFAULT_DT, DEFAULT_METHOD
 from .simulation import Trajectory, simulate
+from .step_stability import warn_if_oscillating
 from .vehicle import Vehicle
 
 CASES = ("uniform", "stabilised")
@@ -372,6 +376,13 @@ def run_scenario(
     )
     wall_time = time.perf_counter() - start
     add_path_errors(vehicle, scenario, trajectory)
+    if law is not None and scenario.controller != "none":  # logged once per controller sample
+        warn_if_oscillating(
+            np.asarray(trajectory.v)[:, 6:],
+            scenario.method,
+            scenario.dt,
+            scenario.dt * scenario.steps_per_control,
+        )
     return ScenarioResult(
         scenario=scenario,
         trajectory=trajectory,

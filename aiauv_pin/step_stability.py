@@ -33,11 +33,15 @@ left out: on the paper's vehicle the servo alone gives -188.4 1/s against the fu
 So is the controller: a sampled controller whose joint references feed back the joint rates (the
 paper's attitude law, through its gain ``k_d``) closes a discrete loop that this model does not
 see. For the midpoint method, whose servo alone is stable at every step, it is that loop which
-bounds the step (measured on the paper's scenario, 2026-11-23): on the uniform vehicle the run
-converges at 0.025 s and oscillates every step from 0.03 s; with ``k_d = 30`` instead of 19 it
-oscillates already at 0.01 s, where semi-implicit Euler at 0.004 s converges up to ``k_d = 50``.
-Each step of the midpoint method passes a joint reference change on to the joint rates over 1.5
-steps where Euler's does over one, so at the same step its loop gain is about 1.5 times Euler's.
+bounds the step (measured on the paper's scenario, 2026-11-23): on the uniform vehicle (``k_d =
+19``) the run converges at 0.025 s and oscillates at every step from 0.03 s; at 0.02 s it rings for
+the first second (0.003 rad/s half a second in), and the joints' work is 0.174 J instead of the
+converged 0.107 J (0.099 J at 0.01 s); with ``k_d = 25`` it oscillates at 0.02 s, with ``k_d =
+30`` at 0.01 s, where semi-implicit Euler at 0.004 s converges up to ``k_d = 50`` (and oscillates
+at 80). Each step of the midpoint method passes a change of the joint references on to the joint
+rates over one and a half steps (the stage, then the completion) where Euler's does over one, so
+at the same step its loop gain is about 1.5 times Euler's. :func:`warn_if_oscillating` catches the
+sustained oscillation after a run (:func:`aiauv_pin.scenario.run_scenario` calls it).
 """
 
 from __future__ import annotations
@@ -54,6 +58,17 @@ STEP_MARGIN = 0.75
 
 class StepNearStabilityLimit(UserWarning):
     """The integration step is close to (or beyond) the largest stable step of the joint servo."""
+
+
+class EveryStepOscillation(UserWarning):
+    """A run's joint rates oscillate from one controller sample to the next: the sampled loop is
+    unstable at this step (its output is then far from the continuous closed loop's)."""
+
+
+#: :func:`warn_if_oscillating` warns above this amplitude of the every-sample component of the
+#: joint rates [rad/s, m/s] (an unstable sampled loop on the paper's vehicle: 0.05-0.3 rad/s; a
+#: converged run: below 1e-5).
+OSCILLATION_THRESHOLD = 1e-3
 
 
 def amplification(
@@ -185,3 +200,72 @@ def warn_if_step_near_limit(vehicle, q: np.ndarray, stiffness, damping, method: 
             stacklevel=3,
         )
     return limit
+
+
+def _alternating_amplitude(x: np.ndarray) -> np.ndarray:
+    """Amplitude of the every-sample alternation of each column of ``x`` (k, n): from the second
+    differences ``d_k = x_{k+1} - 2 x_k + x_{k-1}`` (blind to a constant and a ramp), ``|sum_k
+    (-1)^k d_k| / (4 m)`` over an even number ``m`` of them; an alternation ``A (-1)^k`` gives
+    ``A``."""
+    d = x[2:] - 2.0 * x[1:-1] + x[:-2]
+    m = d.shape[0] - d.shape[0] % 2
+    if m < 2:
+        return np.zeros(x.shape[1])
+    signs = np.where(np.arange(m) % 2 == 0, 1.0, -1.0)
+    return np.abs(signs @ d[-m:]) / (4.0 * m)
+
+
+def every_sample_oscillation(joint_rates: np.ndarray, tail: float = 0.1) -> float:
+    """Amplitude of a sustained alternation at every sample of a sampled signal [its unit]: over
+    the last ``tail`` of the samples (at least 50), the smaller of the alternation amplitudes of the
+    window's two halves (:func:`_alternating_amplitude`) if the second is at least half the first,
+    else 0; the largest over the columns.
+
+    A slowly varying signal gives next to nothing (the second differences of a quadratic are
+    constant and cancel in pairs), an alternation ``A (-1)^k`` gives ``A``, and one that dies out
+    within the window (a loop that rings at the start of a run before it settles: on the paper's
+    uniform vehicle at 0.02 s, 0.003 rad/s half a second in, 1e-4 after two) gives 0.
+
+    Args:
+        joint_rates: Samples (k,) or (k, n), one per controller sample; fewer than 20 give 0.
+        tail: Fraction of the samples, at the end, to look at.
+    """
+    x = np.asarray(joint_rates, dtype=float)
+    if x.ndim == 1:
+        x = x[:, np.newaxis]
+    m = min(x.shape[0], max(50, int(tail * x.shape[0])))
+    if m < 20 or x.shape[1] == 0:  # too short a run to tell a sustained oscillation
+        return 0.0
+    window = x[-m:]
+    half = m // 2
+    first = _alternating_amplitude(window[:half])
+    second = _alternating_amplitude(window[half:])
+    sustained = second >= 0.5 * first  # not dying out over the window
+    return float(np.max(np.where(sustained, np.minimum(first, second), 0.0)))
+
+
+def warn_if_oscillating(joint_rates: np.ndarray, method: str, dt: float, period: float) -> float:
+    """Warn (:class:`EveryStepOscillation`) when the joint rates, logged once per controller sample
+    of ``period`` [s], oscillate at every sample over the end of the run by more than
+    :data:`OSCILLATION_THRESHOLD`; return that amplitude.
+
+    What :func:`warn_if_step_near_limit` cannot see: the loop that a sampled controller closes
+    through the joint servo (module docstring). A run that oscillates so stays finite but is far
+    from the continuous closed loop (on the paper's uniform vehicle, the midpoint method at 0.04 s
+    ends 0.54 m off the converged path). A controller that chatters (switches at every sample, e.g.
+    on a saturation) alternates too, by an amount that shrinks with the step rather than vanishing
+    below a limit (the paper's gains on a 3-module vehicle: 0.06 rad/s at 4 ms, 0.009 at 0.5 ms with
+    semi-implicit Euler); the warning says both.
+    """
+    amplitude = every_sample_oscillation(joint_rates)
+    if amplitude > OSCILLATION_THRESHOLD:
+        warnings.warn(
+            f"the joint rates oscillate at every controller sample ({amplitude:.2g} rad/s over the "
+            f"end of the run) with method {method!r} at dt = {dt:g} s (samples every "
+            f"{period:g} s): the sampled control loop is unstable at this step (the run is then far "
+            f"off) or chatters, e.g. on a saturation; compare with a smaller step"
+            + (" or method 'euler'" if method != "euler" else ""),
+            EveryStepOscillation,
+            stacklevel=3,
+        )
+    return amplitude

@@ -36,14 +36,31 @@ def module_spec(n_modules: int) -> dict:
     return {"name": f"aiauv{n_modules}", "radius": 0.085, "module": modules}
 
 
-@pytest.mark.parametrize(("n_modules", "duration"), [(3, 20.0), (5, 30.0), (7, 30.0), (15, 20.0)])
+# With the paper's gains the 3-module vehicle's joints chatter: their rates alternate at every
+# controller sample, by an amount proportional to the step (0.06 rad/s at 4 ms, 0.009 at 0.5 ms), so
+# run_scenario warns (step_stability.warn_if_oscillating); the others are quiet at the default step.
+@pytest.mark.parametrize(
+    ("n_modules", "duration"),
+    [
+        pytest.param(
+            3,
+            20.0,
+            marks=pytest.mark.filterwarnings(
+                "ignore::aiauv_pin.step_stability.EveryStepOscillation"
+            ),
+        ),
+        (5, 30.0),
+        (7, 30.0),
+        (15, 20.0),
+    ],
+)
 def test_generated_vehicle_follows_the_path(tmp_path, n_modules, duration):
     spec = spec_from_dict(module_spec(n_modules))
     path = tmp_path / "vehicle.urdf"
     path.write_text(build_urdf(spec), encoding="utf-8")
     vehicle = load_vehicle(path)
     assert vehicle.nv == 6 + n_modules - 1
-    scenario = PaperScenario(duration=duration, dt=0.01, method="rk4", initial_offset=(1.0, 1.0))
+    scenario = PaperScenario(duration=duration, initial_offset=(1.0, 1.0))  # the default step
     result = run_paper_scenario(vehicle, scenario)
     tr = result.trajectory
     assert tr.status == "complete"

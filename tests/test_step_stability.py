@@ -1,5 +1,6 @@
 """The joint servo's largest stable step (aiauv_pin.step_stability): closed forms, the full
-linearisation, and the warning of simulate, rollout and the command line."""
+linearisation, and the warning of simulate, rollout and the command line; the warning of a sampled
+loop that oscillates at every sample."""
 
 from __future__ import annotations
 
@@ -8,10 +9,13 @@ import warnings
 import numpy as np
 import pytest
 
+from aiauv_pin.scenario import Scenario, run_scenario
 from aiauv_pin.step_stability import (
     STEP_MARGIN,
+    EveryStepOscillation,
     StepNearStabilityLimit,
     amplification,
+    every_sample_oscillation,
     largest_stable_step,
     servo_step_limit,
 )
@@ -191,3 +195,37 @@ def test_command_line_warns_once_in_one_line(tmp_path):
     assert len(lines) == 1, done.stderr
     assert lines[0].startswith("aiauv: warning: dt = 0.012 s is 8")
     assert "Traceback" not in done.stderr
+
+
+def test_every_sample_oscillation_of_closed_forms():
+    k = np.arange(1000)
+    # a constant, a ramp and a quadratic contribute nothing (their second differences cancel)
+    assert every_sample_oscillation(np.full(1000, 0.3)) == pytest.approx(0.0, abs=1e-15)
+    assert every_sample_oscillation(1e-3 * k) == pytest.approx(0.0, abs=1e-15)
+    assert every_sample_oscillation(1e-6 * k**2) == pytest.approx(0.0, abs=1e-15)
+    # an alternation of amplitude A on top of them gives A; the largest column counts
+    signal = np.column_stack(
+        (0.3 + 1e-3 * k, 0.3 + 1e-3 * k + 0.05 * (-1.0) ** k, np.sin(k / 50.0))
+    )
+    assert every_sample_oscillation(signal) == pytest.approx(0.05, rel=1e-9)
+    # only a sustained one: an alternation that died out, or dies out within the window, is not
+    # reported; one that holds or grows is
+    decayed = np.where(k < 500, 0.05 * (-1.0) ** k, 0.0)
+    assert every_sample_oscillation(decayed) == 0.0
+    ringing = 0.05 * (-1.0) ** k * np.exp(-k / 20.0)
+    assert every_sample_oscillation(ringing[:50]) == 0.0
+    growing = 0.05 * (-1.0) ** k * np.exp(k / 20.0)
+    assert every_sample_oscillation(growing[:50]) > 0.05  # at least where it starts
+    assert every_sample_oscillation(np.zeros((1, 3))) == 0.0
+
+
+def test_paper_scenario_warns_where_the_sampled_loop_oscillates(paper):
+    """The midpoint method at 0.03 s on the uniform vehicle: the attitude law's loop through the
+    joint servo oscillates at every step (module docstring); at 0.02 s it converges."""
+    vehicle = paper[0]
+    with pytest.warns(EveryStepOscillation, match=r"oscillate at every controller sample"):
+        run_scenario(vehicle, Scenario(duration=60.0, dt=0.03, method="midpoint"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", EveryStepOscillation)
+        result = run_scenario(vehicle, Scenario(duration=60.0, dt=0.02, method="midpoint"))
+    assert every_sample_oscillation(result.trajectory.v[:, 6:]) < 1e-5
