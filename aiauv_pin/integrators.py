@@ -124,14 +124,14 @@ def midpoint_stage(
     dt: float,
     t: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The midpoint method's stage: ``v_1 = v + dt/2 f(q, v)``, ``q_1 = q * exp(dt/2 v_1)``.
+    """The midpoint method's stage: ``v_1 = v + dt/2 f(q, v)``, ``q_1 = q * exp(dt/2 v_1)``, a
+    semi-implicit Euler step of ``dt/2`` (with ``dynamics`` whose servo, if implicit, is so over
+    the whole ``dt``).
 
     Returns:
         ``(q_1, v_1)``, the state at ``t + dt/2``.
     """
-    half = 0.5 * dt
-    v_mid = v + half * _timed(dynamics, t)(q, v, 0.0 if t is None else t)
-    return pin.integrate(model, q, half * v_mid), v_mid
+    return semi_implicit_euler_step(model, dynamics, q, v, 0.5 * dt, t)
 
 
 def midpoint_final(
