@@ -1069,16 +1069,25 @@ def rk4_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
 
 
 @compiled(fastmath=True, borrows_only=True)
-def euler_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
-    """Semi-implicit Euler: ``v += dt f(q, v)``, then ``q = q * exp(dt v)``; the joint servo
-    implicit (:func:`control.laws.joint_pd_implicit_terms`), so it is stable at any step."""
+def semi_implicit_into(model, env, servo, t, q, v, tau, dt, h, W, q_out, v_out):
+    """``v' = v + h a``, then ``q' = q * exp(h v')``, with ``a`` the acceleration at ``(t, q, v)``
+    and the joint servo implicit over a step ``dt`` (:func:`control.laws.joint_pd_implicit_terms`):
+    semi-implicit Euler with ``h = dt`` (:func:`euler_into`) and the midpoint method's stage with
+    ``h = dt/2`` (:func:`midpoint_stage_into`)."""
     a = W.acc1
     xi = W.xi
     acceleration_into(model, env, servo, t, q, v, tau, W, a, dt)
     for i in range(v.shape[0]):
-        v_out[i] = v[i] + dt * a[i]
-        xi[i] = dt * v_out[i]
+        v_out[i] = v[i] + h * a[i]
+        xi[i] = h * v_out[i]
     integrate(q, xi, q_out)
+
+
+@compiled(fastmath=True, borrows_only=True)
+def euler_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
+    """Semi-implicit Euler: ``v += dt f(q, v)``, then ``q = q * exp(dt v)``; the joint servo
+    implicit (:func:`control.laws.joint_pd_implicit_terms`), so it is stable at any step."""
+    semi_implicit_into(model, env, servo, t, q, v, tau, dt, dt, W, q_out, v_out)
 
 
 @compiled(fastmath=True, borrows_only=True)
@@ -1086,18 +1095,12 @@ def midpoint_stage_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
     """First stage of the servo-implicit midpoint method: the state at ``t + dt/2``.
 
     ``v_1 = v + dt/2 a_0``, ``q_1 = q * exp(dt/2 v_1)``, with ``a_0`` the acceleration of
-    :func:`euler_into` (the joint servo implicit over the whole step ``dt``,
-    :func:`control.laws.joint_pd_implicit_terms`). The compiled loop samples the controller at this
-    state (:func:`aiauv_pin.fast.loop.run_chunk`); :func:`midpoint_final_into` completes the step.
+    :func:`euler_into` (the joint servo implicit over the whole step ``dt``): a semi-implicit step
+    of ``dt/2`` (:func:`semi_implicit_into`). The compiled loop samples the controller at this
+    state (:func:`aiauv_pin.fast.loop.sample_inside_step`); :func:`midpoint_final_into` completes
+    the step.
     """
-    a = W.acc1
-    xi = W.xi
-    acceleration_into(model, env, servo, t, q, v, tau, W, a, dt)
-    half = 0.5 * dt
-    for i in range(v.shape[0]):
-        v_out[i] = v[i] + half * a[i]
-        xi[i] = half * v_out[i]
-    integrate(q, xi, q_out)
+    semi_implicit_into(model, env, servo, t, q, v, tau, dt, 0.5 * dt, W, q_out, v_out)
 
 
 @compiled(fastmath=True, borrows_only=True)
