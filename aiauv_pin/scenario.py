@@ -328,7 +328,8 @@ def run_scenario(
             )
         options.update(added_mass="lagged", lagged_filter=scenario.lagged_filter)
         compiled = False
-    if scenario.controller == "none" and controller is None:
+    passive = scenario.controller == "none" and controller is None
+    if passive:
         use_compiled = vehicle.fast is not None and compiled is not False
         if compiled and not use_compiled:
             raise ValueError(
@@ -376,7 +377,7 @@ def run_scenario(
     )
     wall_time = time.perf_counter() - start
     add_path_errors(vehicle, scenario, trajectory)
-    if law is not None and scenario.controller != "none":  # logged once per controller sample
+    if not passive:  # rows logged once per controller sample
         warn_if_oscillating(
             np.asarray(trajectory.v)[:, 6:],
             scenario.method,

@@ -187,6 +187,21 @@ def check_log_size(n_steps: int, log_every: int, nq: int, nv: int, runs: int = 1
         )
 
 
+def _finite(*arrays: np.ndarray) -> bool:
+    """Whether every entry of every array is finite (a state or force the integrator may use)."""
+    return all(bool(np.all(np.isfinite(a))) for a in arrays)
+
+
+def _finite_step(step: Callable[..., tuple[np.ndarray, np.ndarray]], *arguments):
+    """``step(*arguments)``'s ``(q, v)``, or ``None`` if it is not finite or its linear solve
+    failed."""
+    try:
+        q_new, v_new = step(*arguments)
+    except np.linalg.LinAlgError:
+        return None
+    return (q_new, v_new) if _finite(q_new, v_new) else None
+
+
 def check_run_arguments(
     duration: float, dt: float, method: str, log_every: int, control_period: float | None
 ) -> tuple[int, int]:
@@ -395,7 +410,7 @@ def simulate(
 
     def dynamics_with(tau: np.ndarray):
         def dynamics(qq, vv, tt):
-            if not (np.all(np.isfinite(qq)) and np.all(np.isfinite(vv))):
+            if not _finite(qq, vv):
                 return np.full(model.nv, np.nan)  # a stage overflowed: the step diverges
             total = tau
             if servo_function is not None:
@@ -422,7 +437,7 @@ def simulate(
         for i in range(n):  # the lagged added-mass force, recomputed and held step by step
             t_i = t0 + i * dt
             force = lag.generalized_force(q, v, dt, current, t_i)
-            if not np.all(np.isfinite(force)) or advance_held(tau + force, 1, t_i) < 1:
+            if not _finite(force) or advance_held(tau + force, 1, t_i) < 1:
                 return i
         return n
 
@@ -445,13 +460,10 @@ def simulate(
             )
         dynamics = dynamics_with(tau)
         for i in range(n):
-            try:
-                q_new, v_new = step(model, dynamics, q, v, dt, t0 + i * dt)
-            except np.linalg.LinAlgError:
+            new = _finite_step(step, model, dynamics, q, v, dt, t0 + i * dt)
+            if new is None:
                 return i
-            if not (np.all(np.isfinite(q_new)) and np.all(np.isfinite(v_new))):
-                return i
-            q, v = q_new, v_new
+            q, v = new
         return n
 
     def sample(t: float, qq: np.ndarray, vv: np.ndarray) -> tuple[np.ndarray, Mapping]:
@@ -469,15 +481,13 @@ def simulate(
         nonlocal tau, info
         # the lagged added-mass force, computed once per step and held over it (as in advance)
         force = None if lag is None else lag.generalized_force(q, v, dt, current, t0)
-        if force is not None and not np.all(np.isfinite(force)):
+        if force is not None and not _finite(force):
             return None
         held = tau if force is None else tau + force
-        try:
-            q_mid, v_mid = midpoint_stage(model, dynamics_with(held), q, v, dt, t0)
-        except np.linalg.LinAlgError:
+        mid = _finite_step(midpoint_stage, model, dynamics_with(held), q, v, dt, t0)
+        if mid is None:
             return None
-        if not (np.all(np.isfinite(q_mid)) and np.all(np.isfinite(v_mid))):
-            return None
+        q_mid, v_mid = mid
         tau, info = sample(t0 + 0.5 * dt, q_mid, v_mid)
         return q_mid, v_mid, force
 
@@ -487,13 +497,10 @@ def simulate(
         nonlocal q, v
         q_mid, v_mid, force = stage
         held = tau if force is None else tau + force
-        try:
-            q_new, v_new = midpoint_final(model, dynamics_with(held), q, v, q_mid, v_mid, dt, t0)
-        except np.linalg.LinAlgError:
+        new = _finite_step(midpoint_final, model, dynamics_with(held), q, v, q_mid, v_mid, dt, t0)
+        if new is None:
             return False
-        if not (np.all(np.isfinite(q_new)) and np.all(np.isfinite(v_new))):
-            return False
-        q, v = q_new, v_new
+        q, v = new
         return True
 
     bar = None
