@@ -218,9 +218,31 @@ def _simulate_command(case: str, duration: float, out: Path, html: bool) -> list
     return command if html else [*command, "--no-html"]
 
 
+#: A fresh process that starts numba and calls one trivial function from its warm on-disk cache:
+#: the least any run of numba-compiled code costs before it computes anything (``end_to_end``).
+_NUMBA_FLOOR_SCRIPT = """\
+import numba
+import numpy
+
+
+@numba.njit(cache=True)
+def total(x):
+    s = 0.0
+    for i in range(x.shape[0]):
+        s += x[i]
+    return s
+
+
+total(numpy.ones(3))
+"""
+
+
 def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5) -> dict:
     """Wall time of fresh ``aiauv simulate`` processes (warm cache), with and without playback,
-    interleaved; plus a fresh ``python -c "import aiauv_pin"`` for the import share.
+    interleaved; plus a fresh ``python -c "import aiauv_pin"`` for the import share, and two
+    floors: a fresh ``python -c "import numpy"``, and a fresh process that calls one trivial
+    numba function from its warm cache (numba's own start: its import and the set-up of its
+    compiler target, which loading any cached function needs).
 
     ``breakdown`` splits each run's wall time with its own ``summary.json``: ``setup_s`` (vehicle
     loading and the compiled code's loading, ``setup_time``), ``simulation_s`` (``wall_time``), and
@@ -228,25 +250,39 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
     (CSV, summary, figures, page) and the exit.
     """
     import json
+    import os
 
-    walls: dict[str, list[float]] = {"no_html": [], "with_html": [], "import_only": []}
+    walls: dict[str, list[float]] = {
+        "no_html": [],
+        "with_html": [],
+        "import_only": [],
+        "numpy_floor": [],
+        "numba_floor": [],
+    }
     parts: dict[str, dict[str, list[float]]] = {
         name: {"setup_s": [], "simulation_s": [], "rest_s": []} for name in ("no_html", "with_html")
     }
     with tempfile.TemporaryDirectory() as folder:
         base = Path(folder)
         outs = {"no_html": base / "a", "with_html": base / "b"}
+        floor_script = base / "numba_floor.py"
+        floor_script.write_text(_NUMBA_FLOOR_SCRIPT, encoding="utf-8")
         commands = {
             "no_html": _simulate_command(case, duration, outs["no_html"], html=False),
             "with_html": _simulate_command(case, duration, outs["with_html"], html=True),
             "import_only": [sys.executable, "-c", "import aiauv_pin.cli"],
+            "numpy_floor": [sys.executable, "-c", "import numpy"],
+            "numba_floor": [sys.executable, str(floor_script)],
         }
-        for command in commands.values():  # one untimed run each (page cache, numba cache)
-            subprocess.run(command, capture_output=True, check=True, cwd=base)
+        # the floor's cache in the temporary folder (the project's cache is left as it is)
+        floor_env = {**os.environ, "NUMBA_CACHE_DIR": str(base / "numba-cache")}
+        envs = {name: (floor_env if name == "numba_floor" else None) for name in commands}
+        for name, command in commands.items():  # one untimed run each (page cache, numba cache)
+            subprocess.run(command, capture_output=True, check=True, cwd=base, env=envs[name])
         for _ in range(repeats):
             for name, command in commands.items():
                 start = time.perf_counter()
-                subprocess.run(command, capture_output=True, check=True, cwd=base)
+                subprocess.run(command, capture_output=True, check=True, cwd=base, env=envs[name])
                 walls[name].append(time.perf_counter() - start)
                 if name in parts:
                     summary = json.loads((outs[name] / "summary.json").read_text(encoding="utf-8"))
@@ -261,9 +297,10 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
         "commands": {
             name: "aiauv " + " ".join(c[3:]).replace(str(base), "DIR")
             if "aiauv_pin.cli" in c[:3]
-            else "python " + " ".join(c[1:])
+            else "python " + " ".join(c[1:]).replace(str(base), "DIR")
             for name, c in commands.items()
         },
+        "numba_floor_script": _NUMBA_FLOOR_SCRIPT,
         **{f"{name}_wall_s": _spread(w) for name, w in walls.items()},
         "breakdown": {
             name: {part: _spread(values) for part, values in split.items()}
@@ -339,6 +376,16 @@ def first_run(case: str = "uniform", repeats: int = 3, compile_repeats: int = 2)
 #: scenario's default step may have (issue 15: the default is the cheapest setting within it).
 ACCURACY_TARGET = 0.002
 
+#: Factors by which :func:`accuracy_per_cost` scales the paper's attitude gains ``k_p, k_d``
+#: (eq. 23, the loop that curves the body) to find a setting's gain margin [-].
+MARGIN_FACTORS = (1.0, 1.25, 1.5, 2.0, 2.5, 3.0)
+
+#: Gain margin the default step must keep on the paper's attitude loop [-]: 2 (6 dB), the low end
+#: of the 2-5 asked of a feedback design (Astrom and Murray, *Feedback Systems*, 2nd ed., 2021,
+#: ch. 10, stability margins). A step chosen for accuracy alone can sit just inside the stability
+#: limit of the sampled loop, where a user's retuned gains make it oscillate at every sample.
+MARGIN_TARGET = 2.0
+
 
 def accuracy_per_cost(
     case: str = "uniform",
@@ -365,8 +412,10 @@ def accuracy_per_cost(
     grid: float = 0.04,
     controller: str = "paper",
     current: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    margin_factors: tuple[float, ...] = MARGIN_FACTORS,
 ) -> dict:
-    """End-effector error of each (method, step) against a converged reference.
+    """End-effector error of each (method, step) against a converged reference, and the gain
+    margin of the settings within the target.
 
     The controller is sampled at every integration step (the scenario's default; the midpoint
     method samples it at the middle of each step), so the errors include the effect of the
@@ -386,6 +435,25 @@ def accuracy_per_cost(
     cheapest candidate within :data:`ACCURACY_TARGET` over the whole path (issue 15's rule for the
     default step) and whether it is the scenario's default (:mod:`aiauv_pin.scenario_defaults`,
     added to ``candidates`` if missing).
+
+    With the paper's controller, each candidate within the target (and the default) also gets a
+    ``gain_margin``: the largest of ``margin_factors`` up to which the run, with the attitude gains
+    ``k_p, k_d`` (eq. 23) scaled by every factor, stays finite and free of an every-sample
+    oscillation (:func:`aiauv_pin.step_stability.every_sample_oscillation` of the joint rates at
+    most :data:`~aiauv_pin.step_stability.OSCILLATION_THRESHOLD`); ``None`` if it fails at the
+    first factor. ``cheapest_robust`` is the cheapest candidate within the target whose margin is
+    at least :data:`MARGIN_TARGET`, the rule the default follows (``default_follows_rule``).
+
+    Why the margin depends on the method, not only on the controller's sample rate: on the rate
+    loop ``w' = u`` with ``u = -a w`` sampled at ``t + theta dt`` and held over the step, a stage
+    predicted with the previous output (``w_s = w_k + theta dt u_(k-1)``, as the midpoint method's
+    stage, ``theta = 1/2``) gives ``w_(k+1) = w_k - a dt w_s``, whose characteristic polynomial
+    ``z^2 - (1 - (1 + theta) a dt) z - theta a dt`` has its roots inside the unit circle iff
+    ``a dt < 2 / (1 + 2 theta)`` (Jury's conditions): 2 for sampling at the start of the step
+    (semi-implicit Euler), 1 for the midpoint method. Measured on the paper's uniform vehicle, 300 s:
+    semi-implicit Euler at 0.004 s keeps a margin of 3 or more, the midpoint method at 0.02 s and at
+    0.01 s oscillates at 1.25 (``benchmarks/default_step.json``), and at 0.004 s at 2: less than
+    the scalar model's half of Euler's range (Euler at 0.01 s keeps 2).
     """
     from . import loading
     from .controllers import CompiledController
@@ -394,14 +462,15 @@ def accuracy_per_cost(
     from .scenario import Scenario, initial_state, tip_frame
     from .scenario_defaults import DEFAULT_DT, DEFAULT_METHOD
     from .simulation import simulate
+    from .step_stability import OSCILLATION_THRESHOLD, every_sample_oscillation
 
     if controller not in ("paper", "none"):
         raise ValueError(f"accuracy_per_cost: controller must be paper or none, got {controller!r}")
     vehicle = loading.load_vehicle(loading.bundled_urdf(case))
 
-    def path(method: str, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """The scenario's run (as :func:`aiauv_pin.scenario.run_scenario` runs it), logged every
-        ``grid`` seconds only (a 0.5 ms reference logged every step would take gigabytes)."""
+    def scenario_run(method: str, dt: float, log_every: int, gain_scale: float = 1.0):
+        """The scenario's run (as :func:`aiauv_pin.scenario.run_scenario` runs it), with the
+        attitude gains ``k_p, k_d`` scaled by ``gain_scale``, logged every ``log_every`` steps."""
         scenario = Scenario(
             case=case,
             duration=duration,
@@ -411,14 +480,14 @@ def accuracy_per_cost(
             current=tuple(current),
         )
         if controller == "paper":
-            law = VehiclePathFollowing(
-                vehicle, scenario.controller_gains, path=scenario.path_to_follow
-            ).compiled()
+            gains = scenario.controller_gains
+            gains = replace(gains, k_p=gain_scale * gains.k_p, k_d=gain_scale * gains.k_d)
+            law = VehiclePathFollowing(vehicle, gains, path=scenario.path_to_follow).compiled()
             servo = law.servo
         else:
             law, servo = CompiledController.passive(), None
         q0, v0 = initial_state(vehicle, scenario)
-        run = simulate(
+        return simulate(
             vehicle,
             q0,
             v0,
@@ -428,8 +497,26 @@ def accuracy_per_cost(
             method=method,
             servo=servo,
             current=scenario.water,
-            log_every=max(1, round(grid / dt)),
+            log_every=log_every,
         )
+
+    def gain_margin(method: str, dt: float) -> float | None:
+        """The largest of ``margin_factors`` up to which the scaled loop converges (docstring)."""
+        margin = None
+        for factor in margin_factors:
+            try:  # every step logged: one row per controller sample
+                run = scenario_run(method, dt, 1, factor)
+            except SimulationDiverged:
+                break
+            if every_sample_oscillation(np.asarray(run.v)[:, 6:]) > OSCILLATION_THRESHOLD:
+                break
+            margin = factor
+        return margin
+
+    def path(method: str, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """The scenario's end-effector every ``grid`` seconds only (a 0.5 ms reference logged
+        every step would take gigabytes)."""
+        run = scenario_run(method, dt, max(1, round(grid / dt)))
         # the end-effector of the logged state: with the midpoint method a row's diagnostics (the
         # controller's measured p) are those of the sample half a step earlier
         frame = vehicle.frame_id(tip_frame(vehicle))
@@ -492,6 +579,14 @@ def accuracy_per_cost(
         r for r in reachable if r["max_end_effector_error_m"] <= ACCURACY_TARGET and "cpu_s" in r
     ]
     cheapest = min(within, key=lambda r: r["cpu_s"]["median"]) if within else None
+    robust = None
+    if controller == "paper":
+        for row in rows:
+            is_default = row["method"] == default[0] and math.isclose(row["dt"], default[1])
+            if row in within or is_default:
+                row["gain_margin"] = gain_margin(row["method"], row["dt"])
+        kept = [r for r in within if (r.get("gain_margin") or 0.0) >= MARGIN_TARGET]
+        robust = min(kept, key=lambda r: r["cpu_s"]["median"]) if kept else None
     return {
         "case": case,
         "controller": controller,
@@ -509,6 +604,20 @@ def accuracy_per_cost(
         "cheapest_is_default": cheapest is not None
         and cheapest["method"] == default[0]
         and math.isclose(cheapest["dt"], default[1]),
+        **(
+            {}
+            if controller != "paper"
+            else {
+                "margin_factors": list(margin_factors),
+                "margin_target": MARGIN_TARGET,
+                "cheapest_robust": (
+                    None if robust is None else {"method": robust["method"], "dt": robust["dt"]}
+                ),
+                "default_follows_rule": robust is not None
+                and robust["method"] == default[0]
+                and math.isclose(robust["dt"], default[1]),
+            }
+        ),
     }
 
 
@@ -548,6 +657,9 @@ def format_parts(results: dict) -> list[str]:
         spread("fresh 'aiauv simulate --no-html' wall", e2e["no_html_wall_s"], "s")
         spread("fresh 'aiauv simulate' (with playback) wall", e2e["with_html_wall_s"], "s")
         spread("fresh 'import aiauv_pin.cli' wall", e2e["import_only_wall_s"], "s")
+        if "numba_floor_wall_s" in e2e:
+            spread("floor: fresh 'import numpy' wall", e2e["numpy_floor_wall_s"], "s")
+            spread("floor: fresh numba, one cached function", e2e["numba_floor_wall_s"], "s")
         for name, label in (("no_html", "--no-html"), ("with_html", "with playback")):
             for part, values in e2e.get("breakdown", {}).get(name, {}).items():
                 spread(f"  {label}: {part[:-2]}", values, "s")
@@ -571,13 +683,23 @@ def format_parts(results: dict) -> list[str]:
             if error is None:
                 lines.append(f"{label:<48} diverges")
             else:
+                margin = ""
+                if "gain_margin" in r:
+                    value = r["gain_margin"]
+                    margin = ", gain margin " + ("< 1" if value is None else f"{value:g}")
                 lines.append(
                     f"{label:<48} {1000 * error:10.3f} mm, cost "
-                    f"{r.get('cost_relative_to_rk4_0.01', float('nan')):.2f}x RK4 0.01"
+                    f"{r.get('cost_relative_to_rk4_0.01', float('nan')):.2f}x RK4 0.01{margin}"
                 )
         if "cheapest_is_default" in acc:
             cheapest = acc.get("cheapest_within_2mm")
             text = "none" if cheapest is None else f"{cheapest['method']} dt={cheapest['dt']:g}"
             verdict = "is" if acc["cheapest_is_default"] else "is NOT"
             lines.append(f"{'cheapest within 2 mm':<48} {text} ({verdict} the default)")
+        if "default_follows_rule" in acc:
+            robust = acc.get("cheapest_robust")
+            text = "none" if robust is None else f"{robust['method']} dt={robust['dt']:g}"
+            verdict = "is" if acc["default_follows_rule"] else "is NOT"
+            label = f"cheapest within 2 mm, gain margin >= {acc['margin_target']:g}"
+            lines.append(f"{label:<48} {text} ({verdict} the default)")
     return lines

@@ -2,7 +2,9 @@
 
 Issue 15's rule: the default is the cheapest (method, step) whose end-effector path stays within
 2 mm (:data:`aiauv_pin.bench_run.ACCURACY_TARGET`) of a converged reference (RK4 at 0.5 ms) over
-the whole 300 s run. This script measures the error of the candidates
+the whole 300 s run; ours adds that the paper's attitude loop must keep a gain margin of 2
+(:data:`aiauv_pin.bench_run.MARGIN_TARGET`: it still converges with ``k_p, k_d`` doubled). This
+script measures the error (and, with the controller, the margin) of the candidates
 (:func:`aiauv_pin.bench_run.accuracy_per_cost`) on both bundled vehicles with the paper's controller
 in still water, and checks the default also stays well-behaved (finite, close to the reference) with
 the paper's controller in a current and in a passive drift in that current. It writes
@@ -80,11 +82,19 @@ def main() -> None:
         for row in result["rows"]:
             error = row["max_end_effector_error_m"]
             text = "diverges" if error is None else f"{1000 * error:.3f} mm"
-            print(f"  {row['method']:<6} dt={row['dt']:<7g} {text}")
+            if "gain_margin" in row:
+                margin = row["gain_margin"]
+                text += ", gain margin " + ("< 1" if margin is None else f"{margin:g}")
+            print(f"  {row['method']:<8} dt={row['dt']:<7g} {text}")
         print(
             f"  cheapest within 2 mm: {result['cheapest_within_2mm']} "
             f"(default {result['default']}: {result['cheapest_is_default']})"
         )
+        if "cheapest_robust" in result:
+            print(
+                f"  cheapest within 2 mm with gain margin >= {result['margin_target']:g}: "
+                f"{result['cheapest_robust']} (the default: {result['default_follows_rule']})"
+            )
 
 
 if __name__ == "__main__":
