@@ -162,6 +162,7 @@ def _run_simulate(args) -> int:
     from .outputs import live_path_points, preload_plotting, write_results
     from .result_folder import check_output_folder, staged_folder
     from .scenario import ScenarioResult, run_scenario
+    from .text import signed
     from .validation import explain_divergence
 
     scenario = scenario_for_args(args)
@@ -266,7 +267,7 @@ def _run_simulate(args) -> int:
         )
     final = content["final"]
     errors = (
-        f"final p_y = {final['p_y']:+.4f} m, p_z = {final['p_z']:+.4f} m"
+        f"final p_y = {signed(final['p_y'], 4)} m, p_z = {signed(final['p_z'], 4)} m"
         if "p_y" in final
         else f"final cross-track error = {final['cross_track_error']:.4f} m"
     )

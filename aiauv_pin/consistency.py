@@ -53,6 +53,7 @@ from .check import BUOYANCY_TOLERANCE
 from .errors import SimulationDiverged
 from .integrators import rk4_step
 from .simulation import Trajectory, simulate
+from .text import signed
 from .vehicle import Vehicle
 
 #: Seed of the random states (any fixed seed gives reproducible checks).
@@ -664,20 +665,10 @@ class Trim(NamedTuple):
             if np.any(np.isnan(self.center_of_buoyancy)):
                 attitude = "no buoyancy"
         else:
-            roll, pitch = _signed(math.degrees(self.roll)), _signed(math.degrees(self.pitch))
+            roll, pitch = signed(math.degrees(self.roll)), signed(math.degrees(self.pitch))
             attitude = f"roll {roll} deg, pitch {pitch} deg"
         share = 100.0 * self.net_buoyancy / self.weight if self.weight > 0 else math.nan
-        return f"trim {attitude}; net buoyancy {self.net_buoyancy:+.4g} N ({_signed(share)} % of the weight)"
-
-
-def _signed(value: float, digits: int = 2) -> str:
-    """``value`` with its sign and ``digits`` decimals, ``+0.00`` for whatever rounds to zero.
-
-    A symmetric vehicle's trim is zero up to rounding errors whose sign depends on the platform's
-    libraries (the paper vehicle's pitch is 5.2e-15 rad with the wheels of Python 3.11, ``-0.0``
-    with those of 3.13); Python 3.11's ``z`` format option does the same, but 3.10 is supported.
-    """
-    return f"{round(value, digits) + 0.0:+.{digits}f}"
+        return f"trim {attitude}; net buoyancy {self.net_buoyancy:+.4g} N ({signed(share)} % of the weight)"
 
 
 def trim(vehicle: Vehicle) -> Trim:
