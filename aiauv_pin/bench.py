@@ -835,13 +835,20 @@ def _run_bench_command(args) -> int:
         write_text(args.out, json.dumps(results, indent=2) + "\n")
         print("\n".join(lines))
         print(f"-> {args.out}")
+        if "kernels" in args.only:  # the figure of the scaling just measured
+            _write_scaling_figure(results, args.out)
         return 0
     results = run_bench(quick=args.quick, case=args.case, duration=args.duration)
     write_text(args.out, json.dumps(results, indent=2) + "\n")
     print(format_table(results))
     print(f"-> {args.out}")
+    _write_scaling_figure(results, args.out)
+    return 0
+
+
+def _write_scaling_figure(results: dict, out: Path) -> None:
+    """``scaling.png`` next to the JSON file ``out``, from ``results``' scaling rows (if any)."""
     if (results.get("scaling") or {}).get("rows"):
         from .bench_native import scaling_figure
 
-        print(f"-> {scaling_figure(results['scaling'], Path(args.out).parent / 'scaling.png')}")
-    return 0
+        print(f"-> {scaling_figure(results['scaling'], Path(out).parent / 'scaling.png')}")

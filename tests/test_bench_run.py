@@ -6,6 +6,8 @@ their formatting and the accuracy comparison on a few seconds of the scenario.
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from aiauv_pin import bench_run
@@ -183,3 +185,17 @@ def test_bench_rejects_an_unknown_part(capsys):
         main(["bench", "--only", "everything"])
     assert exit_info.value.code != 0
     assert "--only" in capsys.readouterr().err
+
+
+def test_bench_only_kernels_updates_the_json_and_redraws_the_scaling_figure(tmp_path, capsys):
+    # the figure of the README is drawn from the scaling rows: updating the rows alone (--only
+    # kernels) left the figure of an earlier run beside them
+    out = tmp_path / "results.json"
+    out.write_text('{"end_to_end": {"kept": true}}\n', encoding="utf-8")
+    assert main(["bench", "--only", "kernels", "--quick", "--out", str(out)]) == 0
+    results = json.loads(out.read_text(encoding="utf-8"))
+    assert results["end_to_end"] == {"kept": True}  # parts not measured are kept
+    assert [row["links"] for row in results["scaling"]["rows"]] == results["scaling"]["links"]
+    figure = tmp_path / "scaling.png"
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"-> {figure}" in capsys.readouterr().out
