@@ -444,16 +444,10 @@ def accuracy_per_cost(
     first factor. ``cheapest_robust`` is the cheapest candidate within the target whose margin is
     at least :data:`MARGIN_TARGET`, the rule the default follows (``default_follows_rule``).
 
-    Why the margin depends on the method, not only on the controller's sample rate: on the rate
-    loop ``w' = u`` with ``u = -a w`` sampled at ``t + theta dt`` and held over the step, a stage
-    predicted with the previous output (``w_s = w_k + theta dt u_(k-1)``, as the midpoint method's
-    stage, ``theta = 1/2``) gives ``w_(k+1) = w_k - a dt w_s``, whose characteristic polynomial
-    ``z^2 - (1 - (1 + theta) a dt) z - theta a dt`` has its roots inside the unit circle iff
-    ``a dt < 2 / (1 + 2 theta)`` (Jury's conditions): 2 for sampling at the start of the step
-    (semi-implicit Euler), 1 for the midpoint method. Measured on the paper's uniform vehicle, 300 s:
+    The margin depends on the method, not only on the controller's sample rate (a scalar model in
+    :mod:`aiauv_pin.step_stability`'s docstring). Measured on the paper's uniform vehicle, 300 s:
     semi-implicit Euler at 0.004 s keeps a margin of 3 or more, the midpoint method at 0.02 s and at
-    0.01 s oscillates at 1.25 (``benchmarks/default_step.json``), and at 0.004 s at 2: less than
-    the scalar model's half of Euler's range (Euler at 0.01 s keeps 2).
+    0.01 s oscillates at 1.25 (``benchmarks/default_step.json``), and at 0.004 s at 2.
     """
     from . import loading
     from .controllers import CompiledController

@@ -24,7 +24,7 @@ leaves open, documented here and in the README:
   both. The midpoint method at 0.02 s is 0.21-0.36 mm off for 0.33x and would win on accuracy
   alone, but its loop oscillates at every sample with the paper's gains times 1.25 (uniform) or 2
   (stabilised): its stage, predicted with the previous output, halves the sampled loop's stable
-  range (:func:`aiauv_pin.bench_run.accuracy_per_cost`); it also rings at the start of the run and
+  range (:mod:`aiauv_pin.step_stability`); it also rings at the start of the run and
   its joints' work is 63 % too large. Euler's joint servo is implicit, so a larger step only costs
   accuracy (5.0 mm at 0.01 s, 2 cm at 0.04 s). Measured by ``benchmarks/default_step.py``
   (``benchmarks/default_step.json``); ``aiauv bench --only accuracy-per-cost`` says whether the

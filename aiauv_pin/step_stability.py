@@ -38,10 +38,20 @@ bounds the step (measured on the paper's scenario, 2026-11-23): on the uniform v
 the first second (0.003 rad/s half a second in), and the joints' work is 0.174 J instead of the
 converged 0.107 J (0.099 J at 0.01 s); with ``k_d = 25`` it oscillates at 0.02 s, with ``k_d =
 30`` at 0.01 s, where semi-implicit Euler at 0.004 s converges up to ``k_d = 50`` (and oscillates
-at 80). Each step of the midpoint method passes a change of the joint references on to the joint
-rates over one and a half steps (the stage, then the completion) where Euler's does over one, so
-at the same step its loop gain is about 1.5 times Euler's. :func:`warn_if_oscillating` catches the
-sustained oscillation after a run (:func:`aiauv_pin.scenario.run_scenario` calls it).
+at 80).
+
+Why the midpoint method loses range, on a scalar model: the rate loop ``w' = u`` with ``u = -a w``
+sampled at ``t + theta dt`` and held over the step, the sample's state predicted with the previous
+output (``w_s = w_k + theta dt u_(k-1)``, as the midpoint method's stage, ``theta = 1/2``), gives
+``w_(k+1) = w_k - a dt w_s``. Its characteristic polynomial ``z^2 - (1 - (1 + theta) a dt) z -
+theta a dt`` has its roots inside the unit circle iff ``a dt < 2 / (1 + 2 theta)`` (Jury's
+conditions; checked against the recurrence): 2 for a sample at the step's start (semi-implicit
+Euler), 1 at its middle, so half of Euler's stable range of gains at the same step. Predicting the
+stage again with the first sample's output (a second sample per step) gives ``a dt < 2`` back, a
+third 1.48. On the paper's vehicle the midpoint method keeps less than half (gain margins measured
+by :func:`aiauv_pin.bench_run.accuracy_per_cost`: 1.5 at 0.004 s, where Euler keeps 2 at 0.01 s),
+which this model does not explain. :func:`warn_if_oscillating` catches the sustained oscillation
+after a run (:func:`aiauv_pin.scenario.run_scenario` calls it).
 """
 
 from __future__ import annotations

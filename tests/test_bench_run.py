@@ -143,7 +143,7 @@ def test_gain_margin_keeps_euler_and_drops_the_midpoint_method():
     # the paper's attitude gains scaled up: semi-implicit Euler at the default step still
     # converges at twice them, the midpoint method at 0.02 s (within 2 mm, and cheaper) oscillates
     # at every sample from 1.25 times them (its stage halves the sampled loop's stable range,
-    # bench_run.accuracy_per_cost); so the cheapest within 2 mm is not the default, the cheapest
+    # aiauv_pin.step_stability); so the cheapest within 2 mm is not the default, the cheapest
     # with a margin of 2 is
     result = bench_run.accuracy_per_cost(
         duration=20.0,
