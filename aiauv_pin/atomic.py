@@ -82,11 +82,14 @@ def check_output_file(path: str | os.PathLike) -> Path:
     return path
 
 
-def real_folder(root: str | os.PathLike, folder: str | os.PathLike | None = None) -> Path:
+def real_folder(
+    root: str | os.PathLike, folder: str | os.PathLike | None = None, *, create: bool = True
+) -> Path:
     """``folder`` (default ``root``), a folder inside ``root`` reached through real folders only.
 
     ``root`` and every folder between it and ``folder`` must be a directory and not a symbolic
-    link (checked with ``lstat``); missing ones are created.
+    link (checked with ``lstat``); missing ones are created (with ``create``; else only what
+    exists is checked).
 
     Raises:
         OutputPathError: A folder on the way is a link or not a folder, or ``folder`` is outside
@@ -104,13 +107,17 @@ def real_folder(root: str | os.PathLike, folder: str | os.PathLike | None = None
     for step in (None, *parts):
         if step is not None:
             current = current / step
+        if create:
+            try:
+                current.mkdir(parents=step is None)
+            except FileExistsError:
+                pass
+            except OSError as exc:
+                raise OutputPathError(f"cannot create {current}: {exc.strerror}") from None
         try:
-            current.mkdir(parents=step is None)
-        except FileExistsError:
-            pass
-        except OSError as exc:
-            raise OutputPathError(f"cannot create {current}: {exc.strerror}") from None
-        mode = os.lstat(current).st_mode
+            mode = os.lstat(current).st_mode
+        except FileNotFoundError:
+            return folder  # not created: nothing further down exists either
         if not stat.S_ISDIR(mode):
             raise OutputPathError(
                 f"refusing to write into {current}: it is {kind_of(mode)}, not a folder"

@@ -712,10 +712,9 @@ def run_sweep(
     out = Path(out)
     points = spec.points()
     claim_folder(out, "sweep", allowed=(LOCK_FILE,))  # new, empty, or a sweep's: never foreign
+    for folder in (runs_folder(out), out / "figures"):  # a planted link: refused, never followed
+        real_folder(out, folder, create=False)
     with output_lock(out):
-        real_folder(out, runs_folder(out))  # a planted link is refused, never read or written
-        if plots:
-            real_folder(out, out / "figures")
         return _run_locked(
             spec,
             spec_text,
