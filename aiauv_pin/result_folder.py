@@ -130,37 +130,35 @@ def read_manifest(folder: str | os.PathLike, kind: str | None = None) -> dict | 
     return content
 
 
-def _listing(folder: Path) -> tuple[list[str], list[str], list[str]]:
-    """Files, folders and other entries (links, FIFOs, ...) under ``folder``, relative, never
-    following a link."""
-    files, folders, others = [], [], []
+def _entries(folder: Path) -> Iterator[tuple[str, str]]:
+    """``(relative path, "file" | "folder" | "other")`` of everything under ``folder``, top-down,
+    never following a link (a link is an ``"other"``)."""
     for top, dirs, names in os.walk(folder, followlinks=False):
         base = Path(top).relative_to(folder)
         for name in sorted(dirs + names):
-            relative = (base / name).as_posix()
-            mode = os.lstat(Path(top) / name).st_mode
-            if stat.S_ISDIR(mode):
-                folders.append(relative)
-            elif stat.S_ISREG(mode):
-                files.append(relative)
-            else:
-                others.append(relative)
-    return files, folders, others
+            try:
+                mode = os.lstat(Path(top) / name).st_mode
+            except FileNotFoundError:
+                continue
+            kind = "folder" if stat.S_ISDIR(mode) else "file" if stat.S_ISREG(mode) else "other"
+            yield (base / name).as_posix(), kind
 
 
-def _foreign_entry(folder: Path, allowed: Iterable[str] = ()) -> str | None:
-    """The first entry of ``folder`` its manifest does not list (``None``: all ours)."""
+def _listing(folder: Path) -> tuple[list[str], list[str], list[str]]:
+    """Files, folders and other entries (links, FIFOs, ...) under ``folder``, relative."""
+    found: dict[str, list[str]] = {"file": [], "folder": [], "other": []}
+    for entry, kind in _entries(folder):
+        found[kind].append(entry)
+    return found["file"], found["folder"], found["other"]
+
+
+def _foreign_entry(folder: Path) -> str | None:
+    """The first entry of ``folder`` its manifest does not list (``None``: all ours); stops at
+    the first one (``--out ~`` is refused at once, not after reading the whole tree)."""
     manifest = read_manifest(folder) or {"files": [], "folders": []}
-    ours_files = set(manifest["files"]) | {MARKER} | set(allowed)
-    ours_folders = set(manifest["folders"])
-    files, folders, others = _listing(folder)
-    if others:
-        return others[0]
-    for entry in folders:
-        if entry not in ours_folders:
-            return entry
-    for entry in files:
-        if entry not in ours_files:
+    ours = {"file": set(manifest["files"]) | {MARKER}, "folder": set(manifest["folders"])}
+    for entry, kind in _entries(folder):
+        if entry not in ours.get(kind, ()):
             return entry
     return None
 
