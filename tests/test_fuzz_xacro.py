@@ -110,7 +110,7 @@ def _eval_through_property(marker: Path) -> str:
     """``$(eval ...)`` cannot hold ')', but its text is expanded first: a property brings it."""
     code = f'open("{marker}", "w").write("x")'
     return (
-        f"<xacro:property name=\"p\" value={quoteattr(repr(code))}/>{LINK}"
+        f'<xacro:property name="p" value={quoteattr(repr(code))}/>{LINK}'
         '<gazebo><x v="$(eval ${p})"/></gazebo>'
     )
 
@@ -299,9 +299,7 @@ def test_sdf_and_urdf_fifos_and_oversize_files_are_refused(tmp_path, capsys):
     for sdf, expected in ((fifo, "not a regular file"), (oversize, "larger than")):
         message = _outcome("SDF input", lambda sdf=sdf: read_gz_model(sdf))
         assert message is not None and expected in message
-        message = _outcome(
-            "SDF input", lambda sdf=sdf: import_gz(sdf, urdf, tmp_path / "out.urdf")
-        )
+        message = _outcome("SDF input", lambda sdf=sdf: import_gz(sdf, urdf, tmp_path / "out.urdf"))
         assert message is not None and expected in message
         assert main(["import-gz", str(sdf), "--urdf", str(urdf), "-o", str(tmp_path / "o.urdf")])
         assert capsys.readouterr().err.count("\n") == 1
@@ -351,7 +349,7 @@ def test_what_the_safe_evaluator_allows_matches_xacro(tmp_path):
         '<xacro:arg name="arm" default="true"/>'
         '<xacro:include filename="inc.xacro" ns="parts"/>'
         '<xacro:property name="d2r" value="${pi / 180}"/>'
-        '<xacro:property name="dims" value="${dict(a=[1, 2.5, \'x y\'], b=[3, 4, \'z\'])}"/>'
+        "<xacro:property name=\"dims\" value=\"${dict(a=[1, 2.5, 'x y'], b=[3, 4, 'z'])}\"/>"
         '<xacro:property name="n" value="3"/>'
         '<xacro:macro name="box" params="name size:=1 *origin">'
         '<link name="${name}_link"><x v="${size ** 2 / 2}" w="${name + \'_\' + str(size)}"/>'
@@ -360,8 +358,8 @@ def test_what_the_safe_evaluator_allows_matches_xacro(tmp_path):
         '<xacro:if value="${n &gt; 2 and not (n == 5)}"><k v="${max(1, n) if n else 0}"/></xacro:if>'
         '<xacro:unless value="$(arg arm)"><no/></xacro:unless>'
         '<t v="${sin(radians(30))} ${math.cos(math.pi)} ${sqrt(2)} ${atan2(1, 1)} ${fabs(-n)}"/>'
-        '<t v="${round(2.567, 2)} ${int(7 / 2)} ${float(\'1.5\')} ${len(dims)} ${n % 2} ${n // 2}"/>'
-        '<t v="${parts.width * 2} ${\'x\' in dims[\'a\'][2]} ${[1, 2][-1]} ${(1, 2) &lt; (1, 3)}"/>'
+        "<t v=\"${round(2.567, 2)} ${int(7 / 2)} ${float('1.5')} ${len(dims)} ${n % 2} ${n // 2}\"/>"
+        "<t v=\"${parts.width * 2} ${'x' in dims['a'][2]} ${[1, 2][-1]} ${(1, 2) &lt; (1, 3)}\"/>"
         '<t v="$(eval 2 * 3 + 1 if arm else 0)" w="$(eval arm and 2 ** 3)"/>'
     )
     path = _write(tmp_path, "ok.xacro", body)
