@@ -181,10 +181,10 @@ class Manifest:
         import llvmlite.binding as llvm
         import numba
 
+        if self.numba != numba.__version__:  # first: the one a user can act on (pyproject's range)
+            return f"built with numba {self.numba}, running {numba.__version__}"
         if self.source_hash != source_hash:
             return "built from other sources"
-        if self.numba != numba.__version__:
-            return f"built with numba {self.numba}, running {numba.__version__}"
         if self.python_tag != python_tag():
             return f"built for {self.python_tag}, running {python_tag()}"
         if self.triple != llvm.get_process_triple():
