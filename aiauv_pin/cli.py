@@ -173,12 +173,13 @@ def _run_simulate(args) -> int:
             "use a larger --dt or a shorter --duration"
         )
     path = scenario.vehicle if scenario.vehicle is not None else loading.bundled_urdf(scenario.case)
-    from .compilation import announce_compilation, warm_up
+    from .compilation import CompilationWatch, warm_up
 
     compile_start = time.perf_counter()
     vehicle = loading.load_vehicle(path, **_description_options(args))
-    # announced once the vehicle passed the validation gate: a refused file gets its one line only
-    compiling = announce_compilation()
+    # watched once the vehicle passed the validation gate: a refused file gets its one line only;
+    # the notice is printed when numba starts compiling (set-up or run), and only then
+    compilation = CompilationWatch()
     if vehicle.fallback_reason is not None:
         print(
             f"aiauv: warning: compiled backend unavailable ({vehicle.fallback_reason}); "
@@ -187,8 +188,9 @@ def _run_simulate(args) -> int:
         )
     # compile (or load) the kernels before the timed run: summary.json's real-time factor is the
     # simulation's alone; the set-up time is recorded beside it
-    warm_up(vehicle, scenario)
-    timing = {"setup_time": time.perf_counter() - compile_start, "compiled_now": compiling}
+    with compilation:
+        warm_up(vehicle, scenario)
+    timing = {"setup_time": time.perf_counter() - compile_start}
     if args.scenario is not None:
         name = args.scenario.stem
     elif scenario.vehicle is not None:
@@ -213,14 +215,16 @@ def _run_simulate(args) -> int:
         on_log = live_view(vehicle, path_points=live_path_points(scenario))
     start = time.perf_counter()
     try:
-        result = run_scenario(
-            vehicle,
-            scenario,
-            progress=not args.quiet,
-            on_log=on_log,
-            after_first_chunk=preload_plotting,
-        )
+        with compilation:
+            result = run_scenario(
+                vehicle,
+                scenario,
+                progress=not args.quiet,
+                on_log=on_log,
+                after_first_chunk=preload_plotting,
+            )
     except SimulationDiverged as exc:
+        timing["compiled_now"] = compilation.compiled_now
         cause = " ".join(explain_divergence(vehicle, scenario.dt, str(exc)).split())
         partial = exc.trajectory
         if partial is None or len(partial.t) == 0:
@@ -243,6 +247,7 @@ def _run_simulate(args) -> int:
             f"simulation diverged: {cause}; partial results up to t = {partial.t[-1]:.6g} s "
             f"({len(partial.t)} samples) written to {out}"
         ) from None
+    timing["compiled_now"] = compilation.compiled_now
     with staged_folder(out) as staging:  # in place only once every file is written
         also = []
         if not args.no_html:  # the page, written beside the figures (by whichever process is free)
@@ -274,8 +279,9 @@ def _run_simulate(args) -> int:
     if "u" in final:
         errors += f", u = {final['u']:.4f} m/s, phi_tilde = {final['phi_tilde']:.4f} rad"
     print(
-        f"{name}: {content['simulated_time']:.1f} s simulated in {content['wall_time']:.1f} s "
-        f"({content['real_time_factor']:.0f}x real time); {errors} -> {out}"
+        f"{name}: {content['simulated_time']:.1f} s simulated (set-up {timing['setup_time']:.1f} s, "
+        f"simulation {content['wall_time']:.1f} s, {content['real_time_factor']:.0f}x real time); "
+        f"{errors} -> {out}"
     )
     return 0
 
