@@ -17,6 +17,7 @@ How seeding works and why the target is portable: :mod:`hydro.prebuilt`.
 from __future__ import annotations
 
 import argparse
+import os
 import subprocess
 import sys
 import tempfile
@@ -30,8 +31,8 @@ from .compilation import default_target_environment
 
 #: What the build runs (``aiauv`` command lines, and the README's batch rollout): the quick start,
 #: the commands a new user tries next, and each built-in controller (a passive run serves any
-#: vehicle: the loop's types do not depend on the vehicle). Each simulates 1 s; the compiled code does not depend on
-#: the duration.
+#: vehicle: the loop's types do not depend on the vehicle). Each simulates 1 s; the compiled code
+#: does not depend on the duration.
 WORKLOADS = (
     ("simulate", "--duration", "1"),
     ("simulate", "--duration", "1", "--no-html", "--method", "rk4"),
