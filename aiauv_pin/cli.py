@@ -159,9 +159,8 @@ def scenario_for_args(args):
 def _run_simulate(args) -> int:
     from . import loading
     from .errors import AiauvError, SimulationDiverged
-    from .outputs import live_path_points, preload_plotting, write_results
+    from .outputs import final_line, live_path_points, preload_plotting, write_results
     from .result_folder import check_output_folder, staged_folder
-    from .outputs import final_line
     from .scenario import ScenarioResult, joint_position_units, run_scenario
     from .validation import explain_divergence
 

@@ -236,9 +236,7 @@ def timeseries_table(result: ScenarioResult) -> list[TimeseriesColumn]:
 
     def add_info(key: str, names, unit: str) -> None:
         values = np.asarray(info[key]).reshape(len(tr.t), -1)
-        table.extend(
-            TimeseriesColumn(name, unit, values[:, k]) for k, name in enumerate(names)
-        )
+        table.extend(TimeseriesColumn(name, unit, values[:, k]) for k, name in enumerate(names))
 
     paper = "u" in info
     for key, names, unit in _INFO_COLUMNS:
@@ -382,9 +380,7 @@ def read_timeseries(path: str | os.PathLike) -> Timeseries:
     values = np.empty((len(rows) - 1, len(header)))
     for k, row in enumerate(rows[1:]):
         if len(row) != len(header):
-            raise ValueError(
-                f"{path}: row {k + 2} has {len(row)} cells, the header {len(header)}"
-            )
+            raise ValueError(f"{path}: row {k + 2} has {len(row)} cells, the header {len(header)}")
         try:
             values[k] = [float(cell) for cell in row]
         except ValueError:
@@ -527,6 +523,11 @@ def _error_axes(plt, title: str):
     ax.set_title(title)
     ax.axhline(0.0, color="k", lw=0.5)
     ax_log.set_yscale("log")
+    # minor ticks (labelled over less than a decade) as plain numbers, "2e-02", not "2 x 10^-2":
+    # narrow enough to leave the axis label in the figure
+    from matplotlib.ticker import LogFormatter
+
+    ax_log.yaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(1, 0.4)))
     ax_log.set_xlabel("t [s]")
     ax_log.grid(True, which="major", lw=0.3)
     return fig, ax, ax_log
@@ -598,6 +599,10 @@ def _set_equal_axes(ax, points: np.ndarray) -> None:
     ax.set_ylim(centre[1] - half, centre[1] + half)
     ax.set_zlim(centre[2] - half, centre[2] + half)
     ax.set_box_aspect((1.0, 1.0, 1.0))
+    from matplotlib.ticker import MaxNLocator
+
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):  # tick labels that do not run into each other
+        axis.set_major_locator(MaxNLocator(5))
 
 
 def _draw(
@@ -699,8 +704,8 @@ def _draw(
         for label, points in (("base", np.asarray(tr.q)[:, :3]), ("end-effector", info["p"])):
             stride = max(1, len(points) // (2 * PLOT_BUCKETS))
             points = np.concatenate((points[::stride], points[-1:]))
-            ax.plot(points[:, 0], points[:, 1], points[:, 2], label=label)
-            ax.scatter(*points[0], marker="o", s=12)  # the start
+            (line,) = ax.plot(points[:, 0], points[:, 1], points[:, 2], label=label)
+            ax.scatter(*points[0], marker="o", s=12, color=line.get_color())  # the start
             drawn.append(points)
         ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"Trajectory ({case})")
         _set_equal_axes(ax, np.concatenate(drawn))
@@ -721,7 +726,7 @@ def figure_path(folder: Path, name: str, figure_format: str = "png") -> Path:
 _MARGINS = {
     "error": {"left": 0.13, "right": 0.97, "bottom": 0.1, "top": 0.93, "hspace": 0.08},
     "single": {"left": 0.12, "right": 0.97, "bottom": 0.15, "top": 0.9},
-    "three": {"left": 0.1, "right": 0.97, "bottom": 0.09, "top": 0.94, "hspace": 0.1},
+    "three": {"left": 0.13, "right": 0.97, "bottom": 0.09, "top": 0.94, "hspace": 0.1},
     "3d": {"left": 0.02, "right": 0.92, "bottom": 0.06, "top": 0.93},
 }
 _LAYOUT_OF = {
