@@ -1,4 +1,10 @@
-"""Result files of a path-following run: ``timeseries.csv``, ``summary.json`` and ``figures/``.
+"""Result files of a run: ``timeseries.csv``, ``summary.json`` and ``figures/``.
+
+What they hold fits the run: path errors, named in the path's frame, only for a run that follows
+a path (:func:`aiauv_pin.scenario.followed_path`), the motion of the base for one that does not
+(:func:`figures_of`, :func:`aiauv_pin.scenario.summary`); ``timeseries.csv`` has a unit in every
+header cell and the whole state, written so that it reads back exactly
+(:func:`timeseries_table`, :func:`read_timeseries`, :func:`timeseries_trajectory`).
 
 The run is logged at every controller sample (every step by default) and ``summary.json``'s
 integrals (work) and settling times use every logged sample. ``timeseries.csv`` holds every
@@ -200,9 +206,12 @@ BASE_TWIST = (
     ("base_q", "rad/s"),
     ("base_r", "rad/s"),
 )
-#: Number format of ``timeseries.csv``: Python's shortest representation that reads back to the
-#: same float, so :func:`read_timeseries` returns the logged values bit for bit.
-CSV_FORMAT = "%r"
+#: Number format of ``timeseries.csv``: 17 significant digits, which read back to the same float,
+#: so :func:`read_timeseries` returns the logged values bit for bit (Python's shortest such text,
+#: ``repr``, takes 1.6 times as long to write; it is kept for the time, ``0.04`` rather than
+#: ``0.040000000000000001``).
+CSV_FORMAT = "%.17g"
+TIME_FORMAT = "%r"
 
 
 def _rate_unit(unit: str) -> str:
@@ -316,13 +325,14 @@ def csv_rows(result: ScenarioResult) -> np.ndarray:
     return rows
 
 
-def format_table(header: list[str], table: np.ndarray, fmt: str = "%.9g") -> str:
+def format_table(header: list[str], table: np.ndarray, fmt: str | Sequence[str] = "%.9g") -> str:
     """CSV text of a 2-D float table (same text as ``np.savetxt(..., delimiter=",")``).
 
-    ``fmt`` is a ``%`` format of one number; ``"%r"`` writes each as Python's ``repr`` (the
-    shortest text that reads back to the same float)."""
+    ``fmt`` is a ``%`` format of one number, or one per column; ``"%r"`` writes Python's ``repr``
+    (the shortest text that reads back to the same float)."""
     n_rows, n_columns = table.shape
-    line = ",".join([fmt] * n_columns) + "\n"
+    formats = [fmt] * n_columns if isinstance(fmt, str) else list(fmt)
+    line = ",".join(formats) + "\n"
     body = (line * n_rows) % tuple(table.ravel().tolist()) if n_rows else ""
     return ",".join(header) + "\n" + body
 
@@ -330,12 +340,13 @@ def format_table(header: list[str], table: np.ndarray, fmt: str = "%.9g") -> str
 def write_timeseries(result: ScenarioResult, path: Path) -> Path:
     """Write ``timeseries.csv``: one row per ``csv_period`` (see the module docstring), a header
     of ``name [unit]`` cells (:func:`timeseries_table`), numbers that read back exactly
-    (:data:`CSV_FORMAT`)."""
+    (:data:`CSV_FORMAT`, :data:`TIME_FORMAT`)."""
     columns = timeseries_table(result)
     rows = csv_rows(result)
     table = np.column_stack([np.asarray(column.values, dtype=float)[rows] for column in columns])
     header = [column_header(column.name, column.unit) for column in columns]
-    return write_text(path, format_table(header, table, CSV_FORMAT))
+    formats = [TIME_FORMAT if column.name == "t" else CSV_FORMAT for column in columns]
+    return write_text(path, format_table(header, table, formats))
 
 
 @dataclass(frozen=True)
@@ -613,13 +624,14 @@ def _draw(
     vehicle_name: str | None = None,
     path_points: np.ndarray | None = None,
 ):
-    """The figure ``name`` of :data:`FIGURES`, titled with the vehicle's name.
+    """The figure ``name`` of :data:`FIGURES` or :data:`MOTION_FIGURES`, titled with a name.
 
     Args:
-        name: One of :data:`FIGURES`.
+        name: One of :data:`FIGURES` or :data:`MOTION_FIGURES`.
         result: The run.
         plt: ``matplotlib.pyplot``.
-        vehicle_name: Name in the titles (default: the scenario's case).
+        vehicle_name: Name in the titles (``aiauv simulate``: its output folder's; default: the
+            scenario's case).
         path_points: World points of the path the 3-D figure draws, (N, 3) [m] (default:
             :func:`default_path_points`).
     """
@@ -935,7 +947,10 @@ def write_figures(
     vehicle_name: str | None = None,
     path_points: np.ndarray | None = None,
 ) -> list[Path]:
-    """Figures mirroring the paper's Figs. 2-7, plus the 3-D path (:data:`FIGURES`).
+    """The figures of ``result`` (:func:`figures_of`): the paper's Figs. 2-7 and the 3-D path
+    (:data:`FIGURES`) with its controller, the cross-track errors and the 3-D path for another run
+    that follows a path, the base's motion and the 3-D trajectories for a run that follows none.
+    Every axis is labelled with its unit.
 
     Error figures (cross-track, ``phi_tilde``, ``omega_tilde``) have a log-scale panel of the
     error's magnitude under the linear one, so that final errors of 1e-5 are visible; the 3-D path
@@ -949,11 +964,11 @@ def write_figures(
         parallel: Draw in two processes where possible.
         figure_format: ``"png"`` (:data:`FIGURE_DPI` dpi), ``"svg"`` or ``"pdf"``.
         vehicle_name: Name in the titles (default: the scenario's case).
-        path_points: The path drawn in the 3-D figure, world points (N, 3) [m] (default: the
-            x-axis over the run's x-range).
+        path_points: The path drawn in the 3-D figure, world points (N, 3) [m] (default:
+            :func:`default_path_points`).
 
     Returns:
-        The files written, in the order of :data:`FIGURES`.
+        The files written, in the order of :func:`figures_of`.
     """
     _prepare_figures(figure_format)
     folder = Path(folder)
