@@ -352,7 +352,7 @@ def _xacro_argument(text: str) -> tuple[str, str]:
 
 
 def _add_description_options(parser) -> None:
-    """``--arg`` and ``--package-path``: for ``.xacro`` files and ``package://`` URIs."""
+    """``--arg``, ``--package-path``, ``--trust-xacro``: for ``.xacro`` files and ``package://``."""
     parser.add_argument(
         "--arg",
         dest="xacro_args",
@@ -372,10 +372,21 @@ def _add_description_options(parser) -> None:
         help="folder searched for ROS packages named by $(find pkg) and package:// "
         "(repeatable; searched before ROS_PACKAGE_PATH and example-robot-data)",
     )
+    parser.add_argument(
+        "--trust-xacro",
+        action="store_true",
+        help="expand a .xacro vehicle with full xacro, whose ${...} expressions are Python eval "
+        "and can run code: only for a file you trust (default: a safe evaluator of arithmetic, "
+        "comparisons and math functions)",
+    )
 
 
 def _description_options(args) -> dict:
-    return {"xacro_args": dict(args.xacro_args), "package_path": list(args.package_path)}
+    return {
+        "xacro_args": dict(args.xacro_args),
+        "package_path": list(args.package_path),
+        "trust_xacro": args.trust_xacro,
+    }
 
 
 def _add_annotate(subparsers) -> None:

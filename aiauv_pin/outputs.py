@@ -791,22 +791,13 @@ def _fork_context():
 
 
 def _die_with_parent(parent: int) -> None:
-    """Initializer of the figure worker: it is killed when the process that forked it dies.
-
-    Linux ``prctl(PR_SET_PDEATHSIG, SIGKILL)``; if the parent is already gone, exit at once.
-    """
-    import ctypes
-    import ctypes.util
-    import os
+    """Initializer of the figure worker: it is killed (SIGKILL) when the process that forked it
+    dies, however it dies (:func:`aiauv_pin.parent_death.die_with_parent`)."""
     import signal
 
-    try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
-        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
-    except (OSError, AttributeError):
-        pass
-    if os.getppid() != parent:
-        os._exit(1)
+    from .parent_death import die_with_parent
+
+    die_with_parent(parent, signal.SIGKILL)
 
 
 #: The figures from the slowest to draw to the fastest (measured, 2026-11), the order in which

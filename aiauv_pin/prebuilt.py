@@ -17,7 +17,6 @@ How seeding works and why the target is portable: :mod:`hydro.prebuilt`.
 from __future__ import annotations
 
 import argparse
-import os
 import subprocess
 import sys
 import tempfile
@@ -127,13 +126,16 @@ def pack(cache_dir: Path, archive: Path) -> int:
         )
     if not any(name.endswith(".nbi") for name, _ in entries):
         raise SystemExit("aiauv: error: the workloads left numba's cache empty")
-    archive.parent.mkdir(parents=True, exist_ok=True)
-    partial = archive.with_name(archive.name + ".partial")
-    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as packed:
+    from .atomic import atomic_path
+
+    # a killed build leaves the previous archive whole; a link or FIFO at ``archive`` is refused
+    with (
+        atomic_path(archive) as partial,
+        zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as packed,
+    ):
         packed.writestr(prebuilt.MANIFEST, manifest.to_json())
         for name, file in entries:
             packed.write(file, name)
-    os.replace(partial, archive)  # a killed build leaves the previous archive whole
     return len(entries)
 
 

@@ -471,7 +471,8 @@ def test_result_folder_is_replaced_whole_and_foreign_folders_are_refused(tmp_pat
         (staging / "playback.html").write_text("old")
     with staged_folder(out) as staging:
         (staging / "summary.json").write_text('{"new": 1}')
-    assert sorted(p.name for p in out.iterdir()) == ["summary.json"]  # no stale playback.html
+    # no stale playback.html; the manifest lists what the run wrote
+    assert sorted(p.name for p in out.iterdir()) == [".aiauv-run.json", "summary.json"]
     with pytest.raises(RuntimeError), staged_folder(out) as staging:
         (staging / "summary.json").write_text("half")
         raise RuntimeError("killed")
