@@ -159,10 +159,9 @@ def scenario_for_args(args):
 def _run_simulate(args) -> int:
     from . import loading
     from .errors import AiauvError, SimulationDiverged
-    from .outputs import live_path_points, preload_plotting, write_results
+    from .outputs import final_line, live_path_points, preload_plotting, write_results
     from .result_folder import check_output_folder, staged_folder
-    from .scenario import ScenarioResult, run_scenario
-    from .text import signed
+    from .scenario import ScenarioResult, joint_position_units, run_scenario
     from .validation import explain_divergence
 
     scenario = scenario_for_args(args)
@@ -198,6 +197,7 @@ def _run_simulate(args) -> int:
     else:
         name = scenario.case
     out = args.out if args.out is not None else Path("results") / name
+    title = Path(out).resolve().name or name  # the figures' titles name the folder
     check_output_folder(out)  # refuse a file or a foreign folder before simulating
     if not args.no_html:  # a shape the playback cannot draw: say so before the run, not after it
         from .viewer import vehicle_visuals
@@ -238,10 +238,15 @@ def _run_simulate(args) -> int:
             time.perf_counter() - start,
             vehicle.joint_names,
             vehicle.thruster_names,
+            joint_units=joint_position_units(vehicle),
         )
         with staged_folder(out) as staging:  # nothing of an earlier run survives
             write_results(
-                result, staging, {"vehicle": str(path), **timing}, figure_format=args.figure_format
+                result,
+                staging,
+                {"vehicle": str(path), **timing},
+                figure_format=args.figure_format,
+                vehicle_name=title,
             )
         raise AiauvError(
             f"simulation diverged: {cause}; partial results up to t = {partial.t[-1]:.6g} s "
@@ -269,19 +274,12 @@ def _run_simulate(args) -> int:
             {"vehicle": str(path), **timing},
             figure_format=args.figure_format,
             also=also,
+            vehicle_name=title,
         )
-    final = content["final"]
-    errors = (
-        f"final p_y = {signed(final['p_y'], 4)} m, p_z = {signed(final['p_z'], 4)} m"
-        if "p_y" in final
-        else f"final cross-track error = {final['cross_track_error']:.4f} m"
-    )
-    if "u" in final:
-        errors += f", u = {final['u']:.4f} m/s, phi_tilde = {final['phi_tilde']:.4f} rad"
     print(
         f"{name}: {content['simulated_time']:.1f} s simulated (set-up {timing['setup_time']:.1f} s, "
         f"simulation {content['wall_time']:.1f} s, {content['real_time_factor']:.0f}x real time); "
-        f"{errors} -> {out}"
+        f"{final_line(content)} -> {out}"
     )
     return 0
 

@@ -182,8 +182,9 @@ def flatten_summary(summary: dict) -> dict:
     """The metrics of :func:`aiauv_pin.scenario.summary` as flat ``a.b`` keys (no parameters).
 
     ``final.cross_track_error`` [m] and ``settling_time.cross_track_5cm`` [s] are there for every
-    path, ``final.p_y``, ``final.p_z`` and their settling times on the paper's x-axis only, the
-    surge, pointing error and work when the paper's controller ran.
+    run that follows a path (not a passive one), ``final.p_y``, ``final.p_z`` and their settling
+    times on the paper's x-axis only, the surge, pointing error and work when the paper's
+    controller ran, the base's motion (``final.base_*``) for every run.
     """
     flat: dict = {}
     skip = {"parameters", "case", "status", "message", "dt", "method", "path", "controller"}
