@@ -609,6 +609,8 @@ def describe(root: dict, node: dict) -> str:
             return f"a list of {low} {item}"
         if low is not None and high is not None:
             return f"a list of {low} to {high} {item}"
+        if low == 1:
+            return f"a non-empty list of {item}"
         if low:
             return f"a list of at least {low} {item}"
         return f"a list of {item}"
@@ -630,6 +632,7 @@ _PLURALS = (
     ("a name", "names"),
     ("a non-empty string", "non-empty strings"),
     ("a value", "values"),
+    ("one of", "values, each one of"),
 )
 
 
@@ -692,8 +695,10 @@ def problem_line(problem: Mapping, root: dict, data: Any, what: str) -> str:
     where = place.key or what
     if kind == "extra_forbidden":
         known = list((place.parent or {}).get("properties", {}))
-        listed = ", ".join(known) if len(known) <= 30 else f"see `aiauv schema`, {len(known)} keys"
-        return f"{where}: unknown key (expected {listed})"
+        if len(known) <= 30:
+            return f"{where}: unknown key (expected {', '.join(known)})"
+        kind = what.split()[0]
+        return f"{where}: unknown key ({len(known)} keys known: `aiauv schema {kind}` lists them)"
     if kind == "missing":
         return f"{where}: missing"
     if kind in ("value_error", "assertion_error"):
