@@ -463,6 +463,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     if command in LOCAL_COMMANDS:
         return parser
     from .bench import add_bench_parser
+    from .file_schemas import add_schema_parser
     from .interop.cli import add_interop_subcommands
     from .linearize_cli import add_linearize_parser
     from .sweep import add_sweep_subcommand
@@ -471,6 +472,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     add_sweep_subcommand(subparsers)
     add_interop_subcommands(subparsers)
     add_linearize_parser(subparsers)
+    add_schema_parser(subparsers)
     return parser
 
 

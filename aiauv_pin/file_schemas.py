@@ -57,9 +57,7 @@ NAME_PATTERN = f"^{_NAME_PATTERN.pattern}$"
 
 
 def _config(title: str | None = None) -> ConfigDict:
-    return ConfigDict(
-        strict=True, extra="forbid", allow_inf_nan=False, frozen=True, title=title
-    )
+    return ConfigDict(strict=True, extra="forbid", allow_inf_nan=False, frozen=True, title=title)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -178,7 +176,10 @@ class HelixTable(BaseModel):
         number(1.0e-3, MAX_POSITION), "m", "helix radius", ...
     )
     pitch: number(-MAX_POSITION, MAX_POSITION) = key(
-        number(-MAX_POSITION, MAX_POSITION), "m/turn", "advance along the axis per turn (0: a circle)", ...
+        number(-MAX_POSITION, MAX_POSITION),
+        "m/turn",
+        "advance along the axis per turn (0: a circle)",
+        ...,
     )
     start_angle: number(-1.0e3, 1.0e3) = key(
         number(-1.0e3, 1.0e3), "rad", "angle of the point s = 0 about the axis", 0.0
@@ -314,15 +315,24 @@ class ControllerTable(BaseModel):
         0.0, 1.0e6, "N m/rad", f"joint proportional gain (eq. 24); default {_GAINS.k_qp:g}"
     )
     k_qd: G(0.0, 1.0e6) | None = _gain_field(
-        0.0, 1.0e6, "N m s/rad", f"joint derivative gain (eq. 24); default {_GAINS.k_qd:g}",
+        0.0,
+        1.0e6,
+        "N m s/rad",
+        f"joint derivative gain (eq. 24); default {_GAINS.k_qd:g}",
         low_open=False,
     )
     k_1p: G(0.0, 1.0e6) | None = _gain_field(
-        0.0, 1.0e6, "N s/m", f"surge proportional gain (eq. 25); default {_GAINS.k_1p:g}",
+        0.0,
+        1.0e6,
+        "N s/m",
+        f"surge proportional gain (eq. 25); default {_GAINS.k_1p:g}",
         low_open=False,
     )
     k_1i: G(0.0, 1.0e6) | None = _gain_field(
-        0.0, 1.0e6, "N/m", f"surge integral gain (eq. 25); default {_GAINS.k_1i:g}",
+        0.0,
+        1.0e6,
+        "N/m",
+        f"surge integral gain (eq. 25); default {_GAINS.k_1i:g}",
         low_open=False,
     )
     q_max: G(0.0, math.pi, low_open=True) | None = _gain_field(
@@ -501,9 +511,14 @@ class VehicleSpecFile(BaseModel):
         number(0.0, 1.0e9, low_open=True), "N m", "URDF joint effort limit", DEFAULT_JOINT_EFFORT
     )
     joint_velocity: number(0.0, 1.0e6, low_open=True) = key(
-        number(0.0, 1.0e6, low_open=True), "rad/s", "URDF joint velocity limit", DEFAULT_JOINT_VELOCITY
+        number(0.0, 1.0e6, low_open=True),
+        "rad/s",
+        "URDF joint velocity limit",
+        DEFAULT_JOINT_VELOCITY,
     )
-    max_thrust: Thrust = key(Thrust, "N", "default thrust limit of the thrusters", DEFAULT_MAX_THRUST)
+    max_thrust: Thrust = key(
+        Thrust, "N", "default thrust limit of the thrusters", DEFAULT_MAX_THRUST
+    )
     module: list[ModuleTable] = key(
         list[ModuleTable],
         "-",
@@ -757,7 +772,11 @@ def given(table: BaseModel | None) -> dict:
     """The keys a table gives (not ``None``), as plain Python values."""
     if table is None:
         return {}
-    return {name: getattr(table, name) for name in table.model_fields_set if getattr(table, name) is not None}
+    return {
+        name: getattr(table, name)
+        for name in table.model_fields_set
+        if getattr(table, name) is not None
+    }
 
 
 # --------------------------------------------------------------------------------------------------

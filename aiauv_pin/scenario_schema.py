@@ -18,6 +18,7 @@ it is (``path.radius``), a vector key either whole (``start.position = [x, y, z]
 from __future__ import annotations
 
 import dataclasses
+import types
 import typing
 from typing import Any, Literal, NamedTuple
 
@@ -79,7 +80,7 @@ class Parameter(NamedTuple):
 def _plain(annotation):
     """The annotation without ``| None``."""
     args = typing.get_args(annotation)
-    if typing.get_origin(annotation) in (typing.Union, getattr(__import__("types"), "UnionType")):
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
         members = [a for a in args if a is not type(None)]
         if len(members) == 1:
             return members[0]
@@ -128,9 +129,9 @@ def _table_keys(section: str, tables: dict[str, type[BaseModel]]) -> tuple[Param
         for field in model.model_fields:
             owners.setdefault(field, []).append(type_name)
     out = []
-    for field, types in owners.items():
-        model = tables[types[0]]
-        applies = () if len(types) == len(tables) or field == "type" else tuple(types)
+    for field, owned in owners.items():
+        model = tables[owned[0]]
+        applies = () if len(owned) == len(tables) or field == "type" else tuple(owned)
         parameter = _parameter(f"{section}.{field}", model, field, applies_to=applies)
         if field == "type":
             parameter = parameter._replace(kind=("choice", tuple(tables)), sweepable=False)

@@ -333,10 +333,18 @@ def _axis_type(name: str):
 def _distribution_type(name: str):
     """A ``[random]`` entry: ``{ uniform | loguniform | normal = [a, b] }`` or ``{ choice = [...] }``."""
     options = Annotated[list[_value_type(name)], Field(min_length=1)]
-    members = [Annotated[_form_model("choice", options, "values drawn with equal odds", None), Tag("choice")]]
+    members = [
+        Annotated[
+            _form_model("choice", options, "values drawn with equal odds", None), Tag("choice")
+        ]
+    ]
     forms = ("choice",)
     if _is_number_parameter(name):
-        meanings = {"uniform": "[low, high]", "loguniform": "[low, high], low > 0", "normal": "[mean, std]"}
+        meanings = {
+            "uniform": "[low, high]",
+            "loguniform": "[low, high], low > 0",
+            "normal": "[mean, std]",
+        }
         for form, meaning in meanings.items():
             model = _form_model(form, _PAIR, meaning, _check_range)
             members.append(Annotated[model, Tag(form)])
@@ -384,7 +392,11 @@ def _names_model(prefix: str, leaf, section: str, extra: dict | None = None) -> 
         definitions[f"f{k}"] = (kind | None, Field(None, alias=key, description=meaning))
     title = f"{section}.{prefix}" if prefix else section
     model_name = "".join(p.capitalize() for p in f"{section}_{prefix}".replace(".", "_").split("_"))
-    return create_model(model_name, __config__=ConfigDict(**_SPEC_CONFIG, title="table" if prefix else title), **definitions)
+    return create_model(
+        model_name,
+        __config__=ConfigDict(**_SPEC_CONFIG, title="table" if prefix else title),
+        **definitions,
+    )
 
 
 @cache
