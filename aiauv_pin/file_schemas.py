@@ -529,6 +529,21 @@ class VehicleSpecFile(BaseModel):
     )
 
 
+def markdown_keys() -> str:
+    """The keys of a vehicle spec as a Markdown table (for the documentation site)."""
+    lines = ["| key | unit | meaning |", "|---|---|---|"]
+    for prefix, model in (
+        ("", VehicleSpecFile),
+        ("module.", ModuleTable),
+        ("module.thruster.", ThrusterTable),
+    ):
+        for name, info in model.model_fields.items():
+            unit = (info.json_schema_extra or {}).get("unit", "-")
+            text = (info.description or "").replace("|", "/")
+            lines.append(f"| `{prefix}{name}` | {unit} | {text} |")
+    return "\n".join(lines) + "\n"
+
+
 # --------------------------------------------------------------------------------------------------
 # JSON Schema
 

@@ -65,6 +65,19 @@ def _write_scenario_keys(app) -> None:
         target.write_text(text)
 
 
+def _write_vehicle_keys(app) -> None:
+    """The table of vehicle-spec keys with units and ranges, generated from the schema."""
+    from aiauv_pin.file_schemas import markdown_keys
+
+    folder = Path(app.srcdir) / "_generated"
+    folder.mkdir(exist_ok=True)
+    target = folder / "vehicle_keys.md"
+    text = markdown_keys()
+    if not target.exists() or target.read_text() != text:
+        target.write_text(text)
+
+
 def setup(app) -> None:
     app.connect("builder-inited", _write_sweep_parameters)
     app.connect("builder-inited", _write_scenario_keys)
+    app.connect("builder-inited", _write_vehicle_keys)
