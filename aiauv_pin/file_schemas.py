@@ -379,7 +379,9 @@ class OutputTable(BaseModel):
 
 
 Seconds = number(0.0, MAX_DURATION, low_open=True)
-Step = number(1.0e-6, 1.0)
+#: An integration step [s]: a step of more than 10 s says nothing about the vehicle (it may still
+#: diverge, which a run reports); the lower bound keeps duration / dt countable.
+Step = number(1.0e-6, 10.0)
 
 
 class ScenarioFile(BaseModel):

@@ -115,7 +115,7 @@ def test_vehicle_is_taken_relative_to_the_file(tmp_path):
         ("duration = -1.0", "duration: expected a number in (0, 1e5], got -1.0"),
         ("method = 4", "method: expected"),
         ("speed = 1.0", "speed: unknown key"),
-        ("dt = true", "dt: expected a number in [1e-6, 1] (a bool is not a number), got True"),
+        ("dt = true", "dt: expected a number in [1e-6, 10] (a bool is not a number), got True"),
         ("duration = '300'", "duration: expected a number in (0, 1e5], got '300'"),
     ],
 )
