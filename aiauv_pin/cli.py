@@ -463,9 +463,9 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     if command in LOCAL_COMMANDS:
         return parser
     from .bench import add_bench_parser
-    from .file_schemas import add_schema_parser
     from .interop.cli import add_interop_subcommands
     from .linearize_cli import add_linearize_parser
+    from .schema_command import add_schema_parser
     from .sweep import add_sweep_subcommand
 
     add_bench_parser(subparsers)

@@ -57,9 +57,10 @@ from hydro.currents import current_from_mapping
 from hydro.spec import HydroError
 
 from .errors import AiauvError
-from .file_schemas import ScenarioFile, given, validate
+from .file_schemas import ScenarioFile
 from .scenario import Scenario
 from .scenario_schema import TABLES, TOP_LEVEL
+from .schema_validation import given, validate
 
 __all__ = ["TABLES", "TOP_LEVEL", "ScenarioFileError", "load_scenario", "scenario_from_mapping"]
 

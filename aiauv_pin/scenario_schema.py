@@ -26,7 +26,8 @@ from pydantic import BaseModel
 
 from control.path_following import PathFollowingGains
 
-from .file_schemas import CURRENT_TABLES, METHODS, PATH_TABLES, ScenarioFile, _bounds
+from .file_schemas import CURRENT_TABLES, METHODS, PATH_TABLES, ScenarioFile
+from .schema_validation import bounds_of
 
 __all__ = ["METHODS"]
 #: Components of a vector in world axes.
@@ -110,7 +111,7 @@ def _parameter(name: str, model: type[BaseModel], field: str, **options) -> Para
     unit = (info.json_schema_extra or {}).get("unit", "-")
     meaning = (info.description or "").rsplit(f" [{unit}]", 1)[0]
     annotation = _plain(info.rebuild_annotation())
-    bounds = _bounds(annotation)
+    bounds = bounds_of(annotation)
     return Parameter(
         name,
         _kind(name, annotation),

@@ -57,7 +57,6 @@ from control.path_following import PathFollowingGains
 from control.reduced_attitude import FEEDFORWARD_OPTIONS
 
 from .errors import AiauvError
-from .file_schemas import _g, validate
 from .loading import BUNDLED_CASES, bundled_urdf
 from .scenario import PaperScenario, Scenario
 from .scenario_file import (
@@ -68,6 +67,7 @@ from .scenario_file import (
 )
 from .scenario_schema import ALIASES, SCHEMA, XYZ, Parameter, scalar_parameters
 from .scenario_schema import METHODS as METHODS
+from .schema_validation import number_text, validate
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -268,7 +268,7 @@ _SPEC_CONFIG = {"strict": True, "extra": "forbid", "allow_inf_nan": False, "froz
 def _check_count(self):
     start, stop, count = self.args
     if not (count == int(count) and 1 <= count <= MAX_RUNS):
-        raise ValueError(f"count must be a whole number >= 1 and <= {MAX_RUNS}, got {_g(count)}")
+        raise ValueError(f"count must be a whole number >= 1 and <= {MAX_RUNS}, got {number_text(count)}")
     if self.form == "geomspace" and (start <= 0 or stop <= 0):
         raise ValueError(f"geomspace needs start and stop > 0, got {start:g}, {stop:g}")
     return self

@@ -21,6 +21,17 @@ from pathlib import Path
 from typing import Any
 
 from aiauv_pin.errors import AiauvError
+from aiauv_pin.schema_validation import NAME_PATTERN, validate
+from aiauv_pin.vehicle_spec_schema import (
+    DEFAULT_FLUID_DENSITY,
+    DEFAULT_GRAVITY,
+    DEFAULT_JOINT_EFFORT,
+    DEFAULT_JOINT_LIMIT_DEG,
+    DEFAULT_JOINT_VELOCITY,
+    DIRECTIONS,
+    JOINT_AXES,
+    VehicleSpecFile,
+)
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -32,31 +43,10 @@ class SpecError(AiauvError, ValueError):
     """Malformed vehicle spec; the message is one line naming the field (and module)."""
 
 
-JOINT_AXES: dict[str, tuple[float, float, float]] = {
-    "x": (1.0, 0.0, 0.0),
-    "y": (0.0, 1.0, 0.0),
-    "z": (0.0, 0.0, 1.0),
-}
-"""Unit joint axis in the parent link frame for each ``joint`` letter."""
-
-_DIRECTIONS: dict[str, tuple[float, float, float]] = {
-    **JOINT_AXES,
-    "-x": (-1.0, 0.0, 0.0),
-    "-y": (0.0, -1.0, 0.0),
-    "-z": (0.0, 0.0, -1.0),
-}
-
 END_EFFECTOR_LINK = "end_effector"
 END_EFFECTOR_JOINT = "end_effector_joint"
 _RESERVED_NAMES = frozenset({END_EFFECTOR_LINK, END_EFFECTOR_JOINT, "universe", "root_joint"})
-_NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
-
-DEFAULT_FLUID_DENSITY = 1000.0  # [kg/m^3]
-DEFAULT_GRAVITY = 9.81  # [m/s^2]
-DEFAULT_JOINT_LIMIT_DEG = 65.0  # [deg]
-DEFAULT_JOINT_EFFORT = 1000.0  # [N m]
-DEFAULT_JOINT_VELOCITY = 10.0  # [rad/s]
-DEFAULT_MAX_THRUST = 50.0  # [N]
+_NAME_PATTERN = re.compile(NAME_PATTERN)
 
 
 def joint_name(index: int) -> str:
@@ -311,13 +301,13 @@ class VehicleSpec:
 
 
 # --------------------------------------------------------------------------------------------------
-# Reading the TOML table (checked by the schema, aiauv_pin.file_schemas.VehicleSpecFile)
+# Reading the TOML table (checked by the schema, aiauv_pin.vehicle_spec_schema.VehicleSpecFile)
 
 
 def spec_from_dict(table: Mapping[str, Any]) -> VehicleSpec:
     """Validate a parsed spec table (the TOML document as a dict) into a :class:`VehicleSpec`.
 
-    The table is checked by the schema (:class:`aiauv_pin.file_schemas.VehicleSpecFile`: types,
+    The table is checked by the schema (:class:`aiauv_pin.vehicle_spec_schema.VehicleSpecFile`: types,
     unknown keys, plausible ranges); the data classes check what depends on several keys (names
     used twice, the head's joint, a thruster or a CG/CB outside its module).
 
@@ -333,8 +323,6 @@ def spec_from_dict(table: Mapping[str, Any]) -> VehicleSpec:
             thruster outside its module, or a CG/CB outside its module; the message is one line
             naming the key path (``module 'link2'.mass``).
     """
-    from aiauv_pin.file_schemas import VehicleSpecFile, validate
-
     checked = validate(VehicleSpecFile, table, SpecError, "vehicle spec")
     modules = []
     for index, module in enumerate(checked.module):
@@ -351,7 +339,7 @@ def spec_from_dict(table: Mapping[str, Any]) -> VehicleSpec:
         for thruster in module.thruster:
             direction = thruster.direction
             if isinstance(direction, str):
-                direction = _DIRECTIONS[direction]
+                direction = DIRECTIONS[direction]
             limit = thruster.max_thrust if thruster.max_thrust is not None else checked.max_thrust
             position = (thruster.x, thruster.y, thruster.z)
             try:

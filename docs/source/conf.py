@@ -71,7 +71,7 @@ def _write_scenario_keys(app) -> None:
 
 def _write_vehicle_keys(app) -> None:
     """The table of vehicle-spec keys with units and ranges, generated from the schema."""
-    from aiauv_pin.file_schemas import markdown_keys
+    from aiauv_pin.vehicle_spec_schema import markdown_keys
 
     _write_generated(app, "vehicle_keys.md", markdown_keys())
 
