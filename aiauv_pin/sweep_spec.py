@@ -36,7 +36,7 @@ import math
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
-from functools import cache
+from functools import cache, lru_cache
 from pathlib import Path
 from typing import Annotated, Any, Union
 
@@ -48,10 +48,12 @@ from pydantic import (
     Discriminator,
     Field,
     Tag,
+    ValidationError,
     create_model,
     model_validator,
 )
 from pydantic.json_schema import SkipJsonSchema
+from typing_extensions import TypeAliasType
 
 from control.path_following import PathFollowingGains
 from control.reduced_attitude import FEEDFORWARD_OPTIONS
@@ -234,7 +236,22 @@ def _distribution(name: str, entry) -> Distribution:
 # The schema of sweep specs, generated from the scenario file's (aiauv_pin.file_schemas)
 
 
-@cache
+def _named(kind: str):
+    """The type a function returns for a name, as one JSON-Schema ``$defs`` entry (a reference
+    wherever it is used, its validator built once)."""
+
+    def decorate(function):
+        @cache
+        def named(name: str):
+            return TypeAliasType(f"{kind}.{name}", function(name))
+
+        named.__doc__ = function.__doc__
+        return named
+
+    return decorate
+
+
+@_named("value")
 def _value_type(name: str):
     """The pydantic type of one value of a parameter name (scalar, component, vector, alias)."""
     if name in SCHEMA and SCHEMA[name].components:  # a whole vector of the scenario file
@@ -268,7 +285,9 @@ _SPEC_CONFIG = {"strict": True, "extra": "forbid", "allow_inf_nan": False, "froz
 def _check_count(self):
     start, stop, count = self.args
     if not (count == int(count) and 1 <= count <= MAX_RUNS):
-        raise ValueError(f"count must be a whole number >= 1 and <= {MAX_RUNS}, got {number_text(count)}")
+        raise ValueError(
+            f"count must be a whole number >= 1 and <= {MAX_RUNS}, got {number_text(count)}"
+        )
     if self.form == "geomspace" and (start <= 0 or stop <= 0):
         raise ValueError(f"geomspace needs start and stop > 0, got {start:g}, {stop:g}")
     return self
@@ -316,7 +335,7 @@ def _form_tag(forms: tuple[str, ...], list_tag: str | None):
     return tag
 
 
-@cache
+@_named("grid")
 def _axis_type(name: str):
     """A ``[grid]`` entry: a list of values, or ``{ linspace | geomspace = [a, b, n] }``."""
     values = Annotated[list[_value_type(name)], Field(min_length=1, title="list")]
@@ -329,7 +348,7 @@ def _axis_type(name: str):
     return Annotated[Union[tuple(members)], Discriminator(_form_tag(_GRID_FORMS, "list"))]  # noqa: UP007
 
 
-@cache
+@_named("random")
 def _distribution_type(name: str):
     """A ``[random]`` entry: ``{ uniform | loguniform | normal = [a, b] }`` or ``{ choice = [...] }``."""
     options = Annotated[list[_value_type(name)], Field(min_length=1)]
@@ -358,12 +377,21 @@ def _is_table(value) -> str | None:
     return "value"
 
 
-def _names_model(prefix: str, leaf, section: str, extra: dict | None = None) -> type[BaseModel]:
-    """The table of parameter names under ``prefix`` (``""``: all), nested tables included."""
+def _names_model(
+    prefix: str, leaf, section: str, extra: dict | None = None, given: frozenset | None = None
+) -> type[BaseModel]:
+    """The table of parameter names under ``prefix`` (``""``: all), nested tables included.
+
+    ``given``: only the names among these dotted key paths (:func:`_key_paths`); ``None``: all.
+    """
     fields: dict[str, Any] = dict(extra or {})
     start = f"{prefix}." if prefix else ""
-    names = [n for n in (*PARAMETERS, *VECTORS) if n.startswith(start)]
-    base_only = [n for n, p in SCHEMA.items() if not p.sweepable and n.startswith(start)]
+
+    def wanted(name: str) -> bool:
+        return name.startswith(start) and (given is None or name in given)
+
+    names = [n for n in (*PARAMETERS, *VECTORS) if wanted(n)]
+    base_only = [n for n, p in SCHEMA.items() if not p.sweepable and wanted(n)]
     keys: dict[str, Any] = {}
     for name in dict.fromkeys(names):
         keys[name[len(start) :]] = leaf(name)
@@ -372,7 +400,7 @@ def _names_model(prefix: str, leaf, section: str, extra: dict | None = None) -> 
     for rest in list(keys):
         head = rest.split(".", 1)[0]
         if "." in rest and head not in fields:
-            node = _names_model(f"{start}{head}", leaf, section)
+            node = _names_model(f"{start}{head}", leaf, section, given=given)
             whole = keys.get(head)
             if whole is None or whole is _BASE_ONLY:
                 fields[head] = node
@@ -399,15 +427,43 @@ def _names_model(prefix: str, leaf, section: str, extra: dict | None = None) -> 
     )
 
 
-@cache
-def sweep_file_model() -> type[BaseModel]:
+#: Most key paths a spec may have for a model of only its own names (more: the whole model).
+_MAX_GIVEN = 1000
+
+
+def _key_paths(table: Any, prefix: str = "", out: set | None = None) -> set[str] | None:
+    """The dotted paths of every key in nested tables (``None``: too many, or a key not text)."""
+    out = set() if out is None else out
+    if isinstance(table, Mapping):
+        for name, value in table.items():
+            if not isinstance(name, str) or len(out) >= _MAX_GIVEN:
+                return None
+            out.add(f"{prefix}{name}")
+            if _key_paths(value, f"{prefix}{name}.", out) is None:
+                return None
+    return out
+
+
+@lru_cache(maxsize=64)
+def sweep_file_model(
+    given: frozenset | None = None,
+    grid_given: frozenset | None = None,
+    random_given: frozenset | None = None,
+) -> type[BaseModel]:
     """The pydantic model of a sweep spec, generated from the scenario file's schema.
 
     Fixed parameters, ``[grid]`` entries and ``[random]`` entries are the scenario's keys under
     their dotted names (or written as nested tables), with the scenario's types and ranges; a grid
     entry is a list or a ``linspace``/``geomspace`` table, a random entry a distribution table.
+
+    Args:
+        given, grid_given, random_given: Only the names among these key paths
+            (:func:`_key_paths`) of the top level, ``[grid]`` and ``[random]`` (``None``: every
+            name, as ``aiauv schema sweep`` prints it). A spec is checked by the model of its own
+            names (a few fields, quick to build) and, if it fails, by the whole model, whose
+            schema the message is written from.
     """
-    grid = _names_model("", _axis_type, "grid")
+    grid = _names_model("", _axis_type, "grid", given=grid_given)
     random = _names_model(
         "",
         _distribution_type,
@@ -416,6 +472,7 @@ def sweep_file_model() -> type[BaseModel]:
             "samples": Annotated[int, Field(ge=1, le=MAX_RUNS, description="number of draws")],
             "seed": Annotated[int, Field(ge=0, le=2**63 - 1, description="seed of the draws")],
         },
+        given=random_given,
     )
     base = Annotated[str, Field(min_length=1, max_length=4096)]
     return _names_model(
@@ -427,7 +484,21 @@ def sweep_file_model() -> type[BaseModel]:
             "grid": Annotated[grid, Field(description="cartesian product of values")],
             "random": Annotated[random, Field(description="Monte Carlo sample")],
         },
+        given=given,
     )
+
+
+def _check_spec(table: Any) -> None:
+    """Check a spec against its schema: by the model of its own names, then the whole model."""
+    if isinstance(table, Mapping):
+        paths = [_key_paths(table), _key_paths(table.get("grid")), _key_paths(table.get("random"))]
+        if all(p is not None for p in paths):
+            try:
+                sweep_file_model(*(frozenset(p) for p in paths)).model_validate(table)
+                return
+            except ValidationError:
+                pass  # the whole model's schema words the message
+    validate(sweep_file_model(), table, SweepSpecError, "sweep spec")
 
 
 def file_sha256(path: str | Path) -> str:
@@ -849,7 +920,7 @@ def sweep_spec_from_dict(table: Mapping, base_dir: str | Path = ".") -> SweepSpe
     Raises:
         SweepSpecError: One line naming the entry.
     """
-    validate(sweep_file_model(), table, SweepSpecError, "sweep spec")
+    _check_spec(table)
     table = dict(table)
     base_dir = Path(base_dir)
     base, base_file, base_vehicle = None, None, None
