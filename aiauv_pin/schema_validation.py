@@ -135,7 +135,8 @@ def json_schema(model: type[BaseModel]) -> dict:
 # Errors: one line naming the key path and what is expected
 
 
-def _shown(value) -> str:
+def shown(value) -> str:
+    """A value as a message shows it: its ``repr``, cut to 60 characters."""
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
@@ -303,13 +304,13 @@ def problem_line(problem: Mapping, root: dict, data: Any, what: str) -> str:
         tags = [_tag(v) for v in _variants(root, _resolve(root, node)) or []]
         if tags and all(tags):
             got = problem.get("ctx", {}).get("tag")
-            shown = "missing" if got is None else f"got {_shown(got)}"
-            return f"{where}.type: expected one of {', '.join(tags)}, {shown}"
+            found = "missing" if got is None else f"got {shown(got)}"
+            return f"{where}.type: expected one of {', '.join(tags)}, {found}"
     value = place.value if not place.complete else problem.get("input")
     if kind in ("too_short", "too_long") and place.complete and isinstance(value, list):
         got = f"{len(value)} {'entry' if len(value) == 1 else 'entries'}"
     else:
-        got = _shown(value)
+        got = shown(value)
     note = ""
     if isinstance(value, bool) and "number" in describe(root, node):
         note = " (a bool is not a number)"

@@ -56,7 +56,6 @@ from pydantic.json_schema import SkipJsonSchema
 from typing_extensions import TypeAliasType
 
 from control.path_following import PathFollowingGains
-from control.reduced_attitude import FEEDFORWARD_OPTIONS
 
 from .errors import AiauvError
 from .loading import BUNDLED_CASES, bundled_urdf
@@ -69,7 +68,7 @@ from .scenario_file import (
 )
 from .scenario_schema import ALIASES, SCHEMA, XYZ, Parameter, scalar_parameters
 from .scenario_schema import METHODS as METHODS
-from .schema_validation import number_text, validate
+from .schema_validation import number_text, shown, validate
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -87,10 +86,6 @@ RUN_KEY_VERSION = "aiauv-sweep-run/2"
 MAX_RUNS = 100_000
 #: Largest number of integration steps of one run (``duration / dt``).
 MAX_STEPS_PER_RUN = 5_000_000
-#: Feedforward options of :class:`control.path_following.PathFollowingGains`.
-FEEDFORWARD = FEEDFORWARD_OPTIONS
-#: Keys of a spec that are not parameters.
-RESERVED = ("base", "grid", "random")
 
 #: Every scalar of the schema a spec may set: its key and component.
 _SCALARS: dict[str, tuple[Parameter, str | None]] = scalar_parameters()
@@ -156,11 +151,6 @@ def _is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def _shown(value) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
-
-
 def _as_components(name: str, value) -> dict:
     """A value of a (possibly vector) parameter as a dict of its canonical components.
 
@@ -175,7 +165,7 @@ def _as_components(name: str, value) -> dict:
     if not isinstance(value, (list, tuple)) or len(value) != len(parts):
         raise ValueError(
             f"{name}: expected a list of {len(parts)} numbers "
-            f"({', '.join(c.rsplit('.', 1)[1] for c in parts)}), got {_shown(value)}"
+            f"({', '.join(c.rsplit('.', 1)[1] for c in parts)}), got {shown(value)}"
         )
     return dict(zip(parts, value, strict=True))
 
@@ -237,13 +227,15 @@ def _distribution(name: str, entry) -> Distribution:
 
 
 def _named(kind: str):
-    """The type a function returns for a name, as one JSON-Schema ``$defs`` entry (a reference
-    wherever it is used, its validator built once)."""
+    """The type a function returns for a name, as one JSON-Schema ``$defs`` entry with the name's
+    meaning (a reference wherever it is used)."""
 
     def decorate(function):
         @cache
         def named(name: str):
-            return TypeAliasType(f"{kind}.{name}", function(name))
+            meaning = PARAMETERS.get(name, ("", None))[1]
+            alias = f"{kind}_{name.replace('.', '_')}"  # a dot would lengthen the $defs name
+            return TypeAliasType(alias, Annotated[function(name), Field(description=meaning)])
 
         named.__doc__ = function.__doc__
         return named
@@ -306,10 +298,10 @@ def _check_range(self):
 
 
 @cache
-def _form_model(form: str, args_type, meaning: str, check) -> type[BaseModel]:
-    """A one-key table ``{ form = [...] }`` of a grid or random entry."""
+def _form_model(form: str, args_type, meaning: str, check, label: str = "") -> type[BaseModel]:
+    """A one-key table ``{ form = [...] }`` of a grid or random entry (``label``: of a name)."""
     model = create_model(
-        f"{form.capitalize()}Form",
+        f"{form}_{label.replace('.', '_')}" if label else f"{form.capitalize()}Form",
         __config__=ConfigDict(**_SPEC_CONFIG, title=form),
         **{form: (args_type, Field(..., description=meaning))},
     )
@@ -354,7 +346,8 @@ def _distribution_type(name: str):
     options = Annotated[list[_value_type(name)], Field(min_length=1)]
     members = [
         Annotated[
-            _form_model("choice", options, "values drawn with equal odds", None), Tag("choice")
+            _form_model("choice", options, "values drawn with equal odds", None, name),
+            Tag("choice"),
         ]
     ]
     forms = ("choice",)
@@ -414,10 +407,10 @@ def _names_model(
                 ]
     for rest, kind in keys.items():
         fields.setdefault(rest, kind)
-    definitions = {}
-    for k, (key, kind) in enumerate(fields.items()):
-        meaning = PARAMETERS.get(f"{start}{key}", ("", ""))[1] or None
-        definitions[f"f{k}"] = (kind | None, Field(None, alias=key, description=meaning))
+    definitions = {  # the meaning is in the type's $defs entry (:func:`_named`)
+        f"f{k}": (kind | None, Field(None, alias=key))
+        for k, (key, kind) in enumerate(fields.items())
+    }
     title = f"{section}.{prefix}" if prefix else section
     model_name = "".join(p.capitalize() for p in f"{section}_{prefix}".replace(".", "_").split("_"))
     return create_model(
@@ -489,16 +482,20 @@ def sweep_file_model(
 
 
 def _check_spec(table: Any) -> None:
-    """Check a spec against its schema: by the model of its own names, then the whole model."""
+    """Check a spec against the model of its own names (a few fields, quick to build); an
+    unknown key is worded from the whole model's schema (the keys it knows)."""
+    model = None
     if isinstance(table, Mapping):
         paths = [_key_paths(table), _key_paths(table.get("grid")), _key_paths(table.get("random"))]
         if all(p is not None for p in paths):
+            own = sweep_file_model(*(frozenset(p) for p in paths))
             try:
-                sweep_file_model(*(frozenset(p) for p in paths)).model_validate(table)
+                own.model_validate(table)
                 return
-            except ValidationError:
-                pass  # the whole model's schema words the message
-    validate(sweep_file_model(), table, SweepSpecError, "sweep spec")
+            except ValidationError as error:
+                if all(p["type"] != "extra_forbidden" for p in error.errors()):
+                    model = own  # the same problems as the whole model's
+    validate(model or sweep_file_model(), table, SweepSpecError, "sweep spec")
 
 
 def file_sha256(path: str | Path) -> str:
@@ -833,10 +830,10 @@ class SweepSpec:
             try:
                 resolved = resolve_parameters(given, hashes[vehicle], self.base)
             except ValueError as exc:
-                shown = ", ".join(
-                    f"{display[k]}={_shown(v)}" for k, v in given.items() if k in display
+                swept = ", ".join(
+                    f"{display[k]}={shown(v)}" for k, v in given.items() if k in display
                 )
-                where = f"run {len(points) + 1} ({shown})" if shown else "fixed parameters"
+                where = f"run {len(points) + 1} ({swept})" if swept else "fixed parameters"
                 raise SweepSpecError(f"{where}: {' '.join(str(exc).split())}") from None
             key = run_id(resolved)
             if key in seen:
@@ -890,7 +887,7 @@ def _split(table: Mapping, section: str) -> dict:
 def _load_base(base, base_dir: Path) -> tuple[dict, Path, Path | None]:
     """The base scenario's tables (checked, without ``vehicle``), its file and its vehicle."""
     if not isinstance(base, str) or not base:
-        raise SweepSpecError(f"base: expected a scenario file name, got {_shown(base)}")
+        raise SweepSpecError(f"base: expected a scenario file name, got {shown(base)}")
     path = Path(base).expanduser()
     path = path if path.is_absolute() else base_dir / path
     try:

@@ -16,7 +16,7 @@ import math
 import re
 import sys
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -361,15 +361,8 @@ def spec_from_dict(table: Mapping[str, Any]) -> VehicleSpec:
                 thrusters=tuple(thrusters),
             )
         )
-    return VehicleSpec(
-        name=checked.name,
-        modules=tuple(modules),
-        fluid_density=checked.fluid_density,
-        gravity=checked.gravity,
-        joint_limit_deg=checked.joint_limit_deg,
-        joint_effort=checked.joint_effort,
-        joint_velocity=checked.joint_velocity,
-    )
+    same = {f.name: getattr(checked, f.name) for f in fields(VehicleSpec) if f.name != "modules"}
+    return VehicleSpec(modules=tuple(modules), **same)  # the other fields keep their file names
 
 
 def spec_from_toml(text: str) -> VehicleSpec:
