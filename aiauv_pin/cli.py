@@ -480,12 +480,14 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     from .bench import add_bench_parser
     from .interop.cli import add_interop_subcommands
     from .linearize_cli import add_linearize_parser
+    from .schema_command import add_schema_parser
     from .sweep import add_sweep_subcommand
 
     add_bench_parser(subparsers)
     add_sweep_subcommand(subparsers)
     add_interop_subcommands(subparsers)
     add_linearize_parser(subparsers)
+    add_schema_parser(subparsers)
     return parser
 
 

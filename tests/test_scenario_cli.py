@@ -112,9 +112,11 @@ def test_vehicle_is_taken_relative_to_the_file(tmp_path):
 @pytest.mark.parametrize(
     "line, message",
     [
-        ("duration = -1.0", "duration: must be > 0"),
+        ("duration = -1.0", "duration: expected a number in (0, 1e5], got -1.0"),
         ("method = 4", "method: expected"),
         ("speed = 1.0", "speed: unknown key"),
+        ("dt = true", "dt: expected a number in [1e-6, 10] (a bool is not a number), got True"),
+        ("duration = '300'", "duration: expected a number in (0, 1e5], got '300'"),
     ],
 )
 def test_bad_issue_file_names_the_key(tmp_path, capfd, line, message):
