@@ -46,6 +46,7 @@ of another version anyway); otherwise the kernels are compiled once into the per
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import json
 import os
 import sys
@@ -53,7 +54,6 @@ import tempfile
 import warnings
 import zipfile
 from functools import lru_cache
-from importlib import resources
 from pathlib import Path
 
 #: The CPU name numba compiles for when the host has every feature of it (x86-64 psABI level 3).
@@ -98,7 +98,12 @@ def archive_path() -> Path:
         return Path(f"no-archive-declared/{python_tag()}.zip")
     package, _, folder = entries[0].value.partition(":")
     top, _, inside = package.partition(".")
-    return Path(str(resources.files(top).joinpath(*inside.split("."), folder, f"{python_tag()}.zip")))
+    # found as import would find it, without importing it (this runs while packages import)
+    spec = importlib.util.find_spec(top)
+    if spec is None or not spec.submodule_search_locations:
+        return Path(f"no-archive-declared/{python_tag()}.zip")
+    root = Path(next(iter(spec.submodule_search_locations)))
+    return root.joinpath(*(inside.split(".") if inside else ()), folder, f"{python_tag()}.zip")
 
 
 def portable_target_wanted(environ, machine: str, host_features: dict[str, bool]) -> bool:
