@@ -11,6 +11,18 @@ expected shape:
 * finite values;
 * the base quaternion of ``q`` of unit norm within :data:`QUATERNION_TOLERANCE`; within it, it is
   normalised (on a copy); a zero, far-from-unit or non-finite quaternion is refused.
+
+The compiled entry points (:class:`aiauv_pin.fast.model.FastModel`, the derivatives, transition
+Jacobians and linear models, :func:`aiauv_pin.rollout`) take their arguments through the same
+functions, one per kind of argument: :func:`float_array` (any array of numbers),
+:func:`configuration` (``q``), :func:`in_place_array` (an array compiled code advances in place:
+no copy is possible, so it must already be a C-contiguous, writeable float64 array),
+:func:`positive_seconds` (``dt``), :func:`step_count`, :func:`method_name`, :func:`frame_index`,
+:func:`optional_current` (a velocity or a checked :class:`hydro.currents.Current`) and
+:func:`compiled_controller` (the records a :class:`~aiauv_pin.controllers.CompiledController`
+gives the compiled loop). The hottest calls (``acceleration`` and ``step`` in still water) check
+their state inside the compiled call instead (:func:`aiauv_pin.fast.handle.state_verdict`), which
+costs far less than these Python checks (``benchmarks/entry_checks.py``).
 """
 
 from __future__ import annotations
@@ -20,7 +32,7 @@ import numbers
 
 import numpy as np
 
-from .errors import ArgumentError
+from .errors import ArgumentError, RecordSizeError
 
 #: Largest accepted ``| |quaternion| - 1 |`` of the base orientation in ``q``; smaller deviations
 #: (round-off of an integrator, a hand-typed ``0.7071``) are normalised away.
@@ -71,6 +83,50 @@ def configuration(value, nq: int, name: str = "q") -> np.ndarray:
         ArgumentError: See the module docstring.
     """
     q = float_array(value, name, (nq,))
+    deviation = unit_quaternion(q, name)
+    if deviation > EXACT_QUATERNION_DEVIATION:
+        q = q.copy()
+        q[3:7] /= math.sqrt(float(q[3] ** 2 + q[4] ** 2 + q[5] ** 2 + q[6] ** 2))
+    return q
+
+
+def in_place_array(value, name: str, shape: tuple[int, ...]) -> np.ndarray:
+    """``value`` itself, which compiled code will overwrite: a C-contiguous, aligned, writeable
+    float64 array of ``shape`` with finite entries (a copy would leave the caller's array as it
+    was, so nothing is converted).
+
+    Raises:
+        ArgumentError: One line naming ``name`` and what it must be.
+    """
+    if not (
+        type(value) is np.ndarray
+        and value.dtype == np.float64
+        and value.shape == shape
+        and value.flags.carray
+        and value.flags.writeable
+    ):
+        got = (
+            f"{value.dtype.name} array of shape {value.shape}"
+            + ("" if value.flags.carray else ", not C-contiguous")
+            + ("" if value.flags.writeable else ", read-only")
+            if isinstance(value, np.ndarray)
+            else type(value).__name__
+        )
+        raise ArgumentError(
+            f"{name} is advanced in place: it must be a writeable C-contiguous float64 array of "
+            f"shape {shape}, got {got}"
+        )
+    if not np.isfinite(value).all():
+        raise ArgumentError(f"{name} must be finite (shape {shape}), got NaN or infinity")
+    return value
+
+
+def unit_quaternion(q: np.ndarray, name: str = "q") -> float:
+    """The deviation ``| |q[3:7]| - 1 |`` of a finite configuration's base quaternion.
+
+    Raises:
+        ArgumentError: Beyond :data:`QUATERNION_TOLERANCE`.
+    """
     norm = math.sqrt(float(q[3] ** 2 + q[4] ** 2 + q[5] ** 2 + q[6] ** 2))
     deviation = abs(norm - 1.0)
     if deviation > QUATERNION_TOLERANCE:
@@ -78,19 +134,102 @@ def configuration(value, nq: int, name: str = "q") -> np.ndarray:
             f"{name}[3:7] (base quaternion x, y, z, w) must have unit norm (within "
             f"{QUATERNION_TOLERANCE:g}), got norm {norm:.6g}"
         )
-    if deviation > EXACT_QUATERNION_DEVIATION:
-        q = q.copy()
-        q[3:7] /= norm
-    return q
+    return deviation
+
+
+def configurations(value, nq: int, name: str = "configurations") -> np.ndarray:
+    """Configurations ``(n, nq)`` (each as :func:`configuration`, normalised on a copy)."""
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise ArgumentError(
+            f"{name} must be an array of numbers of shape (n, {nq}) ({exc.__class__.__name__})"
+        ) from None
+    if array.ndim != 2 or array.shape[1] != nq:
+        raise ArgumentError(f"{name} must have shape (n, {nq}), got {array.shape}")
+    array = float_array(array, name, array.shape)
+    rows = [configuration(row, nq, f"{name}[{i}]") for i, row in enumerate(array)]
+    return np.ascontiguousarray(rows).reshape(array.shape)
+
+
+def step_count(value, name: str = "n_steps", *, largest: int = 2**53) -> int:
+    """A whole number of steps ``0 <= value <= largest`` (an int, not a bool or a float).
+
+    Raises:
+        ArgumentError: One line.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ArgumentError(f"{name} must be a whole number, got {value!r:.40}")
+    if not 0 <= int(value) <= largest:
+        raise ArgumentError(f"{name} must be in [0, {largest}], got {int(value)}")
+    return int(value)
+
+
+def method_name(value, methods) -> str:
+    """One of the integration ``methods`` (names).
+
+    Raises:
+        ArgumentError: Another value.
+    """
+    if not isinstance(value, str) or value not in methods:
+        raise ArgumentError(f"unknown method {value!r:.40} (expected one of {', '.join(methods)})")
+    return value
+
+
+def frame_index(value, n_frames: int) -> int:
+    """A Pinocchio frame index in ``[0, n_frames)``.
+
+    Raises:
+        ArgumentError: Not an integer, or out of range.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ArgumentError(f"frame_id must be a frame index (int), got {value!r:.40}")
+    if not 0 <= int(value) < n_frames:
+        raise ArgumentError(f"frame_id must be in [0, {n_frames}), got {int(value)}")
+    return int(value)
 
 
 def optional_current(value):
-    """``None``, a :class:`hydro.currents.Current`, or a finite (3,) water velocity [m/s]."""
-    from hydro.currents import Current
+    """``None``, a checked :class:`hydro.currents.Current` (:meth:`hydro.currents.Current.check`:
+    enough finite parameters for its function), or a finite (3,) water velocity [m/s].
 
-    if value is None or isinstance(value, Current):
+    Raises:
+        ArgumentError: One line naming the current's problem.
+    """
+    from hydro.currents import Current
+    from hydro.spec import HydroError
+
+    if value is None:
+        return value
+    if isinstance(value, Current):
+        try:
+            value.check()
+        except HydroError as exc:
+            raise RecordSizeError(str(exc)) from None
         return value
     return float_array(value, "current", (3,))
+
+
+def compiled_controller(controller, nq: int, nv: int, n_thrusters: int):
+    """``controller`` (a :class:`~aiauv_pin.controllers.CompiledController`) checked before the
+    compiled loop runs it: its declared ``info_shapes`` at least what a built-in controller writes
+    for this vehicle, and its records for this vehicle's sizes
+    (:meth:`~aiauv_pin.controllers.CompiledController.check_records`). A user's function is run
+    bounds-checked (:attr:`~aiauv_pin.controllers.CompiledController.loop_function`), so it cannot
+    write past what was allocated either.
+
+    Raises:
+        ArgumentError: Not a compiled controller.
+        RecordSizeError: A record smaller than what the controller writes or reads.
+    """
+    from .controllers import CompiledController
+
+    if not isinstance(controller, CompiledController):
+        raise ArgumentError(
+            f"controller must be a CompiledController, got {type(controller).__name__:.40}"
+        )
+    controller.check_records(nq, nv, n_thrusters)
+    return controller
 
 
 def finite_time(value) -> float:

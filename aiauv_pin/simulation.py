@@ -21,6 +21,7 @@ from hydro.laws import UUV_SIMULATOR_FILTER
 
 from .arguments import (
     check_timing,
+    compiled_controller,
     configuration,
     float_array,
     optional_current,
@@ -28,7 +29,7 @@ from .arguments import (
 )
 from .controllers import CompiledController
 from .disturbances import Disturbance
-from .errors import ArgumentError, SimulationDiverged
+from .errors import ArgumentError, SimulationDiverged, bounds_checked_call
 from .integrators import INTEGRATORS, SAMPLES_INSIDE_STEP, midpoint_final, midpoint_stage
 from .lagged import LaggedAddedMass, check_filter, check_scheme
 from .step_stability import warn_if_step_near_limit
@@ -599,6 +600,7 @@ def _simulate_compiled(
     v = np.array(v0, dtype=float)
     if q.shape != (nq,) or v.shape != (nv,):
         raise ValueError(f"q0 must have {nq} and v0 {nv} entries")
+    compiled_controller(controller, nq, nv, fast.n_thrusters)  # records it writes (issue 29)
     if controller.reset is not None:
         controller.reset()
     environment = fast.environment(as_current(current), disturbance)
@@ -633,28 +635,29 @@ def _simulate_compiled(
         while True:
             stop = min(k + chunk, n_steps)
             start_log = logged
-            logged, done = run_chunk(
-                fast.model,
-                environment,
-                servo_record,
-                controller.loop_function,
-                controller.parameters,
-                controller.state,
-                q,
-                v,
-                tau,
-                info,
-                float(dt),
-                METHOD_MARKERS[method],
-                k,
-                stop,
-                n_steps,
-                steps_per_control,
-                log_every,
-                log,
-                logged,
-                workspace,
-            )
+            with bounds_checked_call("simulate"):
+                logged, done = run_chunk(
+                    fast.model,
+                    environment,
+                    servo_record,
+                    controller.loop_function,
+                    controller.parameters,
+                    controller.state,
+                    q,
+                    v,
+                    tau,
+                    info,
+                    float(dt),
+                    METHOD_MARKERS[method],
+                    k,
+                    stop,
+                    n_steps,
+                    steps_per_control,
+                    log_every,
+                    log,
+                    logged,
+                    workspace,
+                )
             if on_log is not None:
                 for row in log[start_log:logged]:
                     on_log(

@@ -21,9 +21,9 @@ import numpy as np
 
 from hydro.currents import as_current
 
-from .arguments import float_array, optional_current
+from .arguments import finite_time, float_array, method_name, optional_current, positive_seconds
 from .derivatives import compiled_derivatives, uniform_current
-from .errors import ArgumentError
+from .errors import project_errors
 
 #: Integration methods with transition Jacobians.
 METHODS = ("rk4", "euler")
@@ -44,6 +44,7 @@ class TransitionJacobians(NamedTuple):
     B: np.ndarray
 
 
+@project_errors("transition_jacobians")
 def transition_jacobians(
     vehicle,
     q,
@@ -76,8 +77,7 @@ def transition_jacobians(
     from .fast import kernels
     from .fast.transition import transition_into
 
-    if method not in METHODS:
-        raise ArgumentError(f"unknown method {method!r:.40} (expected one of {', '.join(METHODS)})")
+    method = method_name(method, METHODS)
     q, v = vehicle._q(q), vehicle._v(v)
     nv, m = vehicle.nv, len(vehicle.hydro.thrusters)
     thrusts = np.zeros(m) if thrusts is None else float_array(thrusts, "thrusts", (m,))
@@ -89,10 +89,9 @@ def transition_jacobians(
     tau0 = np.zeros(nv) if tau is None else vehicle._v(tau, "tau")
     tau0 = tau0.copy()
     tau0[6:] += joint_torques
-    dt = float(dt)
-    if not np.isfinite(dt) or dt <= 0.0:
-        raise ArgumentError(f"dt must be a positive number of seconds, got {dt!r}")
-    uniform_current(current, float(t))  # checks it is uniform in space
+    dt = positive_seconds(dt, "dt")
+    t = finite_time(t)
+    uniform_current(current, t)  # checks it is uniform in space
     derivatives = compiled_derivatives(vehicle)
     fast = derivatives._fast
     water = as_current(optional_current(current))
@@ -102,7 +101,7 @@ def transition_jacobians(
     transition_into(
         fast.model,
         env,
-        float(t),
+        t,
         q,
         v,
         tau0,

@@ -23,22 +23,60 @@ Refused (:class:`aiauv_pin.errors.PhysicalParameterError`, one line naming the p
   ``size`` the link's extent (its geometry, centre of gravity and buoyancy, and the origins of the
   joints it carries);
 * a mass matrix ``M(q)`` that is not positive definite at the neutral configuration (some body has
-  neither mass nor added mass), or not finite.
+  neither mass nor added mass), or not finite;
+* a crossflow (slender-cylinder) drag outside its range: cylinder length or radius outside
+  :data:`LENGTH_RANGE`, a drag coefficient above :data:`MAX_DIMENSIONLESS`, or a strip coefficient
+  times length above :data:`MAX_COEFFICIENT`.
 
-:func:`explain_divergence` names a suspect parameter when a run diverges (a damping time constant or
-a thrust that accelerates the vehicle implausibly).
+Plausibility ranges, in one table (:data:`PLAUSIBLE_RANGES`, also in ``docs/source``; every value
+is checked by the gate, the URDF validation walk (:mod:`aiauv_pin.urdf_validation`: geometry,
+origins) or the hydrodynamics reader (:mod:`hydro.urdf_block`: cylinder sizes and coefficients,
+before anything is computed from them). Why these bounds: each is orders of magnitude beyond any
+underwater vehicle, and small enough that every force the laws compute stays finite: with
+coefficients up to 1e9 SI, lengths up to 1e3 m and speeds up to 100 m/s, a quadratic drag is at
+most ``1e9 * 1e2 * 1e2 = 1e13`` N, a moment ``1e16`` N m, and the products the kinematics and the
+JSON writers form stay far below the float64 limit (1.8e308), where a length of 1e308 overflowed
+(issue 29: a visual origin of 1e308 passed ``check`` and failed writing JSON at the end of the run;
+``C_dC = 1e20`` ran until it diverged).
+
+========================  =================  ==========  =======================================
+parameter                 range              unit        reason
+========================  =================  ==========  =======================================
+gravity                   [0, 100]           m/s^2       the Sun's surface has 274; Earth 9.81
+fluid_density             [1e-3, 2e4]        kg/m^3      air 1.2, mercury 13 500
+link mass                 [0, 1e6]           kg          a submarine hull section
+principal inertia         [0, 1e8]           kg m^2      1e6 kg at 10 m
+volume                    [0, 1e3]           m^3         1e6 kg of water
+distance                  [0, 1e3]           m           origins, CG, CB, thruster, geometry
+geometry size             [1e-4, 1e3]        m           box, cylinder, sphere sizes
+mesh scale                [1e-6, 1e3]        -           millimetre meshes are 1e-3
+origin angle (rpy)        [-1e3, 1e3]        rad         any angle, a few hundred turns
+added mass, damping       [-1e9, 1e9]        SI          drag at 100 m/s below 1e13 N
+dimensionless coefficient [0, 1e3]           -           drag coefficients are 0.1 to 2
+reference speed v_ref     [1e-3, 1e3]        m/s         turns C_dL into a linear coefficient
+strip coeff. x length     [0, 1e9]           kg/m        as a quadratic damping entry
+max_thrust                [0, 1e7]           N           the largest ship propellers
+========================  =================  ==========  =======================================
+
+:func:`explain_divergence` names a suspect parameter when a run diverges: a damping time constant
+shorter than the step, a thrust that accelerates the vehicle implausibly, or else the parameter
+nearest the top of its range relative to that range (:func:`divergence_suspect`).
 """
 
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from hydro.spec import HydroSpec
+from hydro.urdf_block import LENGTH_RANGE, MAX_DIMENSIONLESS, V_REF_RANGE
 
 from .errors import PhysicalParameterError
-from .urdf_validation import UrdfStructure
+
+if TYPE_CHECKING:  # urdf_validation imports the ranges from here
+    from .urdf_validation import UrdfStructure
 
 #: Largest gravitational acceleration [m/s^2] (the Sun's surface has 274; Earth 9.81).
 MAX_GRAVITY = 100.0
@@ -60,6 +98,52 @@ MAX_THRUST = 1e7
 #: A thruster may sit at most ``THRUSTER_REACH * size + THRUSTER_MARGIN`` [m] from its link origin.
 THRUSTER_REACH = 2.0
 THRUSTER_MARGIN = 1.0
+#: Range of a geometry origin's angles (roll, pitch, yaw) [rad].
+ANGLE_RANGE = (-1e3, 1e3)
+#: Range of a mesh's scale factors [-].
+MESH_SCALE_RANGE = (1e-6, 1e3)
+
+#: The plausibility ranges of the module docstring's table: ``name -> (low, high, unit)``; the
+#: constants above and :data:`hydro.urdf_block.LENGTH_RANGE`, :data:`~hydro.urdf_block.MAX_DIMENSIONLESS`,
+#: :data:`~hydro.urdf_block.V_REF_RANGE` hold the same numbers, where each check reads them.
+PLAUSIBLE_RANGES: dict[str, tuple[float, float, str]] = {
+    "gravity": (0.0, MAX_GRAVITY, "m/s^2"),
+    "fluid_density": (MIN_FLUID_DENSITY, MAX_FLUID_DENSITY, "kg/m^3"),
+    "mass": (0.0, MAX_LINK_MASS, "kg"),
+    "moment of inertia": (0.0, MAX_INERTIA, "kg m^2"),
+    "volume": (0.0, MAX_VOLUME, "m^3"),
+    "distance": (0.0, MAX_DISTANCE, "m"),
+    "geometry size": (*LENGTH_RANGE, "m"),
+    "mesh scale": (*MESH_SCALE_RANGE, "-"),
+    "origin angle": (*ANGLE_RANGE, "rad"),
+    "added mass or damping entry": (-MAX_COEFFICIENT, MAX_COEFFICIENT, "SI"),
+    "dimensionless coefficient": (0.0, MAX_DIMENSIONLESS, "-"),
+    "v_ref": (*V_REF_RANGE, "m/s"),
+    "strip coefficient x length": (0.0, MAX_COEFFICIENT, "kg/m"),
+    "max_thrust": (0.0, MAX_THRUST, "N"),
+}
+
+
+def check_range(value: float, kind: str, what: str, where: str = "") -> float:
+    """``value`` if within the plausibility range ``kind`` of :data:`PLAUSIBLE_RANGES`.
+
+    Args:
+        value: The number.
+        kind: A key of :data:`PLAUSIBLE_RANGES`.
+        what: The parameter and where it is (e.g. ``"link 'hull' <visual> cylinder radius"``).
+        where: Prefix of the message (the file).
+
+    Raises:
+        PhysicalParameterError: Outside the range (or not finite), one line naming ``what``.
+    """
+    low, high, unit = PLAUSIBLE_RANGES[kind]
+    if not (math.isfinite(value) and low <= value <= high):
+        raise _refuse(
+            where, f"{what} = {value:.4g} {unit} outside the plausible range [{low:g}, {high:g}]"
+        )
+    return value
+
+
 #: Relative tolerance of the positive semi-definiteness checks (of the largest entry's magnitude).
 PSD_TOLERANCE = 1e-9
 #: Relative tolerance of the triangle inequality (of the largest principal moment).
@@ -170,6 +254,22 @@ def validate_parameters(structure: UrdfStructure, hydro: HydroSpec, where: str =
         _check_psd(link.quadratic_damping, f"{what}: quadratic_damping", where)
         # dissipative in forward motion (u_r > 0), as UUV Simulator's coefficients are meant
         _check_psd(link.forward_speed_damping, f"{what}: linear_damping_forward_speed", where)
+        crossflow = link.crossflow
+        if crossflow is not None:
+            check_range(crossflow.length, "geometry size", f"{what}: crossflow length", where)
+            check_range(crossflow.radius, "geometry size", f"{what}: crossflow radius", where)
+            check_range(
+                crossflow.drag_coefficient,
+                "dimensionless coefficient",
+                f"{what}: crossflow drag coefficient C_dC",
+                where,
+            )
+            check_range(
+                crossflow.strip_coefficient * crossflow.length,
+                "strip coefficient x length",
+                f"{what}: crossflow rho r C_dC L",
+                where,
+            )
     sizes = link_sizes(structure, hydro)
     for thruster in hydro.thrusters:
         what = f"thruster '{thruster.name}'"
@@ -212,10 +312,12 @@ def divergence_suspect(vehicle, dt: float) -> str | None:
     """The parameter most likely to make a fixed-step run diverge at step ``dt``, or ``None``.
 
     Looks at, per link, the damping rates ``D_ii / M_ii`` (``M_ii`` the rigid inertia of the link's
-    body plus the link's added mass; quadratic damping at 1 m/s or 1 rad/s), and at the largest
-    thrust over the vehicle's mass;
+    body plus the link's added mass; quadratic damping and the crossflow drag ``rho r C_dC L`` at
+    1 m/s or 1 rad/s), and at the largest thrust over the vehicle's mass;
     a rate ``r`` with ``r dt > 1`` (explicit Runge-Kutta schemes lose stability near ``r dt = 2.8``)
-    or a thrust accelerating the vehicle by more than ``1000 m/s^2`` is named.
+    or a thrust accelerating the vehicle by more than ``1000 m/s^2`` is named. Failing those, the
+    added-mass, damping or crossflow coefficient largest relative to the top of its plausible range
+    (:data:`PLAUSIBLE_RANGES`) is named when it is above :data:`SUSPECT_SHARE` of it.
     """
     try:
         total_mass = sum(float(i.mass) for i in vehicle.model.inertias[1:])
@@ -233,9 +335,14 @@ def divergence_suspect(vehicle, dt: float) -> str | None:
             diagonal = np.diag(link.added_mass).copy()
             if inertia is not None:
                 diagonal += np.diag(inertia)
+            crossflow = np.zeros((6, 6))
+            if link.crossflow is not None:  # transverse drag per (m/s)^2 over the whole length
+                drag = link.crossflow.strip_coefficient * link.crossflow.length
+                crossflow[1, 1] = crossflow[2, 2] = drag
             for label, matrix in (
                 ("linear_damping", link.linear_damping),
                 ("quadratic_damping", link.quadratic_damping),
+                ("crossflow drag rho r C_dC L", crossflow),
             ):
                 for i in range(6):
                     if diagonal[i] <= 0.0:
@@ -257,9 +364,45 @@ def divergence_suspect(vehicle, dt: float) -> str | None:
                     f"thruster '{name}' max_thrust = {thrust:.4g} N accelerates the "
                     f"{total_mass:.4g} kg vehicle by {thrust / total_mass:.3g} m/s^2"
                 )
+        return _largest_relative_coefficient(vehicle.hydro)
     except Exception:  # a hint must never hide the divergence itself
         return None
     return None
+
+
+#: Share of the top of its range above which a coefficient is named as a divergence suspect.
+SUSPECT_SHARE = 1e-3
+
+
+def _largest_relative_coefficient(hydro: HydroSpec) -> str | None:
+    """The added-mass, damping or crossflow coefficient largest relative to the top of its range
+    (:data:`PLAUSIBLE_RANGES`), when above :data:`SUSPECT_SHARE` of it; else ``None``."""
+    best: tuple[float, str] | None = None
+    for link in hydro.links:
+        candidates = [
+            (float(np.max(np.abs(getattr(link, name)))), name, MAX_COEFFICIENT)
+            for name in (
+                "added_mass",
+                "linear_damping",
+                "quadratic_damping",
+                "forward_speed_damping",
+            )
+        ]
+        if link.crossflow is not None:
+            c = link.crossflow
+            candidates.append((c.drag_coefficient, "crossflow C_dC", MAX_DIMENSIONLESS))
+            candidates.append(
+                (c.strip_coefficient * c.length, "crossflow rho r C_dC L", MAX_COEFFICIENT)
+            )
+        for value, name, top in candidates:
+            share = value / top
+            if share > SUSPECT_SHARE and (best is None or share > best[0]):
+                best = (
+                    share,
+                    f"link '{link.link}' {name} = {value:.4g}, {share:.2g} of the top of its "
+                    f"plausible range ({top:g})",
+                )
+    return None if best is None else best[1]
 
 
 def explain_divergence(vehicle, dt: float, message: str) -> str:

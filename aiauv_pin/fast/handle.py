@@ -117,6 +117,34 @@ def checked_acceleration_of(handle, t, q, v, tau, tolerance, exact_below, out):
 
 
 @compiled(fastmath=True)
+def checked_step_of(handle, t, q, v, tau, dt, method, tolerance, exact_below, q_unit, q_out, v_out):
+    """:func:`aiauv_pin.fast.kernels.step_into` in still water without servo, after
+    :func:`state_verdict` (``q_unit`` (nq,): scratch for the normalised ``q``); returns its
+    verdict (``q_out, v_out`` are written only when it is ``STATE_OK``). ``dt`` and ``method``
+    are checked by the caller."""
+    W = handle.workspace
+    verdict, normalised = state_verdict(t, q, v, tau, tolerance, exact_below, q_unit)
+    if verdict != STATE_OK:
+        return verdict
+    state = q_unit if normalised else q
+    kernels.step_into(
+        handle.model,
+        handle.still_water,
+        handle.no_servo,
+        t,
+        state,
+        v,
+        tau,
+        dt,
+        method,
+        W,
+        q_out,
+        v_out,
+    )
+    return STATE_OK
+
+
+@compiled(fastmath=True)
 def acceleration_of(handle, env, servo, t, q, v, tau, out):
     """:func:`aiauv_pin.fast.kernels.acceleration_into` on the records of ``handle``."""
     kernels.acceleration_into(handle.model, env, servo, t, q, v, tau, handle.workspace, out, 0.0)
