@@ -447,7 +447,7 @@ def simulate(
         if fast is not None:
             packed = servo.packed() if servo is not None else None
             tau_c = np.ascontiguousarray(tau, dtype=float)
-            return fast.run(
+            return fast.run_unchecked(  # q, v its own; tau's shape checked by sample()
                 q,
                 v,
                 tau_c,

@@ -456,7 +456,6 @@ class FastModel:
             )
         return q_out, v_out
 
-    @project_errors("FastModel.run")
     def run(
         self,
         q,
@@ -481,21 +480,52 @@ class FastModel:
         unit_quaternion(q)
         v = in_place_array(v, "v", (self.nv,))
         tau = float_array(tau, "tau", (self.nv,))
-        code = METHOD_CODES[method_name(method, METHOD_CODES)]
+        method = method_name(method, METHOD_CODES)
         dt = positive_seconds(dt, "dt")
         n_steps = step_count(n_steps, largest=MAX_RUN_STEPS)
         t0 = finite_time(t0)
-        env = self.environment(current, disturbance)
-        return kernels.run_steps(
-            self.model,
-            env,
-            self.servo_record(servo),
-            t0,
+        return self.run_unchecked(
             q,
             v,
             tau,
             dt,
             n_steps,
-            code,
+            method=method,
+            current=current,
+            servo=self.servo_record(servo),
+            t0=t0,
+            disturbance=disturbance,
+        )
+
+    @project_errors("FastModel.run")
+    def run_unchecked(
+        self,
+        q,
+        v,
+        tau,
+        dt: float,
+        n_steps: int,
+        *,
+        method="rk4",
+        current=None,
+        servo=None,
+        t0=0.0,
+        disturbance=None,
+    ):
+        """:meth:`run` for a caller that owns and checked ``q, v, tau`` (C-contiguous float64 of
+        the model's sizes; ``tau`` may be non-finite: the run then stops at once), ``method``,
+        ``dt`` and ``n_steps`` (:func:`aiauv_pin.simulate`); the current, disturbance and servo
+        are checked here."""
+        return kernels.run_steps(
+            self.model,
+            self.environment(current, disturbance),
+            self.servo_record(servo),
+            float(t0),
+            q,
+            v,
+            tau,
+            float(dt),
+            int(n_steps),
+            METHOD_CODES[method],
             self.workspace,
         )
