@@ -41,6 +41,28 @@ QUATERNION_TOLERANCE = 1e-6
 EXACT_QUATERNION_DEVIATION = 1e-14
 
 
+#: Up to this many entries, :func:`_all_finite` tests in Python (a list and ``math.isfinite``),
+#: which costs less than a NumPy ufunc call on a small array; above it, ``np.isfinite``.
+SMALL_ARRAY = 64
+
+
+def _all_finite(array: np.ndarray) -> bool:
+    """Whether every entry of a float array is finite."""
+    if array.ndim == 1 and array.shape[0] <= SMALL_ARRAY:
+        return all(map(math.isfinite, array.tolist()))
+    return bool(np.isfinite(array).all())  # the method: np.all's dispatch costs more
+
+
+def _numbers(value, name: str, shape: str) -> np.ndarray:
+    """``np.asarray(value)``, or a one-line error naming ``name`` and the expected ``shape``."""
+    try:
+        return np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise ArgumentError(
+            f"{name} must be an array of numbers of shape {shape} ({exc.__class__.__name__})"
+        ) from None
+
+
 def float_array(value, name: str, shape: tuple[int, ...]) -> np.ndarray:
     """``value`` as a contiguous float64 array of ``shape`` with finite entries.
 
@@ -55,12 +77,7 @@ def float_array(value, name: str, shape: tuple[int, ...]) -> np.ndarray:
     ):
         array = value
     else:
-        try:
-            array = np.asarray(value)
-        except (TypeError, ValueError) as exc:
-            raise ArgumentError(
-                f"{name} must be an array of numbers of shape {shape} ({exc.__class__.__name__})"
-            ) from None
+        array = _numbers(value, name, str(shape))
         if array.dtype.kind not in "biuf":
             raise ArgumentError(
                 f"{name} must be an array of real numbers of shape {shape}, got dtype "
@@ -69,7 +86,7 @@ def float_array(value, name: str, shape: tuple[int, ...]) -> np.ndarray:
         if array.shape != shape:
             raise ArgumentError(f"{name} must have shape {shape}, got {array.shape}")
         array = np.ascontiguousarray(array, dtype=np.float64)
-    if not np.isfinite(array).all():  # the method: np.all's dispatch costs more than the test
+    if not _all_finite(array):
         raise ArgumentError(f"{name} must be finite (shape {shape}), got NaN or infinity")
     return array
 
@@ -116,7 +133,7 @@ def in_place_array(value, name: str, shape: tuple[int, ...]) -> np.ndarray:
             f"{name} is advanced in place: it must be a writeable C-contiguous float64 array of "
             f"shape {shape}, got {got}"
         )
-    if not np.isfinite(value).all():
+    if not _all_finite(value):
         raise ArgumentError(f"{name} must be finite (shape {shape}), got NaN or infinity")
     return value
 
@@ -139,12 +156,7 @@ def unit_quaternion(q: np.ndarray, name: str = "q") -> float:
 
 def configurations(value, nq: int, name: str = "configurations") -> np.ndarray:
     """Configurations ``(n, nq)`` (each as :func:`configuration`, normalised on a copy)."""
-    try:
-        array = np.asarray(value)
-    except (TypeError, ValueError) as exc:
-        raise ArgumentError(
-            f"{name} must be an array of numbers of shape (n, {nq}) ({exc.__class__.__name__})"
-        ) from None
+    array = _numbers(value, name, f"(n, {nq})")
     if array.ndim != 2 or array.shape[1] != nq:
         raise ArgumentError(f"{name} must have shape (n, {nq}), got {array.shape}")
     array = float_array(array, name, array.shape)

@@ -211,8 +211,10 @@ def _ad(twist: np.ndarray) -> np.ndarray:
     return np.block([[pin.skew(w), pin.skew(v)], [np.zeros((3, 3)), pin.skew(w)]])
 
 
+@project_errors("restoring_derivative")
 def restoring_derivative(vehicle, q: np.ndarray) -> np.ndarray:
     """``dg/dq`` (nv, nv), tangent space: Pinocchio's gravity derivatives, vehicle minus water."""
+    q = configuration(q, vehicle.nq)
     model = vehicle.model
     data = model.createData()
     if not vehicle.restoring:

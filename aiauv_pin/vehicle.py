@@ -349,29 +349,31 @@ class Vehicle:
         return self._packed
 
     # ------------------------------------------------------------------ per-thread data
+    def _per_thread(self, name: str, make):
+        """The calling thread's ``name`` in :class:`_PinocchioScratch`, made by ``make()`` on the
+        thread's first use."""
+        local = self._pinocchio
+        value = getattr(local, name)
+        if value is None:
+            value = make()
+            setattr(local, name, value)
+        return value
+
     @property
     def data(self) -> pin.Data:
         """Pinocchio's ``Data`` of the calling thread (``model.createData()`` on first use)."""
-        local = self._pinocchio
-        if local.data is None:
-            local.data = self.model.createData()
-        return local.data
+        return self._per_thread("data", self.model.createData)
 
     @property
     def _buoyancy_data(self) -> pin.Data:
         """The calling thread's ``Data`` of the displaced-water model."""
-        local = self._pinocchio
-        if local.buoyancy_data is None:
-            local.buoyancy_data = self._buoyancy_model.createData()
-        return local.buoyancy_data
+        return self._per_thread("buoyancy_data", self._buoyancy_model.createData)
 
     @property
     def _scratch(self) -> tuple[np.ndarray, np.ndarray]:
         """The calling thread's fluid scratch: body wrenches (nb, 6) and (3, 6)."""
-        local = self._pinocchio
-        if local.scratch is None:
-            local.scratch = (np.zeros((self.model.njoints - 1, 6)), np.zeros((3, 6)))
-        return local.scratch
+        nb = self.model.njoints - 1
+        return self._per_thread("scratch", lambda: (np.zeros((nb, 6)), np.zeros((3, 6))))
 
     # ------------------------------------------------------------------ backend
     @property

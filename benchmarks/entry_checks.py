@@ -11,7 +11,8 @@ Pairs, measured interleaved (one block of each per round, so that load changes h
   Python, :mod:`aiauv_pin.arguments`), reported alone (run this script in another checkout to
   compare it).
 
-Reports the median and the range (min to max) over ``--rounds`` rounds of ``--calls`` calls, the
+Reports the median and the range (min to max) over ``--rounds`` rounds of ``--calls`` calls (CPU
+time of the measuring thread), the
 median of the per-round differences (checked minus unchecked), and the machine load
 (``os.getloadavg``, before and after). Writes ``benchmarks/entry_checks.json``.
 
@@ -35,11 +36,13 @@ from aiauv_pin.fast.model import METHOD_CODES, _entry_point
 
 
 def _per_call(function, calls: int) -> float:
-    """Mean time of one call [us] over ``calls`` calls."""
-    start = time.perf_counter()
+    """Mean CPU time of one call [us] over ``calls`` calls: the thread's own time
+    (``time.thread_time``), so that time slices lost to other processes on a loaded machine do
+    not count (the wall clock's spread was 2x at a load of 10 on 2 cores)."""
+    start = time.thread_time()
     for _ in range(calls):
         function()
-    return (time.perf_counter() - start) / calls * 1e6
+    return (time.thread_time() - start) / calls * 1e6
 
 
 def _summary(samples: list[float]) -> dict:

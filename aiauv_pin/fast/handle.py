@@ -52,13 +52,17 @@ def new_handle(model, workspace, still_water, no_servo):
 
 #: :func:`checked_acceleration_of`'s verdicts: the state is usable, or which argument is not.
 STATE_OK, STATE_Q_NOT_FINITE, STATE_V_NOT_FINITE, STATE_TAU_NOT_FINITE = 0, 1, 2, 3
-STATE_QUATERNION_NOT_UNIT, STATE_T_NOT_FINITE = 4, 5
+STATE_QUATERNION_NOT_UNIT, STATE_T_NOT_FINITE, STATE_NOT_CONTIGUOUS = 4, 5, 6
 
 
 @compiled
 def state_verdict(t, q, v, tau, tolerance, exact_below, q_unit):
-    """Check a state as :mod:`aiauv_pin.arguments` does, in compiled code: all finite, and the base
-    quaternion ``q[3:7]`` of unit norm within ``tolerance``.
+    """Check a state as :mod:`aiauv_pin.arguments` does, in compiled code: contiguous, all finite,
+    and the base quaternion ``q[3:7]`` of unit norm within ``tolerance``.
+
+    Contiguity is checked here, from the strides numba's unboxing copied from the arrays, before
+    any element is read (cheaper than ``flags`` in Python); the caller checks dtype and shape,
+    which the unboxing needs right (a 2-D array would overflow a 1-D record).
 
     Not ``fastmath``: the norm is summed in the order :func:`aiauv_pin.arguments.configuration`
     uses, so that a normalised quaternion is bit-identical to the one it makes.
@@ -73,6 +77,8 @@ def state_verdict(t, q, v, tau, tolerance, exact_below, q_unit):
     Returns:
         ``(verdict, normalised)``: a ``STATE_*`` code, and whether ``q_unit`` holds the state.
     """
+    if q.strides[0] != 8 or v.strides[0] != 8 or tau.strides[0] != 8:
+        return STATE_NOT_CONTIGUOUS, False
     if not math.isfinite(t):
         return STATE_T_NOT_FINITE, False
     for i in range(q.shape[0]):

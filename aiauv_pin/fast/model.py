@@ -164,6 +164,8 @@ class FastModel:
         self._frames: dict[int, tuple[int, np.ndarray, np.ndarray]] = {}
         self._entries: dict = {}
         self._local = _PerThread()
+        self._checked_acceleration_entry = None
+        self._q_shape, self._v_shape = (self.nq,), (self.nv,)
         self._pin_model = vehicle.model
         self._local.workspace = kernels.new_workspace(self.model, self.nq, self.nv)
 
@@ -224,7 +226,7 @@ class FastModel:
         """Picklable state: the per-thread workspaces and the entry points are process-local,
         made again on use."""
         state = self.__dict__.copy()
-        state["_entries"] = {}
+        state["_entries"], state["_checked_acceleration_entry"] = {}, None
         del state["_local"]
         return state
 
@@ -295,14 +297,42 @@ class FastModel:
         (:func:`aiauv_pin.fast.handle.state_verdict`) refused them, and the caller's own checks
         then name the problem.
         """
-        nq, nv = self.nq, self.nv
-        if not (_plain(q, nq) and _plain(v, nv) and _plain(tau, nv) and type(t) in (float, int)):
+        # written out, not through _plain / _fast_call / handle: each Python call costs about
+        # 0.1 us, and this is the hottest entry point (benchmarks/entry_checks.py). Not an
+        # ndarray: no .dtype (AttributeError), or refused by numba's unboxing (TypeError, which
+        # checks PyArray_Check; the shape check here keeps a 2-D array out of its 1-D record).
+        # Contiguity: checked from the strides in the compiled call (state_verdict).
+        try:
+            if not (
+                q.dtype is _FLOAT64
+                and v.dtype is _FLOAT64
+                and tau.dtype is _FLOAT64
+                and q.shape == self._q_shape
+                and v.shape == self._v_shape
+                and tau.shape == self._v_shape
+            ):
+                return None
+        except AttributeError:
             return None
-        out = np.empty(nv)
-        verdict = self._fast_call(
-            checked_acceleration_of,
-            (self.handle, float(t), q, v, tau, tolerance, exact_below, out),
-        )
+        if type(t) is not float:
+            if type(t) is not int:
+                return None
+            t = float(t)
+        handle = self._local.handle
+        entry = self._checked_acceleration_entry
+        out = np.empty(self.nv)
+        if handle is None or entry is None:  # the first call of this thread or model
+            if not (_plain(q, self.nq) and _plain(v, self.nv) and _plain(tau, self.nv)):
+                return None  # (the dispatcher would compile for another layout)
+            verdict = self._fast_call(
+                checked_acceleration_of, (self.handle, t, q, v, tau, tolerance, exact_below, out)
+            )
+            self._checked_acceleration_entry = self._entries[checked_acceleration_of]
+            return out if verdict == STATE_OK else None
+        try:
+            verdict = entry(handle, t, q, v, tau, tolerance, exact_below, out)
+        except TypeError:  # an object that only looks like an array
+            return None
         return out if verdict == STATE_OK else None
 
     def restoring_forces(self, q) -> np.ndarray:
