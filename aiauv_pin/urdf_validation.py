@@ -9,7 +9,7 @@ no entities), against the URDF specification (wiki.ros.org/urdf/XML):
 * every ``<link>`` has a unique name; its ``<inertial>`` (optional) has ``<mass value>`` finite and
   ``>= 0``, six finite ``<inertia>`` entries forming a symmetric positive semi-definite matrix, and
   finite ``<origin>`` numbers; its visual and collision geometry has sizes, origins and mesh scales
-  within the plausible ranges of :data:`aiauv_pin.validation.PLAUSIBLE_RANGES` (a visual radius or
+  within the plausible ranges of :data:`aiauv_pin.plausible_ranges.PLAUSIBLE_RANGES` (a visual radius or
   origin of 1e308 would overflow where the viewer or a JSON writer uses it);
 * every ``<joint>`` has a unique name, a known ``type``, ``<parent link>`` and ``<child link>``
   naming existing, different links, a nonzero finite ``<axis>``, finite ``<origin>`` numbers and,
@@ -34,7 +34,7 @@ from hydro.urdf_block import parse_numbers
 from hydro.urdf_xml import UrdfLink, read_link
 
 from .errors import VehicleLoadError
-from .validation import check_range
+from .plausible_ranges import check_range
 
 #: Joint types of the URDF specification.
 URDF_JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")

@@ -349,6 +349,16 @@ class Vehicle:
         return self._packed
 
     # ------------------------------------------------------------------ per-thread data
+    def __getstate__(self) -> dict:
+        """Picklable state: the per-thread Pinocchio data are made again on use."""
+        state = self.__dict__.copy()
+        del state["_pinocchio"]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._pinocchio = _PinocchioScratch()
+
     def _per_thread(self, name: str, make):
         """The calling thread's ``name`` in :class:`_PinocchioScratch`, made by ``make()`` on the
         thread's first use."""

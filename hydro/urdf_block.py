@@ -75,7 +75,7 @@ from hydro.urdf_xml import (  # noqa: F401  (re-exported: the block's readers us
 DEFAULT_FLUID_DENSITY = 1025.0
 
 #: Plausible range of a cylinder's length and radius [m] (the table of
-#: :data:`aiauv_pin.validation.PLAUSIBLE_RANGES`): checked here before anything is computed from
+#: :data:`aiauv_pin.plausible_ranges.PLAUSIBLE_RANGES`): checked here before anything is computed from
 #: them (a length of 1e308 overflowed computing the cylinder's inertia, issue 29).
 LENGTH_RANGE = (1e-4, 1e3)
 #: Largest dimensionless slender-cylinder coefficient (drag coefficients of cylinders are 0.1

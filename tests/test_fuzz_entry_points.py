@@ -21,7 +21,7 @@ import pytest
 
 import aiauv_pin
 from aiauv_pin.errors import AiauvError, PhysicalParameterError, VehicleLoadError
-from aiauv_pin.validation import PLAUSIBLE_RANGES
+from aiauv_pin.plausible_ranges import PLAUSIBLE_RANGES
 
 FUZZ_SCRIPT = textwrap.dedent(
     r'''
@@ -250,9 +250,12 @@ FUZZ_SCRIPT = textwrap.dedent(
         vehicle, q0, np.zeros(nv), 0.05, 0.01, honest), must_fail=False)
 
     summary = collections.Counter()
+    by_class = collections.Counter()
     for (kind, outcome), count in outcomes.items():
         summary[outcome] += count
+        by_class[(kind.split(" arg ")[0].split(" ")[0], outcome)] += count
     print(json.dumps({"calls": sum(outcomes.values()), "outcomes": dict(summary),
+                      "by_class": {f"{k} -> {o}": n for (k, o), n in sorted(by_class.items())},
                       "failures": failures}))
     '''
 )
