@@ -164,7 +164,7 @@ class FastModel:
         self._frames: dict[int, tuple[int, np.ndarray, np.ndarray]] = {}
         self._entries: dict = {}
         self._local = _PerThread()
-        self._checked_acceleration_entry = None
+        self._checked_acceleration_entry = self._checked_step_entry = None
         self._q_shape, self._v_shape = (self.nq,), (self.nv,)
         self._pin_model = vehicle.model
         self._local.workspace = kernels.new_workspace(self.model, self.nq, self.nv)
@@ -226,7 +226,8 @@ class FastModel:
         """Picklable state: the per-thread workspaces and the entry points are process-local,
         made again on use."""
         state = self.__dict__.copy()
-        state["_entries"], state["_checked_acceleration_entry"] = {}, None
+        state["_entries"] = {}
+        state["_checked_acceleration_entry"] = state["_checked_step_entry"] = None
         del state["_local"]
         return state
 
@@ -425,30 +426,10 @@ class FastModel:
             and type(dt) is float
             and 0.0 < dt < math.inf
             and type(t) in (float, int)
-            and _plain(q, nq)
-            and _plain(v, nv)
-            and _plain(tau, nv)
         ):
-            q_out, v_out = np.empty(nq), np.empty(nv)
-            verdict = self._fast_call(
-                checked_step_of,
-                (
-                    self.handle,
-                    float(t),
-                    q,
-                    v,
-                    tau,
-                    dt,
-                    code,
-                    QUATERNION_TOLERANCE,
-                    EXACT_QUATERNION_DEVIATION,
-                    self._scratch_q(),
-                    q_out,
-                    v_out,
-                ),
-            )
-            if verdict == STATE_OK:
-                return q_out, v_out
+            out = self._checked_step(q, v, tau, dt, code, float(t))
+            if out is not None:
+                return out
         method = method_name(method, METHOD_CODES)
         q = configuration(q, nq)
         v = float_array(v, "v", (nv,))
@@ -459,6 +440,39 @@ class FastModel:
         return self._step_unchecked(
             q, v, tau, dt, METHOD_CODES[method], env, self.servo_record(servo), t
         )
+
+    def _checked_step(self, q, v, tau, dt: float, code: int, t: float):
+        """One still-water step with the state checked in the compiled call (as
+        :meth:`checked_acceleration`: dtype and shape here, contiguity, finiteness and the
+        quaternion in :func:`aiauv_pin.fast.handle.checked_step_of`), or ``None``."""
+        local = self._local
+        try:
+            if not (
+                q.dtype is _FLOAT64
+                and v.dtype is _FLOAT64
+                and tau.dtype is _FLOAT64
+                and q.shape == self._q_shape
+                and v.shape == self._v_shape
+                and tau.shape == self._v_shape
+            ):
+                return None
+        except AttributeError:
+            return None
+        handle, entry, q_unit = local.handle, self._checked_step_entry, local.q_unit
+        q_out, v_out = np.empty(self.nq), np.empty(self.nv)
+        args = (handle, t, q, v, tau, dt, code, QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION)
+        if handle is None or entry is None or q_unit is None:  # first call of this thread
+            if not (_plain(q, self.nq) and _plain(v, self.nv) and _plain(tau, self.nv)):
+                return None  # (the dispatcher would compile for another layout)
+            args = (self.handle, *args[1:], self._scratch_q(), q_out, v_out)
+            verdict = self._fast_call(checked_step_of, args)
+            self._checked_step_entry = self._entries[checked_step_of]
+        else:
+            try:
+                verdict = entry(*args, q_unit, q_out, v_out)
+            except TypeError:  # an object that only looks like an array
+                return None
+        return (q_out, v_out) if verdict == STATE_OK else None
 
     @project_errors("FastModel.step")
     def _step_unchecked(self, q, v, tau, dt, code, env, servo, t):
