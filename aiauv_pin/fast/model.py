@@ -287,6 +287,24 @@ class FastModel:
             )
         return out
 
+    def _state_arrays(self, q, v, tau) -> bool:
+        """Whether ``q, v, tau`` have the dtype (float64, native order) and the shapes that a
+        state checked in compiled code needs (:func:`aiauv_pin.fast.handle.state_verdict` checks
+        the rest). Not an ndarray: no ``.dtype`` (AttributeError), or refused by numba's unboxing
+        (TypeError, from its ``PyArray_Check``); the shape check keeps a 2-D array out of a 1-D
+        record, which the unboxing would overflow."""
+        try:
+            return (
+                q.dtype is _FLOAT64
+                and v.dtype is _FLOAT64
+                and tau.dtype is _FLOAT64
+                and q.shape == self._q_shape
+                and v.shape == self._v_shape
+                and tau.shape == self._v_shape
+            )
+        except AttributeError:
+            return False
+
     def checked_acceleration(
         self, q, v, tau, t, tolerance: float, exact_below: float
     ) -> np.ndarray | None:
@@ -298,22 +316,10 @@ class FastModel:
         (:func:`aiauv_pin.fast.handle.state_verdict`) refused them, and the caller's own checks
         then name the problem.
         """
-        # written out, not through _plain / _fast_call / handle: each Python call costs about
-        # 0.1 us, and this is the hottest entry point (benchmarks/entry_checks.py). Not an
-        # ndarray: no .dtype (AttributeError), or refused by numba's unboxing (TypeError, which
-        # checks PyArray_Check; the shape check here keeps a 2-D array out of its 1-D record).
-        # Contiguity: checked from the strides in the compiled call (state_verdict).
-        try:
-            if not (
-                q.dtype is _FLOAT64
-                and v.dtype is _FLOAT64
-                and tau.dtype is _FLOAT64
-                and q.shape == self._q_shape
-                and v.shape == self._v_shape
-                and tau.shape == self._v_shape
-            ):
-                return None
-        except AttributeError:
+        # not through _plain / _fast_call / handle: each Python call costs about 0.1 us, and
+        # this is the hottest entry point (benchmarks/entry_checks.py); contiguity is checked
+        # from the strides in the compiled call (state_verdict)
+        if not self._state_arrays(q, v, tau):
             return None
         if type(t) is not float:
             if type(t) is not int:
@@ -446,17 +452,7 @@ class FastModel:
         :meth:`checked_acceleration`: dtype and shape here, contiguity, finiteness and the
         quaternion in :func:`aiauv_pin.fast.handle.checked_step_of`), or ``None``."""
         local = self._local
-        try:
-            if not (
-                q.dtype is _FLOAT64
-                and v.dtype is _FLOAT64
-                and tau.dtype is _FLOAT64
-                and q.shape == self._q_shape
-                and v.shape == self._v_shape
-                and tau.shape == self._v_shape
-            ):
-                return None
-        except AttributeError:
+        if not self._state_arrays(q, v, tau):
             return None
         handle, entry, q_unit = local.handle, self._checked_step_entry, local.q_unit
         q_out, v_out = np.empty(self.nq), np.empty(self.nv)
