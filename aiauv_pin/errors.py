@@ -8,7 +8,7 @@ One hierarchy: everything the API raises on bad input or a failed run is an :cla
     |   |-- PhysicalParameterError           a non-physical or implausible parameter
     |   |-- InputLimitError                  a file beyond the input limits
     |   |-- UnsafeNameError                  a name outside the safe set
-    |   `-- UrdfStructureError               (aiauv_pin.urdf_validation) a URDF breaking the spec
+    |   `-- UrdfStructureError               (aiauv_pin.description.urdf_validation) a URDF breaking the spec
     |-- ArgumentError (ValueError)           a bad argument to an API call
     |   `-- RecordSizeError                  a record (controller info row, current parameters)
     |                                        smaller than what compiled code reads or writes
@@ -65,15 +65,16 @@ class NumericalError(AiauvError, ArithmeticError):
 
 
 class InputLimitError(VehicleLoadError):
-    """An input file beyond the documented limits of :mod:`aiauv_pin.input_limits`."""
+    """An input file beyond the documented limits of :mod:`aiauv_pin.description.input_limits`."""
 
 
 class UnsafeNameError(VehicleLoadError):
-    """A link, joint, thruster or robot name outside the safe set of :mod:`aiauv_pin.safe_names`."""
+    """A link, joint, thruster or robot name outside the safe set of
+    :mod:`aiauv_pin.description.safe_names`."""
 
 
 class PhysicalParameterError(VehicleLoadError):
-    """A non-physical or implausible vehicle parameter (:mod:`aiauv_pin.validation`)."""
+    """A non-physical or implausible vehicle parameter (:mod:`aiauv_pin.model.validation`)."""
 
 
 def _first_line(exc: BaseException) -> str:
@@ -102,7 +103,7 @@ def as_project_error(
     ``KeyError``, numba's ``TypingError`` and Boost.Python's ``ArgumentError`` become
     :class:`ArgumentError`; ``OverflowError``, NumPy's ``LinAlgError`` and ``FloatingPointError``
     become :class:`NumericalError`; with ``bounds_checked`` (``where`` runs a bounds-checked
-    compiled controller, :mod:`aiauv_pin.controllers`) an ``IndexError`` becomes
+    compiled controller, :mod:`aiauv_pin.controllers.compiled_controller`) an ``IndexError`` becomes
     :class:`RecordSizeError`.
     """
     if isinstance(exc, AiauvError):

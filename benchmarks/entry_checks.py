@@ -5,10 +5,10 @@ Pairs, measured interleaved (one block of each per round, so that load changes h
 * ``acceleration``: the compiled evaluation called through its cached entry point with no check
   at all (``acceleration_of``, what ``FastModel.acceleration`` ran before the checks), against the
   public, checked ``Vehicle.fast.acceleration`` and ``Vehicle.acceleration`` (the state checked
-  inside the compiled call, :func:`aiauv_pin.fast.handle.state_verdict`);
+  inside the compiled call, :func:`aiauv_pin.kernels.handle.state_verdict`);
 * ``step``: the same for one RK4 step (``step_of`` against ``Vehicle.fast.step``);
 * the Python path: ``Vehicle.acceleration`` with a constant current (its arguments checked in
-  Python, :mod:`aiauv_pin.arguments`), reported alone (run this script in another checkout to
+  Python, :mod:`aiauv_pin.model.array_checks`), reported alone (run this script in another checkout to
   compare it).
 
 Reports the median and the range (min to max) over ``--rounds`` rounds of ``--calls`` calls (CPU
@@ -31,8 +31,8 @@ from pathlib import Path
 import numpy as np
 
 import aiauv_pin
-from aiauv_pin.fast import handle as compiled_handle
-from aiauv_pin.fast.model import METHOD_CODES, _entry_point
+from aiauv_pin.kernels import handle as compiled_handle
+from aiauv_pin.kernels.evaluation import METHOD_CODES, _entry_point
 
 
 def _per_call(function, calls: int) -> float:

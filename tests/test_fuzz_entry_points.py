@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 import aiauv_pin
+from aiauv_pin.description.plausible_ranges import PLAUSIBLE_RANGES
 from aiauv_pin.errors import AiauvError, PhysicalParameterError, VehicleLoadError
-from aiauv_pin.plausible_ranges import PLAUSIBLE_RANGES
 
 FUZZ_SCRIPT = textwrap.dedent(
     r'''
@@ -29,16 +29,16 @@ FUZZ_SCRIPT = textwrap.dedent(
     import numba
     import numpy as np
     import aiauv_pin
-    import aiauv_pin.linear_model
-    import aiauv_pin.transitions
-    from aiauv_pin.fast.records import Servo
-    from aiauv_pin.paper_controller import VehiclePathFollowing
-    from aiauv_pin.controllers import CompiledController
-    from aiauv_pin.derivatives import compiled_derivatives
+    import aiauv_pin.dynamics.linear_model
+    import aiauv_pin.dynamics.transitions
+    from aiauv_pin.kernels.records import Servo
+    from aiauv_pin.controllers.paper_controller import VehiclePathFollowing
+    from aiauv_pin.controllers.compiled_controller import CompiledController
+    from aiauv_pin.model.derivatives import compiled_derivatives
     from aiauv_pin.errors import AiauvError
-    from aiauv_pin.linear_model import Trim
-    from hydro.currents import Current, constant_current, tidal_current
-    from hydro.spec import HydroError
+    from aiauv_pin.dynamics.linear_model import Trim
+    from aiauv_hydro.currents import Current, constant_current, tidal_current
+    from aiauv_hydro.spec import HydroError
 
     rng = np.random.default_rng(20260429)
     vehicle = aiauv_pin.load_vehicle()
@@ -112,10 +112,10 @@ FUZZ_SCRIPT = textwrap.dedent(
         ),
         "Vehicle.acceleration": lambda q, v, tau: vehicle.acceleration(q, v, tau),
         "acceleration_derivatives": lambda q, v, tau: vehicle.acceleration_derivatives(q, v, tau),
-        "transition_jacobians": lambda q, v, tau: aiauv_pin.transitions.transition_jacobians(
+        "transition_jacobians": lambda q, v, tau: aiauv_pin.dynamics.transitions.transition_jacobians(
             vehicle, q, v, dt=0.01, tau=tau
         ),
-        "linearize(Trim)": lambda q, v, tau: aiauv_pin.linear_model.linearize(
+        "linearize(Trim)": lambda q, v, tau: aiauv_pin.dynamics.linear_model.linearize(
             vehicle, Trim(q, v, np.zeros(m), tau, 0.0)  # tau: the trim's joint torques
         ),
     }
@@ -167,14 +167,14 @@ FUZZ_SCRIPT = textwrap.dedent(
         "derivatives velocity short": lambda: compiled_derivatives(vehicle)(
             q0, v0, tau0, np.zeros(2), 0.0
         ),
-        "linearize trim not a Trim": lambda: aiauv_pin.linear_model.linearize(vehicle, (q0, v0)),
-        "linearize trim thrusts short": lambda: aiauv_pin.linear_model.linearize(
+        "linearize trim not a Trim": lambda: aiauv_pin.dynamics.linear_model.linearize(vehicle, (q0, v0)),
+        "linearize trim thrusts short": lambda: aiauv_pin.dynamics.linear_model.linearize(
             vehicle, Trim(q0, v0, np.zeros(m - 1), tau0[6:], 0.0)
         ),
-        "linearize joint_gains nan": lambda: aiauv_pin.linear_model.linearize(
+        "linearize joint_gains nan": lambda: aiauv_pin.dynamics.linear_model.linearize(
             vehicle, joint_gains=(float("nan"), 1.0)
         ),
-        "transition method": lambda: aiauv_pin.transitions.transition_jacobians(
+        "transition method": lambda: aiauv_pin.dynamics.transitions.transition_jacobians(
             vehicle, q0, v0, dt=0.01, method="rk9"
         ),
         "Vehicle.frame_placement id": lambda: vehicle.frame_placement(q0, 5),
@@ -198,7 +198,7 @@ FUZZ_SCRIPT = textwrap.dedent(
     for name, call in {
         "fast.acceleration": lambda: fast.acceleration(q0, v0, tau0, mutated),
         "Vehicle.acceleration": lambda: vehicle.acceleration(q0, v0, tau0, mutated),
-        "rollout": lambda: aiauv_pin.rollout(vehicle, q0, v0, 0.02, 0.01, current=mutated),
+        "rollout": lambda: aiauv_pin.simulation.rollout(vehicle, q0, v0, 0.02, 0.01, current=mutated),
     }.items():
         case(f"current mutated to NaN via {name}", call)
     object.__setattr__(mutated, "parameters", np.zeros(1))
@@ -242,11 +242,11 @@ FUZZ_SCRIPT = textwrap.dedent(
         case(f"simulate {name}",
              lambda: aiauv_pin.simulate(vehicle, q0, np.zeros(nv), 0.05, 0.01, controller))
         case(f"rollout {name}",
-             lambda: aiauv_pin.rollout(vehicle, q0, np.zeros(nv), 0.05, 0.01,
+             lambda: aiauv_pin.simulation.rollout(vehicle, q0, np.zeros(nv), 0.05, 0.01,
                                        [controller, controller]))
     case("simulate honest", lambda: aiauv_pin.simulate(
         vehicle, q0, np.zeros(nv), 0.05, 0.01, honest), must_fail=False)
-    case("rollout honest", lambda: aiauv_pin.rollout(
+    case("rollout honest", lambda: aiauv_pin.simulation.rollout(
         vehicle, q0, np.zeros(nv), 0.05, 0.01, honest), must_fail=False)
 
     summary = collections.Counter()
@@ -409,7 +409,7 @@ def test_a_mesh_scale_out_of_range_is_refused(tmp_path):
 def test_divergence_suspect_names_the_coefficient_nearest_its_range(tmp_path):
     """With no damping time constant below the step, the suspect is the coefficient largest
     relative to the top of its plausible range."""
-    from aiauv_pin.validation import divergence_suspect
+    from aiauv_pin.model.validation import divergence_suspect
 
     vehicle = aiauv_pin.load_vehicle(_cylinder_vehicle(tmp_path, attributes='C_dC="900"'))
     suspect = divergence_suspect(vehicle, 1e-9)
