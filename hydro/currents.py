@@ -64,6 +64,12 @@ def shear_current(t, x, y, z, parameters):
 
 #: ``kind`` numbers of the built-in currents (a user's own function has none: ``-1``).
 CONSTANT, TIDAL, SHEAR = 0, 1, 2
+#: ``kind -> (function, number of parameters it reads)`` of the built-in currents.
+BUILTIN_CURRENTS = {
+    "constant": (constant_current, 3),
+    "tidal": (tidal_current, 8),
+    "shear": (shear_current, 7),
+}
 
 
 @compiled
@@ -119,8 +125,58 @@ class Current:
     description: dict = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
-        parameters = np.ascontiguousarray(self.parameters, dtype=float).reshape(-1)
+        try:
+            parameters = np.ascontiguousarray(self.parameters, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise HydroError(
+                f"current.parameters: expected an array of numbers, got {self.parameters!r:.60}"
+            ) from None
         object.__setattr__(self, "parameters", parameters)
+        self.check()
+
+    def check(self) -> None:
+        """Refuse parameters the compiled code would read past or compute NaN from.
+
+        A built-in current (by ``kind``, or by ``function`` for a ``"user"`` current that is a
+        built-in function) reads a fixed number of parameters (:data:`BUILTIN_CURRENTS`): fewer
+        would be read past the end of the array (a crash). Every parameter must be finite (a NaN
+        velocity makes every acceleration NaN), a tidal period positive. Run again at every
+        compiled entry point (the array is mutable). ``function`` must be callable, and a
+        built-in ``kind`` must come with its own function (the compiled code chooses by ``kind``,
+        Python's :meth:`velocity` by ``function``: they would disagree).
+
+        Raises:
+            HydroError: One line naming the problem.
+        """
+        parameters = self.parameters
+        if not isinstance(parameters, np.ndarray) or parameters.dtype != np.float64:
+            raise HydroError("current.parameters: expected a float64 array")
+        if not callable(self.function):
+            raise HydroError(
+                f"current.function: expected a compiled function, got {self.function!r:.60}"
+            )
+        needed = 0
+        builtin = BUILTIN_CURRENTS.get(self.kind)
+        if builtin is not None:
+            if self.function is not builtin[0]:
+                raise HydroError(
+                    f"current: kind {self.kind!r} needs its own function "
+                    f"{builtin[0].__name__}, got {getattr(self.function, '__name__', '?')}"
+                )
+            needed = builtin[1]
+        else:
+            for function, count in BUILTIN_CURRENTS.values():
+                if self.function is function:
+                    needed = count
+        if parameters.ndim != 1 or parameters.shape[0] < needed:
+            raise HydroError(
+                f"current.parameters: a {self.kind} current ({getattr(self.function, '__name__', '?')}) "
+                f"reads {needed} parameters, got {parameters.size}"
+            )
+        if not all(map(math.isfinite, parameters.tolist())):  # faster than np.isfinite here
+            raise HydroError("current.parameters: expected finite numbers, got NaN or infinity")
+        if self.function is tidal_current and not parameters[6] > 0.0:
+            raise HydroError(f"current.period: expected a positive number, got {parameters[6]!r}")
 
     @classmethod
     def constant(cls, velocity) -> Current:

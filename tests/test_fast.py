@@ -290,7 +290,7 @@ def test_python_entry_checks_shapes(paper_vehicle):
     np.testing.assert_array_equal(fast.acceleration(q, v, np.zeros(paper_vehicle.nv)), first)
     with pytest.raises(aiauv_pin.errors.ArgumentError, match="tau must have shape"):
         fast.acceleration(q, v, np.zeros(paper_vehicle.nv + 1))
-    with pytest.raises(aiauv_pin.errors.ArgumentError, match="q and v must have shapes"):
+    with pytest.raises(aiauv_pin.errors.ArgumentError, match=r"q must have shape \(\d+,\), got"):
         fast.acceleration(q[:-1], v, np.zeros(paper_vehicle.nv))
 
 

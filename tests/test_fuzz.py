@@ -235,7 +235,7 @@ def test_fuzzed_sweep_specs_expand_or_fail_in_one_line(tmp_path_factory, data):
         return
     TALLY["sweep spec accepted"] += 1
     for point in points:  # every accepted run is one simulate() accepts
-        from aiauv_pin.model.array_checks import check_timing
+        from aiauv_pin._internal.array_checks import check_timing
 
         assert check_timing(point.parameters["duration"], point.parameters["dt"]) >= 1
 

@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 
 import aiauv_pin
+from aiauv_pin._internal.array_checks import QUATERNION_TOLERANCE, check_timing
 from aiauv_pin.app.cli import main
 from aiauv_pin.description import input_limits
 from aiauv_pin.errors import (
@@ -36,7 +37,6 @@ from aiauv_pin.errors import (
     UnsafeNameError,
     VehicleLoadError,
 )
-from aiauv_pin.model.array_checks import QUATERNION_TOLERANCE, check_timing
 from aiauv_pin.simulation.fixed_step import simulate
 
 PAPER_TEXT = aiauv_pin.bundled_urdf("uniform").read_text(encoding="utf-8")
@@ -151,7 +151,7 @@ def test_checked_fast_path_matches_the_separate_checks_bit_for_bit(vehicles, rng
     """``Vehicle.acceleration`` checks plain arrays inside its compiled call (issue 15); the result
     must be exactly the one of the Python checks followed by the unchecked compiled evaluation,
     also when the quaternion is normalised, and for inputs the fast path does not take."""
-    from aiauv_pin.model.array_checks import configuration
+    from aiauv_pin._internal.array_checks import configuration
 
     vehicle = vehicles[0]
     if vehicle.fast is None:

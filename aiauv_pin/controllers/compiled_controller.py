@@ -32,6 +32,8 @@ the two longitudinal thrusters::
 
 from __future__ import annotations
 
+import numbers
+import types
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -39,6 +41,89 @@ from typing import Any
 import numpy as np
 
 from aiauv_pin.controllers.paper_compiled import passive
+from aiauv_pin.errors import ArgumentError, RecordSizeError
+
+_BOUNDS_CHECKED: dict = {}
+
+
+def bounds_checked(function, _seen: dict | None = None):
+    """A copy of a user's numba function compiled with ``boundscheck=True``, together with every
+    user's (not the project's) numba function it calls by a global name, recursively.
+
+    Why: the compiled loop gives the controller arrays allocated for what it declares (``info`` of
+    :attr:`CompiledController.info_width` floats, ``tau`` of ``nv``) and its own records; numba
+    does not check indices, so a controller that writes past them corrupts the heap (issue 29).
+    Checked indexing is the cheapest sound guard: a compare per access in the user's own code
+    (the project's kernels it calls stay unchecked; they size their writes by the vehicle), where
+    a guard zone after ``info`` would catch only writes that land in it, and a first sample only
+    the branches that sample takes. A write out of bounds raises ``IndexError`` inside the loop,
+    which :func:`aiauv_pin.errors.as_project_error` turns into a
+    :class:`~aiauv_pin.errors.RecordSizeError`. Compiled in memory (the loop for a user's function
+    is compiled per process anyway, :func:`aiauv_pin.simulation.compiled_loop.loop_for`): numba's
+    disk cache does
+    not key on ``boundscheck``, so a cached copy could load the unchecked code.
+    """
+    checked = _BOUNDS_CHECKED.get(function)
+    if checked is not None:
+        return checked
+    import numba
+
+    from aiauv_hydro.numerics.jit import is_project_function
+
+    seen = {} if _seen is None else _seen
+    if function in seen:  # recursion between a user's functions: the one being built
+        return function
+    seen[function] = None
+    py_func = function.py_func
+    names = set(py_func.__code__.co_names)
+    namespace = py_func.__globals__
+    replaced = {
+        name: bounds_checked(value, seen)
+        for name, value in namespace.items()
+        if name in names
+        and hasattr(value, "py_func")
+        and not is_project_function(value)
+        and value is not function
+    }
+    if replaced:
+        namespace = {**namespace, **replaced}
+    copy = types.FunctionType(
+        py_func.__code__, namespace, py_func.__name__, py_func.__defaults__, py_func.__closure__
+    )
+    copy.__qualname__ = py_func.__qualname__
+    copy.__module__ = py_func.__module__
+    options = {
+        key: value
+        for key, value in getattr(function, "targetoptions", {}).items()
+        if key in ("fastmath", "error_model", "nogil")
+    }
+    checked = numba.njit(boundscheck=True, cache=False, **options)(copy)
+    _BOUNDS_CHECKED[function] = checked
+    return checked
+
+
+def _sizes_of_builtin(function, n_joints: int, n_thrusters: int):
+    """``(info width, {parameter field: expected length})`` of a built-in controller, or ``None``."""
+    from aiauv_pin.controllers.paper_compiled import paper_info_shapes, paper_path_following
+    from aiauv_pin.controllers.turning_compiled import thruster_turning, turning_info_shapes
+
+    if function is passive:
+        return 0, {}
+    if function is paper_path_following:
+        shapes = paper_info_shapes(n_joints, n_thrusters)
+        fields = {
+            "axis_index": n_joints,
+            "reference_scale": n_joints,
+            "servo_references": n_joints,
+            "surge_mask": n_thrusters,
+        }
+    elif function is thruster_turning:
+        shapes = turning_info_shapes(n_joints, n_thrusters)
+        fields = dict.fromkeys(("plane", "force_coeff", "moment_coeff", "surge_mask"), n_thrusters)
+        fields.update(dict.fromkeys(("joint_stiffness", "joint_damping"), n_joints))
+    else:
+        return None
+    return sum(int(np.prod(s, dtype=int)) for s in shapes.values()), fields
 
 
 @dataclass(frozen=True)
@@ -71,10 +156,64 @@ class CompiledController:
     @property
     def loop_function(self):
         """What the compiled loop is given: ``None`` for a built-in controller (chosen there by its
-        parameters, so that the cached loop's signature holds no function), else the function."""
+        parameters, so that the cached loop's signature holds no function), else the user's
+        function compiled bounds-checked (:func:`bounds_checked`)."""
         from aiauv_pin.controllers.dispatch import BUILTIN_CONTROLLERS
 
-        return None if self.function in BUILTIN_CONTROLLERS else self.function
+        if self.function in BUILTIN_CONTROLLERS:
+            return None
+        return bounds_checked(self.function)
+
+    def check_records(self, nq: int, nv: int, n_thrusters: int) -> None:
+        """Refuse records the compiled loop would write or read past, for a vehicle of these sizes.
+
+        ``function`` must be a numba function; ``info_shapes`` a mapping of names to shapes of
+        non-negative whole numbers. A built-in controller writes a known info row and reads
+        parameter arrays of known lengths (the vehicle's joints and thrusters): a declared row
+        shorter than what it writes, or a record built for another vehicle, is refused. A user's
+        function runs bounds-checked (:attr:`loop_function`).
+
+        Raises:
+            ArgumentError: Not a numba function, or malformed ``info_shapes``.
+            RecordSizeError: A record smaller than what the controller writes or reads.
+        """
+        if not hasattr(self.function, "py_func"):
+            raise ArgumentError(
+                f"CompiledController.function must be a numba-compiled function, got "
+                f"{type(self.function).__name__:.40}"
+            )
+        if not isinstance(self.info_shapes, Mapping):
+            raise ArgumentError("CompiledController.info_shapes must be a mapping name -> shape")
+        for key, shape in self.info_shapes.items():
+            if (
+                not isinstance(key, str)
+                or not isinstance(shape, tuple)
+                or not all(
+                    isinstance(n, numbers.Integral) and not isinstance(n, bool) and 0 <= n <= 2**20
+                    for n in shape
+                )
+            ):
+                raise ArgumentError(
+                    f"CompiledController.info_shapes[{key!r:.40}] must be a tuple of whole "
+                    f"numbers in [0, {2**20}], got {shape!r:.40}"
+                )
+        sizes = _sizes_of_builtin(self.function, nv - 6, n_thrusters)
+        if sizes is None:
+            return
+        width, fields = sizes
+        if self.info_width < width:
+            raise RecordSizeError(
+                f"CompiledController.info_shapes declare {self.info_width} floats per info row; "
+                f"{self.function.__name__} writes {width} for this vehicle"
+            )
+        for name, length in fields.items():
+            array = getattr(self.parameters, name, None)
+            if not isinstance(array, np.ndarray) or array.shape != (length,):
+                got = array.shape if isinstance(array, np.ndarray) else type(array).__name__
+                raise RecordSizeError(
+                    f"CompiledController.parameters.{name} must have shape ({length},) for this "
+                    f"vehicle ({nv - 6} joints, {n_thrusters} thrusters), got {got}"
+                )
 
     @property
     def info_width(self) -> int:
@@ -92,3 +231,26 @@ class CompiledController:
             out[key] = np.array(part) if copy else part
             offset += size
         return out
+
+
+def check_compiled_controller(controller, nq: int, nv: int, n_thrusters: int):
+    """``controller`` (a :class:`~aiauv_pin.controllers.compiled_controller.CompiledController`)
+    checked before the
+    compiled loop runs it: its declared ``info_shapes`` at least what a built-in controller writes
+    for this vehicle, and its records for this vehicle's sizes
+    (:meth:`~aiauv_pin.controllers.compiled_controller.CompiledController.check_records`). A user's
+    function is run
+    bounds-checked
+    (:attr:`~aiauv_pin.controllers.compiled_controller.CompiledController.loop_function`), so it cannot
+    write past what was allocated either.
+
+    Raises:
+        ArgumentError: Not a compiled controller.
+        RecordSizeError: A record smaller than what the controller writes or reads.
+    """
+    if not isinstance(controller, CompiledController):
+        raise ArgumentError(
+            f"controller must be a CompiledController, got {type(controller).__name__:.40}"
+        )
+    controller.check_records(nq, nv, n_thrusters)
+    return controller

@@ -9,7 +9,10 @@ no entities), against the URDF specification (wiki.ros.org/urdf/XML):
 * the root element is ``<robot name=...>`` with at least one ``<link>``;
 * every ``<link>`` has a unique name; its ``<inertial>`` (optional) has ``<mass value>`` finite and
   ``>= 0``, six finite ``<inertia>`` entries forming a symmetric positive semi-definite matrix, and
-  finite ``<origin>`` numbers; its visual and collision geometry has positive finite sizes;
+  finite ``<origin>`` numbers; its visual and collision geometry has sizes, origins and mesh scales
+  within the plausible ranges of :data:`aiauv_pin.description.plausible_ranges.PLAUSIBLE_RANGES` (a
+  visual radius or
+  origin of 1e308 would overflow where the viewer or a JSON writer uses it);
 * every ``<joint>`` has a unique name, a known ``type``, ``<parent link>`` and ``<child link>``
   naming existing, different links, a nonzero finite ``<axis>``, finite ``<origin>`` numbers and,
   for ``revolute`` and ``prismatic`` joints, a ``<limit>`` with finite ``lower <= upper`` and
@@ -31,6 +34,7 @@ import numpy as np
 from aiauv_hydro.spec import HydroError
 from aiauv_hydro.urdf.block_reader import parse_numbers
 from aiauv_hydro.urdf.xml_reading import UrdfLink, read_link
+from aiauv_pin.description.plausible_ranges import check_range
 from aiauv_pin.errors import VehicleLoadError
 
 #: Joint types of the URDF specification.
@@ -177,6 +181,14 @@ def _inertial(element: Element, what: str) -> UrdfInertial:
     return UrdfInertial(mass, xyz, rpy, inertia)
 
 
+def _plausible_origin(element: Element, what: str) -> None:
+    """An ``<origin>`` within the plausible distance and angle ranges."""
+    xyz, rpy = _origin(element, what)
+    check_range(float(np.max(np.abs(xyz))), "distance", f"{what} <origin> xyz")
+    for angle in rpy:
+        check_range(float(angle), "origin angle", f"{what} <origin> rpy")
+
+
 def _geometry(element: Element, what: str) -> None:
     geometry = element.find("geometry")
     if geometry is None:
@@ -200,12 +212,15 @@ def _geometry(element: Element, what: str) -> None:
         if not shape.get("filename"):
             raise UrdfStructureError(f"{what}: <mesh> without a filename")
         if "scale" in shape.attrib:
-            _numbers(shape.get("scale"), 3, f"{what} mesh scale")
+            for factor in _numbers(shape.get("scale"), 3, f"{what} mesh scale"):
+                check_range(abs(float(factor)), "mesh scale", f"{what} mesh scale")
         return
     else:
         raise UrdfStructureError(f"{what}: unknown geometry <{shape.tag}>")
     if np.any(sizes <= 0.0):
         raise UrdfStructureError(f"{what}: {shape.tag} sizes must be positive")
+    for size in sizes:
+        check_range(float(size), "geometry size", f"{what} {shape.tag} size")
 
 
 def _joint(element: Element, links: set[str]) -> UrdfJoint:
@@ -325,7 +340,7 @@ def validate_urdf(root: Element) -> UrdfStructure:
             inertials[name] = _inertial(found[0], what)
         for kind in ("visual", "collision"):
             for element in link.findall(kind):
-                _origin(element, f"{what} <{kind}>")
+                _plausible_origin(element, f"{what} <{kind}>")
                 _geometry(element, f"{what} <{kind}>")
         try:
             urdf_links[name] = read_link(link)

@@ -22,13 +22,15 @@ the current is uniform (the dynamics do not depend on where the vehicle is). Wit
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from aiauv_pin.errors import ArgumentError
-from aiauv_pin.model.array_checks import float_array
+from aiauv_pin._internal.array_checks import configuration, float_array
+from aiauv_pin.errors import ArgumentError, project_errors
 from aiauv_pin.model.derivatives import compiled_derivatives, uniform_current
 
 #: Names of the free flyer's tangent coordinates (base frame).
@@ -114,6 +116,42 @@ class LinearModel:
         return modes
 
 
+def checked_trim(vehicle, trim) -> Trim:
+    """``trim`` with its arrays checked for ``vehicle`` (a :class:`Trim`, as
+    :func:`straight_line_trim` makes, or one built by hand): ``q`` a configuration (nq,), ``v``
+    (nv,), ``thrusts`` (m,), ``joint_torques`` (nv - 6,), all finite, ``residual`` a number.
+
+    Raises:
+        ArgumentError: One line naming the field.
+    """
+    if not isinstance(trim, Trim):
+        raise ArgumentError(f"trim must be a Trim, got {type(trim).__name__:.40}")
+    nv, m = vehicle.nv, len(vehicle.thruster_names)
+    residual = trim.residual
+    if isinstance(residual, bool) or not isinstance(residual, numbers.Real):
+        raise ArgumentError(f"trim.residual must be a number, got {residual!r:.40}")
+    return Trim(
+        configuration(trim.q, vehicle.nq, "trim.q"),
+        float_array(trim.v, "trim.v", (nv,)),
+        float_array(trim.thrusts, "trim.thrusts", (m,)),
+        float_array(trim.joint_torques, "trim.joint_torques", (nv - 6,)),
+        float(residual),
+    )
+
+
+def _gains(joint_gains) -> tuple[float, float]:
+    """``(k_p, k_d)``: two finite numbers."""
+    try:
+        k_p, k_d = (float(k) for k in joint_gains)
+    except (TypeError, ValueError):
+        raise ArgumentError(
+            f"joint_gains must be two numbers (k_p, k_d), got {joint_gains!r:.60}"
+        ) from None
+    if not (math.isfinite(k_p) and math.isfinite(k_d)):
+        raise ArgumentError(f"joint_gains must be finite, got ({k_p!r}, {k_d!r})")
+    return k_p, k_d
+
+
 def state_names(vehicle) -> tuple[str, ...]:
     """Names of the tangent state ``(dq, dv)``: base pose and twist, joint angles and rates."""
     joints = vehicle.joint_names
@@ -132,6 +170,7 @@ def input_names(vehicle) -> tuple[str, ...]:
     )
 
 
+@project_errors("straight_line_trim")
 def straight_line_trim(vehicle, speed: float = 0.5, current=None, q=None) -> Trim:
     """Straight-line motion along the base's x-axis at ``speed``, and the inputs that hold it.
 
@@ -145,6 +184,8 @@ def straight_line_trim(vehicle, speed: float = 0.5, current=None, q=None) -> Tri
         current: ``None`` or a uniform current.
         q: Configuration (default: level, joints straight, at the origin).
     """
+    if isinstance(speed, bool) or not isinstance(speed, numbers.Real):
+        raise ArgumentError(f"speed must be a number of m/s, got {speed!r:.40}")
     speed = float(speed)
     if not np.isfinite(speed):
         raise ArgumentError(f"speed must be a finite number of m/s, got {speed!r}")
@@ -170,8 +211,10 @@ def _ad(twist: np.ndarray) -> np.ndarray:
     return np.block([[pin.skew(w), pin.skew(v)], [np.zeros((3, 3)), pin.skew(w)]])
 
 
+@project_errors("restoring_derivative")
 def restoring_derivative(vehicle, q: np.ndarray) -> np.ndarray:
     """``dg/dq`` (nv, nv), tangent space: Pinocchio's gravity derivatives, vehicle minus water."""
+    q = configuration(q, vehicle.nq)
     model = vehicle.model
     data = model.createData()
     if not vehicle.restoring:
@@ -184,6 +227,7 @@ def restoring_derivative(vehicle, q: np.ndarray) -> np.ndarray:
     return derivative
 
 
+@project_errors("linearize")
 def linearize(
     vehicle,
     trim: Trim | None = None,
@@ -206,7 +250,21 @@ def linearize(
         controller: ``controller(q, v) -> u`` (m + nv - 6,), a further feedback around the trim.
         step: Central-difference step for ``controller`` only.
     """
-    trim = straight_line_trim(vehicle, current=current) if trim is None else trim
+    trim = (
+        straight_line_trim(vehicle, current=current)
+        if trim is None
+        else checked_trim(vehicle, trim)
+    )
+    gains = None if joint_gains is None else _gains(joint_gains)
+    if controller is not None and not callable(controller):
+        raise ArgumentError(f"controller must be callable, got {type(controller).__name__:.40}")
+    if controller is not None and not (
+        isinstance(step, numbers.Real)
+        and not isinstance(step, bool)
+        and math.isfinite(step)
+        and step > 0.0
+    ):
+        raise ArgumentError(f"step must be a positive finite number, got {step!r:.40}")
     velocity = uniform_current(current, 0.0)
     nv, m = vehicle.nv, len(vehicle.thruster_names)
     tau = np.zeros(nv)
@@ -223,8 +281,8 @@ def linearize(
     b_matrix[nv:, :m] = da_dthrust
     b_matrix[nv:, m:] = result.da_dtau[:, 6:]
     loops = []
-    if joint_gains is not None:
-        k_p, k_d = (float(k) for k in joint_gains)
+    if gains is not None:
+        k_p, k_d = gains
         gain = np.zeros((m + nv - 6, 2 * nv))
         joints = np.arange(nv - 6)
         gain[m + joints, 6 + joints] = -k_p

@@ -20,8 +20,14 @@ from typing import NamedTuple
 import numpy as np
 
 from aiauv_hydro.currents import as_current
-from aiauv_pin.errors import ArgumentError
-from aiauv_pin.model.array_checks import float_array, optional_current
+from aiauv_pin._internal.array_checks import (
+    finite_time,
+    float_array,
+    method_name,
+    optional_current,
+    positive_seconds,
+)
+from aiauv_pin.errors import project_errors
 from aiauv_pin.model.derivatives import compiled_derivatives, uniform_current
 
 #: Integration methods with transition Jacobians.
@@ -43,6 +49,7 @@ class TransitionJacobians(NamedTuple):
     B: np.ndarray
 
 
+@project_errors("transition_jacobians")
 def transition_jacobians(
     vehicle,
     q,
@@ -75,8 +82,7 @@ def transition_jacobians(
     from aiauv_pin.kernels import articulated_body as kernels
     from aiauv_pin.kernels.step_jacobians import transition_into
 
-    if method not in METHODS:
-        raise ArgumentError(f"unknown method {method!r:.40} (expected one of {', '.join(METHODS)})")
+    method = method_name(method, METHODS)
     q, v = vehicle._q(q), vehicle._v(v)
     nv, m = vehicle.nv, len(vehicle.hydro.thrusters)
     thrusts = np.zeros(m) if thrusts is None else float_array(thrusts, "thrusts", (m,))
@@ -88,10 +94,9 @@ def transition_jacobians(
     tau0 = np.zeros(nv) if tau is None else vehicle._v(tau, "tau")
     tau0 = tau0.copy()
     tau0[6:] += joint_torques
-    dt = float(dt)
-    if not np.isfinite(dt) or dt <= 0.0:
-        raise ArgumentError(f"dt must be a positive number of seconds, got {dt!r}")
-    uniform_current(current, float(t))  # checks it is uniform in space
+    dt = positive_seconds(dt, "dt")
+    t = finite_time(t)
+    uniform_current(current, t)  # checks it is uniform in space
     derivatives = compiled_derivatives(vehicle)
     fast = derivatives._fast
     water = as_current(optional_current(current))
@@ -101,7 +106,7 @@ def transition_jacobians(
     transition_into(
         fast.model,
         env,
-        float(t),
+        t,
         q,
         v,
         tau0,

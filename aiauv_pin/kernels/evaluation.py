@@ -2,23 +2,53 @@
 :mod:`aiauv_pin.kernels.articulated_body`.
 
 :class:`FastModel` holds the vehicle's packed records (:meth:`aiauv_pin.Vehicle.packed_model`),
-one reusable workspace and the default environment (still water, no disturbance), and checks the
-shapes of what it passes to compiled code.
+a reusable workspace per thread and the default environment (still water, no disturbance).
+
+Every public method checks its arguments before any compiled code runs (the kernels do not check
+indices: a ``v`` one entry too long, a short record or a non-contiguous array would be read or
+written past its end), with the checks of :mod:`aiauv_pin._internal.array_checks`: shapes, dtype, contiguity
+of what is advanced in place, finiteness, a unit base quaternion, a checked current
+(:meth:`aiauv_hydro.currents.Current.check`) and servo record. ``acceleration`` and ``step`` in still
+water without a servo check the state inside the compiled call itself
+(:func:`aiauv_pin.kernels.handle.state_verdict`; ``benchmarks/entry_checks.py`` measures what that
+costs). Foreign exceptions leave as project errors (:func:`aiauv_pin.errors.project_errors`).
+
+Threads: the workspace (and the handle that holds it) is per thread (``threading.local``), so one
+:class:`FastModel` may be used from several threads at once; the model records are read only.
 """
 
 from __future__ import annotations
+
+import math
+import threading
 
 import numba  # noqa: F401  (the compiled backend needs numba: ImportError here means fall back)
 import numpy as np
 
 from aiauv_hydro.currents import Current, as_current
-from aiauv_pin.errors import ArgumentError
+from aiauv_pin._internal.array_checks import (
+    EXACT_QUATERNION_DEVIATION,
+    QUATERNION_TOLERANCE,
+    configuration,
+    configurations,
+    finite_time,
+    float_array,
+    frame_index,
+    in_place_array,
+    method_name,
+    optional_current,
+    positive_seconds,
+    step_count,
+    unit_quaternion,
+)
+from aiauv_pin.errors import ArgumentError, project_errors
 from aiauv_pin.kernels import articulated_body as kernels
 from aiauv_pin.kernels.disturbances import Disturbance
 from aiauv_pin.kernels.handle import (
     STATE_OK,
     acceleration_of,
     checked_acceleration_of,
+    checked_step_of,
     new_handle,
     step_of,
 )
@@ -45,8 +75,17 @@ def no_servo() -> Servo:
 
 def environment(current=None, disturbance: Disturbance | None = None) -> Environment:
     """The :class:`Environment` record of a current (see :func:`aiauv_hydro.currents.as_current`) and a
-    compiled disturbance (``None``: none)."""
-    water: Current = as_current(current)
+    compiled disturbance (``None``: none), both checked.
+
+    Raises:
+        ArgumentError: A bad current (:func:`aiauv_pin._internal.array_checks.optional_current`) or a
+            disturbance that is not a compiled :class:`~aiauv_pin.kernels.disturbances.Disturbance`.
+    """
+    water: Current = as_current(optional_current(current))
+    if disturbance is not None and not isinstance(disturbance, Disturbance):
+        raise ArgumentError(
+            f"disturbance must be a compiled Disturbance, got {type(disturbance).__name__:.40}"
+        )
     push = Disturbance.none() if disturbance is None else disturbance
     return Environment(
         water.user_function,
@@ -59,6 +98,10 @@ def environment(current=None, disturbance: Disturbance | None = None) -> Environ
 
 
 _FLOAT64 = np.dtype(np.float64)
+
+
+#: Largest step count of :meth:`FastModel.run` (a step count beyond it is not exact in a float).
+MAX_RUN_STEPS = 2**53
 
 
 def _plain(array, size: int) -> bool:
@@ -88,8 +131,20 @@ def _entry_point(dispatcher, args):
         return dispatcher
 
 
+class _PerThread(threading.local):
+    """What one thread's evaluations overwrite: its workspace, the handle holding it, and a
+    scratch configuration (``threading.local``: a new thread starts with ``None``)."""
+
+    workspace = None
+    handle = None
+    q_unit = None
+
+
 class FastModel:
     """A vehicle's equations of motion evaluated by the compiled kernels.
+
+    Every public method checks its arguments (see the module docstring) and may be called from
+    several threads at once (a workspace per thread).
 
     Args:
         vehicle: The vehicle (its ``added_mass``, ``damping`` and ``restoring`` switches are
@@ -103,33 +158,51 @@ class FastModel:
         self.model = vehicle.packed_model()
         self.nq, self.nv = vehicle.nq, vehicle.nv
         self.n_bodies = self.model.bodies.parent.shape[0]
-        self.workspace = kernels.new_workspace(self.model, self.nq, self.nv)
+        self.n_thrusters = self.model.thrusters.body.shape[0]
         self.still_water = environment()
         self.no_servo = no_servo()
         self._frames: dict[int, tuple[int, np.ndarray, np.ndarray]] = {}
         self._entries: dict = {}
-        self._handle = None
+        self._local = _PerThread()
+        self._checked_acceleration_entry = self._checked_step_entry = None
+        self._q_shape, self._v_shape = (self.nq,), (self.nv,)
         self._pin_model = vehicle.model
+        self._local.workspace = kernels.new_workspace(self.model, self.nq, self.nv)
+
+    @property
+    def workspace(self):
+        """This thread's :class:`~aiauv_pin.kernels.records.Workspace` (made on first use)."""
+        local = self._local
+        if local.workspace is None:
+            local.workspace = kernels.new_workspace(self.model, self.nq, self.nv)
+        return local.workspace
 
     def environment(self, current=None, disturbance=None) -> Environment:
-        """The environment record (the cached still-water one when both are ``None``)."""
+        """The environment record (the cached still-water one when both are ``None``), checked."""
         if current is None and disturbance is None:
             return self.still_water
         return environment(current, disturbance)
 
-    def _state(self, q, v) -> tuple[np.ndarray, np.ndarray]:
-        q, v = np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(v, dtype=float)
-        if q.shape != (self.nq,) or v.shape != (self.nv,):
-            raise ArgumentError(
-                f"q and v must have shapes ({self.nq},) and ({self.nv},), got {q.shape} and {v.shape}"
-            )
-        return q, v
+    def servo_record(self, servo) -> Servo:
+        """``servo`` (a :class:`~aiauv_pin.kernels.records.Servo` record, ``None`` for none) checked:
+        an enabled servo's gains and references are finite float64 arrays of one entry per joint.
 
-    def _generalized(self, tau) -> np.ndarray:
-        tau = np.ascontiguousarray(tau, dtype=float)
-        if tau.shape != (self.nv,):
-            raise ArgumentError(f"tau must have shape ({self.nv},), got {tau.shape}")
-        return tau
+        Raises:
+            ArgumentError: One line naming the field.
+        """
+        if servo is None or servo is self.no_servo:
+            return self.no_servo
+        if not isinstance(servo, Servo):
+            raise ArgumentError(f"servo must be a Servo record, got {type(servo).__name__:.40}")
+        if type(servo.enabled) is not bool or type(servo.compensate_restoring) is not bool:
+            raise ArgumentError("servo.enabled and servo.compensate_restoring must be bools")
+        joints = self.nv - 6
+        for name in ("stiffness", "damping", "references"):
+            value = getattr(servo, name)
+            if not servo.enabled and isinstance(value, np.ndarray) and value.size == 0:
+                continue
+            in_place_array(value, f"servo.{name}", (joints,))
+        return servo
 
     def _fixed_types(self, env, servo) -> bool:
         """Whether ``env`` and ``servo`` are of the kinds whose numba types never change for this
@@ -150,27 +223,62 @@ class FastModel:
         return entry(*args)
 
     def __getstate__(self) -> dict:
-        """Picklable state: the handle and the entry points are process-local, made again on use."""
+        """Picklable state: the per-thread workspaces and the entry points are process-local,
+        made again on use."""
         state = self.__dict__.copy()
-        state["_handle"], state["_entries"] = None, {}
+        state["_entries"] = {}
+        state["_checked_acceleration_entry"] = state["_checked_step_entry"] = None
+        del state["_local"]
         return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._local = _PerThread()
 
     @property
     def handle(self):
-        """The :class:`aiauv_pin.kernels.handle.Handle` of this model's records (made on first use)."""
-        if self._handle is None:
-            self._handle = new_handle(self.model, self.workspace, self.still_water, self.no_servo)
-        return self._handle
+        """This thread's :class:`aiauv_pin.kernels.handle.Handle` (its workspace; made on first use)."""
+        local = self._local
+        handle = local.handle
+        if handle is None:
+            handle = local.handle = new_handle(
+                self.model, self.workspace, self.still_water, self.no_servo
+            )
+        return handle
 
+    def _scratch_q(self) -> np.ndarray:
+        local = self._local
+        if local.q_unit is None:
+            local.q_unit = np.empty(self.nq)
+        return local.q_unit
+
+    # ------------------------------------------------------------------ public, checked
     def acceleration(
         self, q, v, tau, current=None, *, t: float = 0.0, servo=None, disturbance=None
     ):
-        """``dv`` (nv,), as :meth:`aiauv_pin.Vehicle.acceleration` (plus an optional servo record)."""
-        out = np.empty(self.nv)
-        q, v = self._state(q, v)
-        tau = self._generalized(tau)
+        """``dv`` (nv,), as :meth:`aiauv_pin.Vehicle.acceleration` (plus an optional servo record).
+
+        Raises:
+            ArgumentError: A bad argument (see the module docstring), before anything runs.
+        """
+        if current is None and servo is None and disturbance is None:
+            out = self.checked_acceleration(
+                q, v, tau, t, QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION
+            )
+            if out is not None:
+                return out
+        q = configuration(q, self.nq)
+        v = float_array(v, "v", (self.nv,))
+        tau = float_array(tau, "tau", (self.nv,))
+        t = finite_time(t)
         env = self.environment(current, disturbance)
-        servo = self.no_servo if servo is None else servo
+        return self.acceleration_unchecked(q, v, tau, env, self.servo_record(servo), t)
+
+    @project_errors("FastModel.acceleration")
+    def acceleration_unchecked(self, q, v, tau, env, servo, t: float) -> np.ndarray:
+        """:meth:`acceleration` with arguments already checked (an environment record and a servo
+        record): only for callers that ran the checks themselves (:class:`aiauv_pin.Vehicle`)."""
+        out = np.empty(self.nv)
         if self._fixed_types(env, servo):
             self._fast_call(acceleration_of, (self.handle, env, servo, float(t), q, v, tau, out))
         else:
@@ -178,6 +286,24 @@ class FastModel:
                 self.model, env, servo, float(t), q, v, tau, self.workspace, out, 0.0
             )
         return out
+
+    def _state_arrays(self, q, v, tau) -> bool:
+        """Whether ``q, v, tau`` have the dtype (float64, native order) and the shapes that a
+        state checked in compiled code needs (:func:`aiauv_pin.kernels.handle.state_verdict` checks
+        the rest). Not an ndarray: no ``.dtype`` (AttributeError), or refused by numba's unboxing
+        (TypeError, from its ``PyArray_Check``); the shape check keeps a 2-D array out of a 1-D
+        record, which the unboxing would overflow."""
+        try:
+            return (
+                q.dtype is _FLOAT64
+                and v.dtype is _FLOAT64
+                and tau.dtype is _FLOAT64
+                and q.shape == self._q_shape
+                and v.shape == self._v_shape
+                and tau.shape == self._v_shape
+            )
+        except AttributeError:
+            return False
 
     def checked_acceleration(
         self, q, v, tau, t, tolerance: float, exact_below: float
@@ -190,32 +316,57 @@ class FastModel:
         (:func:`aiauv_pin.kernels.handle.state_verdict`) refused them, and the caller's own checks
         then name the problem.
         """
-        nq, nv = self.nq, self.nv
-        if not (_plain(q, nq) and _plain(v, nv) and _plain(tau, nv) and type(t) in (float, int)):
+        # not through _plain / _fast_call / handle: each Python call costs about 0.1 us, and
+        # this is the hottest entry point (benchmarks/entry_checks.py); contiguity is checked
+        # from the strides in the compiled call (state_verdict)
+        if not self._state_arrays(q, v, tau):
             return None
-        out = np.empty(nv)
-        verdict = self._fast_call(
-            checked_acceleration_of,
-            (self.handle, float(t), q, v, tau, tolerance, exact_below, out),
-        )
+        if type(t) is not float:
+            if type(t) is not int:
+                return None
+            t = float(t)
+        handle = self._local.handle
+        entry = self._checked_acceleration_entry
+        out = np.empty(self.nv)
+        if handle is None or entry is None:  # the first call of this thread or model
+            if not (_plain(q, self.nq) and _plain(v, self.nv) and _plain(tau, self.nv)):
+                return None  # (the dispatcher would compile for another layout)
+            verdict = self._fast_call(
+                checked_acceleration_of, (self.handle, t, q, v, tau, tolerance, exact_below, out)
+            )
+            self._checked_acceleration_entry = self._entries[checked_acceleration_of]
+            return out if verdict == STATE_OK else None
+        try:
+            verdict = entry(handle, t, q, v, tau, tolerance, exact_below, out)
+        except TypeError:  # an object that only looks like an array
+            return None
         return out if verdict == STATE_OK else None
 
     def restoring_forces(self, q) -> np.ndarray:
         """``g(q)`` (nv,) on the left-hand side, as :meth:`aiauv_pin.Vehicle.restoring_forces`."""
+        return self.restoring_forces_unchecked(configuration(q, self.nq))
+
+    @project_errors("FastModel.restoring_forces")
+    def restoring_forces_unchecked(self, q: np.ndarray) -> np.ndarray:
+        """:meth:`restoring_forces` of a checked configuration."""
         out = np.empty(self.nv)
-        kernels.restoring_forces(
-            self.model, np.ascontiguousarray(q, dtype=float), self.workspace, out
-        )
+        kernels.restoring_forces(self.model, q, self.workspace, out)
         return out
 
     def thrust_matrix(self, q) -> np.ndarray:
         """``B(q)`` (nv x m), as :meth:`aiauv_pin.Vehicle.thrust_matrix`."""
-        out = np.empty((self.nv, self.model.thrusters.body.shape[0]))
-        kernels.thrust_matrix(self.model, np.ascontiguousarray(q, dtype=float), self.workspace, out)
+        return self.thrust_matrix_unchecked(configuration(q, self.nq))
+
+    @project_errors("FastModel.thrust_matrix")
+    def thrust_matrix_unchecked(self, q: np.ndarray) -> np.ndarray:
+        """:meth:`thrust_matrix` of a checked configuration."""
+        out = np.empty((self.nv, self.n_thrusters))
+        kernels.thrust_matrix(self.model, q, self.workspace, out)
         return out
 
     def frame(self, frame_id: int) -> tuple[int, np.ndarray, np.ndarray]:
         """``(body, rotation, translation)`` of a Pinocchio frame, for the kernels."""
+        frame_id = frame_index(frame_id, len(self._pin_model.frames))
         if frame_id not in self._frames:
             frame = self._pin_model.frames[frame_id]
             self._frames[frame_id] = (
@@ -225,22 +376,30 @@ class FastModel:
             )
         return self._frames[frame_id]
 
-    def frame_positions(self, configurations, frame_id: int) -> np.ndarray:
+    @project_errors("FastModel.frame_positions")
+    def frame_positions(self, configurations_, frame_id: int) -> np.ndarray:
         """World positions [m] (n, 3) of a Pinocchio frame in each of ``configurations`` (n, nq)."""
         body, _, translation = self.frame(frame_id)
-        configurations = np.ascontiguousarray(configurations, dtype=float)
-        if configurations.ndim != 2 or configurations.shape[1] != self.nq:
-            raise ArgumentError(
-                f"configurations must have shape (n, {self.nq}), got {configurations.shape}"
-            )
-        out = np.empty((configurations.shape[0], 3))
-        kernels.frame_positions(self.model, configurations, body, translation, self.workspace, out)
+        states = configurations(configurations_, self.nq)
+        out = np.empty((states.shape[0], 3))
+        if body < 0:  # a frame on the world: it does not move
+            out[:] = translation
+            return out
+        kernels.frame_positions(self.model, states, body, translation, self.workspace, out)
         return out
 
     def frame_motion(self, q, v, frame_id: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """World rotation, world position and twist in its own axes of a Pinocchio frame."""
+        q = configuration(q, self.nq)
+        v = float_array(v, "v", (self.nv,))
+        return self.frame_motion_unchecked(q, v, frame_index(frame_id, len(self._pin_model.frames)))
+
+    @project_errors("FastModel.frame_motion")
+    def frame_motion_unchecked(self, q, v, frame_id: int):
+        """:meth:`frame_motion` of checked arguments."""
         body, rotation, translation = self.frame(frame_id)
-        q, v = self._state(q, v)
+        if body < 0:
+            return rotation.copy(), translation.copy(), np.zeros(6)
         return kernels.frame_kinematics(
             self.model, q, v, body, rotation, translation, self.workspace
         )
@@ -259,14 +418,63 @@ class FastModel:
         disturbance=None,
     ):
         """One integrator step from time ``t``; returns new ``(q, v)`` (as
-        :mod:`aiauv_pin.dynamics.integrators`)."""
+        :mod:`aiauv_pin.dynamics.integrators`).
+
+        Raises:
+            ArgumentError: A bad argument (see the module docstring), before anything runs.
+        """
+        nq, nv = self.nq, self.nv
+        code = METHOD_CODES.get(method) if type(method) is str else None
+        if (
+            code is not None
+            and current is None
+            and servo is None
+            and disturbance is None
+            and type(dt) is float
+            and 0.0 < dt < math.inf
+            and type(t) in (float, int)
+        ):
+            out = self._checked_step(q, v, tau, dt, code, float(t))
+            if out is not None:
+                return out
+        method = method_name(method, METHOD_CODES)
+        q = configuration(q, nq)
+        v = float_array(v, "v", (nv,))
+        tau = float_array(tau, "tau", (nv,))
+        dt = positive_seconds(dt, "dt")
+        t = finite_time(t)
+        env = self.environment(current, disturbance)
+        return self._step_unchecked(
+            q, v, tau, dt, METHOD_CODES[method], env, self.servo_record(servo), t
+        )
+
+    def _checked_step(self, q, v, tau, dt: float, code: int, t: float):
+        """One still-water step with the state checked in the compiled call (as
+        :meth:`checked_acceleration`: dtype and shape here, contiguity, finiteness and the
+        quaternion in :func:`aiauv_pin.kernels.handle.checked_step_of`), or ``None``."""
+        local = self._local
+        if not self._state_arrays(q, v, tau):
+            return None
+        handle, entry, q_unit = local.handle, self._checked_step_entry, local.q_unit
+        q_out, v_out = np.empty(self.nq), np.empty(self.nv)
+        args = (handle, t, q, v, tau, dt, code, QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION)
+        if handle is None or entry is None or q_unit is None:  # first call of this thread
+            if not (_plain(q, self.nq) and _plain(v, self.nv) and _plain(tau, self.nv)):
+                return None  # (the dispatcher would compile for another layout)
+            args = (self.handle, *args[1:], self._scratch_q(), q_out, v_out)
+            verdict = self._fast_call(checked_step_of, args)
+            self._checked_step_entry = self._entries[checked_step_of]
+        else:
+            try:
+                verdict = entry(*args, q_unit, q_out, v_out)
+            except TypeError:  # an object that only looks like an array
+                return None
+        return (q_out, v_out) if verdict == STATE_OK else None
+
+    @project_errors("FastModel.step")
+    def _step_unchecked(self, q, v, tau, dt, code, env, servo, t):
         q_out = np.empty(self.nq)
         v_out = np.empty(self.nv)
-        q, v = self._state(q, v)
-        tau = self._generalized(tau)
-        env = self.environment(current, disturbance)
-        servo = self.no_servo if servo is None else servo
-        code = METHOD_CODES[method]
         if self._fixed_types(env, servo):
             self._fast_call(
                 step_of,
@@ -303,15 +511,60 @@ class FastModel:
         t0=0.0,
         disturbance=None,
     ):
-        """Advance contiguous float arrays ``q, v`` in place; returns the number of finite steps."""
+        """Advance ``q, v`` in place (writeable C-contiguous float64 arrays of shapes ``(nq,)`` and
+        ``(nv,)``, a unit base quaternion); returns the number of finite steps.
+
+        Raises:
+            ArgumentError: A bad argument (see the module docstring), before anything runs.
+        """
+        q = in_place_array(q, "q", (self.nq,))
+        unit_quaternion(q)
+        v = in_place_array(v, "v", (self.nv,))
+        tau = float_array(tau, "tau", (self.nv,))
+        method = method_name(method, METHOD_CODES)
+        dt = positive_seconds(dt, "dt")
+        n_steps = step_count(n_steps, largest=MAX_RUN_STEPS)
+        t0 = finite_time(t0)
+        return self.run_unchecked(
+            q,
+            v,
+            tau,
+            dt,
+            n_steps,
+            method=method,
+            current=current,
+            servo=self.servo_record(servo),
+            t0=t0,
+            disturbance=disturbance,
+        )
+
+    @project_errors("FastModel.run")
+    def run_unchecked(
+        self,
+        q,
+        v,
+        tau,
+        dt: float,
+        n_steps: int,
+        *,
+        method="rk4",
+        current=None,
+        servo=None,
+        t0=0.0,
+        disturbance=None,
+    ):
+        """:meth:`run` for a caller that owns and checked ``q, v, tau`` (C-contiguous float64 of
+        the model's sizes; ``tau`` may be non-finite: the run then stops at once), ``method``,
+        ``dt`` and ``n_steps`` (:func:`aiauv_pin.simulate`); the current, disturbance and servo
+        are checked here."""
         return kernels.run_steps(
             self.model,
             self.environment(current, disturbance),
-            self.no_servo if servo is None else servo,
+            self.servo_record(servo),
             float(t0),
             q,
             v,
-            np.ascontiguousarray(tau, dtype=float),
+            tau,
             float(dt),
             int(n_steps),
             METHOD_CODES[method],

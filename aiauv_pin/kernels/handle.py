@@ -51,15 +51,20 @@ def new_handle(model, workspace, still_water, no_servo):
 
 #: :func:`checked_acceleration_of`'s verdicts: the state is usable, or which argument is not.
 STATE_OK, STATE_Q_NOT_FINITE, STATE_V_NOT_FINITE, STATE_TAU_NOT_FINITE = 0, 1, 2, 3
-STATE_QUATERNION_NOT_UNIT, STATE_T_NOT_FINITE = 4, 5
+STATE_QUATERNION_NOT_UNIT, STATE_T_NOT_FINITE, STATE_NOT_CONTIGUOUS = 4, 5, 6
 
 
 @compiled
 def state_verdict(t, q, v, tau, tolerance, exact_below, q_unit):
-    """Check a state as :mod:`aiauv_pin.model.array_checks` does, in compiled code: all finite, and the base
-    quaternion ``q[3:7]`` of unit norm within ``tolerance``.
+    """Check a state as :mod:`aiauv_pin._internal.array_checks` does, in compiled code: contiguous,
+    all finite,
+    and the base quaternion ``q[3:7]`` of unit norm within ``tolerance``.
 
-    Not ``fastmath``: the norm is summed in the order :func:`aiauv_pin.model.array_checks.configuration`
+    Contiguity is checked here, from the strides numba's unboxing copied from the arrays, before
+    any element is read (cheaper than ``flags`` in Python); the caller checks dtype and shape,
+    which the unboxing needs right (a 2-D array would overflow a 1-D record).
+
+    Not ``fastmath``: the norm is summed in the order :func:`aiauv_pin._internal.array_checks.configuration`
     uses, so that a normalised quaternion is bit-identical to the one it makes.
 
     Args:
@@ -72,6 +77,8 @@ def state_verdict(t, q, v, tau, tolerance, exact_below, q_unit):
     Returns:
         ``(verdict, normalised)``: a ``STATE_*`` code, and whether ``q_unit`` holds the state.
     """
+    if q.strides[0] != 8 or v.strides[0] != 8 or tau.strides[0] != 8:
+        return STATE_NOT_CONTIGUOUS, False
     if not math.isfinite(t):
         return STATE_T_NOT_FINITE, False
     for i in range(q.shape[0]):
@@ -111,6 +118,34 @@ def checked_acceleration_of(handle, t, q, v, tau, tolerance, exact_below, out):
     state = W.q_stage if normalised else q
     kernels.acceleration_into(
         handle.model, handle.still_water, handle.no_servo, t, state, v, tau, W, out, 0.0
+    )
+    return STATE_OK
+
+
+@compiled(fastmath=True)
+def checked_step_of(handle, t, q, v, tau, dt, method, tolerance, exact_below, q_unit, q_out, v_out):
+    """:func:`aiauv_pin.kernels.articulated_body.step_into` in still water without servo, after
+    :func:`state_verdict` (``q_unit`` (nq,): scratch for the normalised ``q``); returns its
+    verdict (``q_out, v_out`` are written only when it is ``STATE_OK``). ``dt`` and ``method``
+    are checked by the caller."""
+    W = handle.workspace
+    verdict, normalised = state_verdict(t, q, v, tau, tolerance, exact_below, q_unit)
+    if verdict != STATE_OK:
+        return verdict
+    state = q_unit if normalised else q
+    kernels.step_into(
+        handle.model,
+        handle.still_water,
+        handle.no_servo,
+        t,
+        state,
+        v,
+        tau,
+        dt,
+        method,
+        W,
+        q_out,
+        v_out,
     )
     return STATE_OK
 

@@ -26,6 +26,7 @@ The current must be uniform in space (constant, or tidal at time ``t``).
 
 from __future__ import annotations
 
+import threading
 from typing import NamedTuple
 
 import numpy as np
@@ -33,8 +34,13 @@ import pinocchio as pin
 
 from aiauv_hydro.currents import Current, as_current
 from aiauv_hydro.laws.fluid_terms import add_body_fluid_bias, body_fluid_bias_jacobians
-from aiauv_pin.errors import ArgumentError
-from aiauv_pin.model.array_checks import finite_time, optional_current
+from aiauv_pin._internal.array_checks import (
+    configuration,
+    finite_time,
+    float_array,
+    optional_current,
+)
+from aiauv_pin.errors import ArgumentError, project_errors
 
 _LOCAL = pin.ReferenceFrame.LOCAL
 
@@ -72,27 +78,55 @@ def uniform_current(current, t: float) -> np.ndarray:
 
 
 class CompiledDerivatives:
-    """The compiled derivatives of one vehicle (a workspace reused between calls)."""
+    """The compiled derivatives of one vehicle (a workspace per thread, reused between calls).
+
+    Calls check every argument before the compiled code runs (:mod:`aiauv_pin._internal.array_checks`)."""
 
     def __init__(self, fast_model) -> None:
         from aiauv_pin.kernels import tangent_rnea as kernels_d
 
         self._fast = fast_model
         self._kernels = kernels_d
-        self.workspace = kernels_d.new_derivative_workspace(fast_model.model, fast_model.nv)
+        self._local = threading.local()
+        self._local.workspace = kernels_d.new_derivative_workspace(fast_model.model, fast_model.nv)
 
+    @property
+    def workspace(self):
+        """The calling thread's derivative workspace (made on first use)."""
+        workspace = getattr(self._local, "workspace", None)
+        if workspace is None:
+            workspace = self._local.workspace = self._kernels.new_derivative_workspace(
+                self._fast.model, self._fast.nv
+            )
+        return workspace
+
+    @project_errors("compiled derivatives")
     def __call__(
         self, q, v, tau, velocity: np.ndarray, t: float, thrusts: np.ndarray | None = None
     ) -> tuple[AccelerationDerivatives, np.ndarray]:
         """Derivatives at ``(q, v)`` with the generalised force ``tau + B(q) thrusts``.
 
+        Args:
+            q: Configuration (nq,); v, tau: (nv,) [m/s, rad/s], [N, N m].
+            velocity: Uniform current (3,), world axes [m/s].
+            t: Time [s].
+            thrusts: Thruster forces (m,) [N] (default 0).
+
         Returns:
             The :class:`AccelerationDerivatives` and ``d dv / d thrusts = M^-1 B(q)`` (nv, m).
+
+        Raises:
+            ArgumentError: A bad argument (shape, dtype, not finite), before anything runs.
         """
         fast = self._fast
         nv = fast.nv
-        m = fast.model.thrusters.body.shape[0]
-        thrusts = np.zeros(m) if thrusts is None else np.ascontiguousarray(thrusts, dtype=float)
+        m = fast.n_thrusters
+        q = configuration(q, fast.nq)
+        v = float_array(v, "v", (nv,))
+        tau = float_array(tau, "tau", (nv,))
+        velocity = float_array(velocity, "current", (3,))
+        t = finite_time(t)
+        thrusts = np.zeros(m) if thrusts is None else float_array(thrusts, "thrusts", (m,))
         out = AccelerationDerivatives(
             np.empty(nv),
             np.empty((nv, nv)),
@@ -105,10 +139,10 @@ class CompiledDerivatives:
         self._kernels.acceleration_derivatives_into(
             fast.model,
             env,
-            float(t),
-            np.ascontiguousarray(q, dtype=float),
-            np.ascontiguousarray(v, dtype=float),
-            np.ascontiguousarray(tau, dtype=float),
+            t,
+            q,
+            v,
+            tau,
             thrusts,
             fast.workspace,
             self.workspace,
@@ -118,6 +152,7 @@ class CompiledDerivatives:
         return out, da_dthrust
 
 
+@project_errors("acceleration_derivatives")
 def pinocchio_derivatives(
     vehicle, q: np.ndarray, v: np.ndarray, tau: np.ndarray, velocity: np.ndarray
 ) -> AccelerationDerivatives:
@@ -199,6 +234,8 @@ def acceleration_derivatives(
     velocity = uniform_current(current, t)
     if backend is None:
         backend = vehicle.active_backend
+    if not isinstance(backend, str):
+        raise ArgumentError(f"backend must be numba or pinocchio, got {backend!r:.40}")
     if backend == "pinocchio":
         return pinocchio_derivatives(vehicle, q, v, tau, velocity)
     if backend != "numba":

@@ -13,20 +13,29 @@ Refused (:class:`aiauv_pin.errors.PhysicalParameterError`, one line naming the p
 * added mass, linear damping ``D_L`` or quadratic damping ``D_Q`` whose symmetric part is not
   positive semi-definite (relative tolerance :data:`PSD_TOLERANCE`): such damping feeds energy into
   the vehicle (the UUV Simulator reader refuses the same, :mod:`aiauv_hydro.urdf.uuv_simulator`);
-* implausible magnitudes, far outside any underwater vehicle (thresholds below, each orders of
-  magnitude beyond real vehicles): gravity above :data:`MAX_GRAVITY`, fluid density outside
-  ``[MIN_FLUID_DENSITY, MAX_FLUID_DENSITY]``, a link mass above :data:`MAX_LINK_MASS`, a principal
-  moment of inertia above :data:`MAX_INERTIA`, a volume above :data:`MAX_VOLUME`, a distance (joint
-  origin, centre of gravity or buoyancy, thruster position) above :data:`MAX_DISTANCE`, an added-mass
-  or damping entry above :data:`MAX_COEFFICIENT`, a thrust limit above :data:`MAX_THRUST`;
+* implausible magnitudes, far outside any underwater vehicle (thresholds in
+  :mod:`aiauv_pin.description.plausible_ranges`, each orders of magnitude beyond real vehicles): gravity above
+  :data:`MAX_GRAVITY`, fluid density outside ``[MIN_FLUID_DENSITY, MAX_FLUID_DENSITY]``, a link
+  mass above :data:`MAX_LINK_MASS`, a principal moment of inertia above :data:`MAX_INERTIA`, a
+  volume above :data:`MAX_VOLUME`, a distance (joint origin, centre of gravity or buoyancy,
+  thruster position) above :data:`MAX_DISTANCE`, an added-mass or damping entry above
+  :data:`MAX_COEFFICIENT`, a thrust limit above :data:`MAX_THRUST`;
 * a thruster farther from its link's origin than ``THRUSTER_REACH * size + THRUSTER_MARGIN``, with
   ``size`` the link's extent (its geometry, centre of gravity and buoyancy, and the origins of the
   joints it carries);
 * a mass matrix ``M(q)`` that is not positive definite at the neutral configuration (some body has
-  neither mass nor added mass), or not finite.
+  neither mass nor added mass), or not finite;
+* a crossflow (slender-cylinder) drag outside its range: cylinder length or radius outside
+  :data:`aiauv_hydro.urdf.block_reader.LENGTH_RANGE`, a drag coefficient above
+  :data:`aiauv_hydro.urdf.block_reader.MAX_DIMENSIONLESS`, or a strip coefficient times length above
+  :data:`MAX_COEFFICIENT`.
 
-:func:`explain_divergence` names a suspect parameter when a run diverges (a damping time constant or
-a thrust that accelerates the vehicle implausibly).
+The plausibility ranges (the magnitudes above, geometry, coefficients) are one table,
+:data:`aiauv_pin.description.plausible_ranges.PLAUSIBLE_RANGES`, with its reasoning.
+
+:func:`explain_divergence` names a suspect parameter when a run diverges: a damping time constant
+shorter than the step, a thrust that accelerates the vehicle implausibly, or else the parameter
+nearest the top of its range relative to that range (:func:`divergence_suspect`).
 """
 
 from __future__ import annotations
@@ -36,26 +45,23 @@ import math
 import numpy as np
 
 from aiauv_hydro.spec import HydroSpec
+from aiauv_hydro.urdf.block_reader import MAX_DIMENSIONLESS
+from aiauv_pin.description.plausible_ranges import (  # noqa: F401  (re-exported: the gate's thresholds)
+    MAX_COEFFICIENT,
+    MAX_DISTANCE,
+    MAX_FLUID_DENSITY,
+    MAX_GRAVITY,
+    MAX_INERTIA,
+    MAX_LINK_MASS,
+    MAX_THRUST,
+    MAX_VOLUME,
+    MIN_FLUID_DENSITY,
+    PLAUSIBLE_RANGES,
+    check_range,
+)
 from aiauv_pin.description.urdf_validation import UrdfStructure
 from aiauv_pin.errors import PhysicalParameterError
 
-#: Largest gravitational acceleration [m/s^2] (the Sun's surface has 274; Earth 9.81).
-MAX_GRAVITY = 100.0
-#: Smallest and largest fluid density [kg/m^3] (air is 1.2; mercury 13 500).
-MIN_FLUID_DENSITY = 1e-3
-MAX_FLUID_DENSITY = 2e4
-#: Largest mass of one link [kg].
-MAX_LINK_MASS = 1e6
-#: Largest principal moment of inertia of one link [kg m^2].
-MAX_INERTIA = 1e8
-#: Largest displaced volume of one link [m^3].
-MAX_VOLUME = 1e3
-#: Largest distance of a joint origin, centre of gravity or buoyancy or thruster from its link [m].
-MAX_DISTANCE = 1e3
-#: Largest magnitude of an added-mass or damping entry [SI].
-MAX_COEFFICIENT = 1e9
-#: Largest thrust limit [N].
-MAX_THRUST = 1e7
 #: A thruster may sit at most ``THRUSTER_REACH * size + THRUSTER_MARGIN`` [m] from its link origin.
 THRUSTER_REACH = 2.0
 THRUSTER_MARGIN = 1.0
@@ -169,6 +175,22 @@ def validate_parameters(structure: UrdfStructure, hydro: HydroSpec, where: str =
         _check_psd(link.quadratic_damping, f"{what}: quadratic_damping", where)
         # dissipative in forward motion (u_r > 0), as UUV Simulator's coefficients are meant
         _check_psd(link.forward_speed_damping, f"{what}: linear_damping_forward_speed", where)
+        crossflow = link.crossflow
+        if crossflow is not None:
+            check_range(crossflow.length, "geometry size", f"{what}: crossflow length", where)
+            check_range(crossflow.radius, "geometry size", f"{what}: crossflow radius", where)
+            check_range(
+                crossflow.drag_coefficient,
+                "dimensionless coefficient",
+                f"{what}: crossflow drag coefficient C_dC",
+                where,
+            )
+            check_range(
+                crossflow.strip_coefficient * crossflow.length,
+                "strip coefficient x length",
+                f"{what}: crossflow rho r C_dC L",
+                where,
+            )
     sizes = link_sizes(structure, hydro)
     for thruster in hydro.thrusters:
         what = f"thruster '{thruster.name}'"
@@ -211,10 +233,12 @@ def divergence_suspect(vehicle, dt: float) -> str | None:
     """The parameter most likely to make a fixed-step run diverge at step ``dt``, or ``None``.
 
     Looks at, per link, the damping rates ``D_ii / M_ii`` (``M_ii`` the rigid inertia of the link's
-    body plus the link's added mass; quadratic damping at 1 m/s or 1 rad/s), and at the largest
-    thrust over the vehicle's mass;
+    body plus the link's added mass; quadratic damping and the crossflow drag ``rho r C_dC L`` at
+    1 m/s or 1 rad/s), and at the largest thrust over the vehicle's mass;
     a rate ``r`` with ``r dt > 1`` (explicit Runge-Kutta schemes lose stability near ``r dt = 2.8``)
-    or a thrust accelerating the vehicle by more than ``1000 m/s^2`` is named.
+    or a thrust accelerating the vehicle by more than ``1000 m/s^2`` is named. Failing those, the
+    added-mass, damping or crossflow coefficient largest relative to the top of its plausible range
+    (:data:`PLAUSIBLE_RANGES`) is named when it is above :data:`SUSPECT_SHARE` of it.
     """
     try:
         total_mass = sum(float(i.mass) for i in vehicle.model.inertias[1:])
@@ -232,9 +256,14 @@ def divergence_suspect(vehicle, dt: float) -> str | None:
             diagonal = np.diag(link.added_mass).copy()
             if inertia is not None:
                 diagonal += np.diag(inertia)
+            crossflow = np.zeros((6, 6))
+            if link.crossflow is not None:  # transverse drag per (m/s)^2 over the whole length
+                drag = link.crossflow.strip_coefficient * link.crossflow.length
+                crossflow[1, 1] = crossflow[2, 2] = drag
             for label, matrix in (
                 ("linear_damping", link.linear_damping),
                 ("quadratic_damping", link.quadratic_damping),
+                ("crossflow drag rho r C_dC L", crossflow),
             ):
                 for i in range(6):
                     if diagonal[i] <= 0.0:
@@ -256,9 +285,45 @@ def divergence_suspect(vehicle, dt: float) -> str | None:
                     f"thruster '{name}' max_thrust = {thrust:.4g} N accelerates the "
                     f"{total_mass:.4g} kg vehicle by {thrust / total_mass:.3g} m/s^2"
                 )
+        return _largest_relative_coefficient(vehicle.hydro)
     except Exception:  # a hint must never hide the divergence itself
         return None
     return None
+
+
+#: Share of the top of its range above which a coefficient is named as a divergence suspect.
+SUSPECT_SHARE = 1e-3
+
+
+def _largest_relative_coefficient(hydro: HydroSpec) -> str | None:
+    """The added-mass, damping or crossflow coefficient largest relative to the top of its range
+    (:data:`PLAUSIBLE_RANGES`), when above :data:`SUSPECT_SHARE` of it; else ``None``."""
+    best: tuple[float, str] | None = None
+    for link in hydro.links:
+        candidates = [
+            (float(np.max(np.abs(getattr(link, name)))), name, MAX_COEFFICIENT)
+            for name in (
+                "added_mass",
+                "linear_damping",
+                "quadratic_damping",
+                "forward_speed_damping",
+            )
+        ]
+        if link.crossflow is not None:
+            c = link.crossflow
+            candidates.append((c.drag_coefficient, "crossflow C_dC", MAX_DIMENSIONLESS))
+            candidates.append(
+                (c.strip_coefficient * c.length, "crossflow rho r C_dC L", MAX_COEFFICIENT)
+            )
+        for value, name, top in candidates:
+            share = value / top
+            if share > SUSPECT_SHARE and (best is None or share > best[0]):
+                best = (
+                    share,
+                    f"link '{link.link}' {name} = {value:.4g}, {share:.2g} of the top of its "
+                    f"plausible range ({top:g})",
+                )
+    return None if best is None else best[1]
 
 
 def explain_divergence(vehicle, dt: float, message: str) -> str:

@@ -23,12 +23,21 @@ compiled kernels of :mod:`aiauv_pin.kernels` (an articulated-body algorithm whos
 6x6 rigid + added inertia), tested against this path to 1e-9; ``"auto"`` falls back to Pinocchio when
 numba is missing or the model has joints the kernels do not handle. The environment variable
 ``AIAUV_BACKEND`` overrides the default for vehicles created without an explicit backend.
+
+Threads: one :class:`Vehicle` may be used from several threads at once, on both backends. What an
+evaluation overwrites is per thread: Pinocchio's ``Data`` (of the vehicle and of its displaced
+water) and the fluid scratch arrays (``threading.local``, made by ``model.createData()`` on a
+thread's first call), and the compiled workspace (:class:`aiauv_pin.kernels.evaluation.FastModel`); the
+model and the fluid parameters are only read. Results are bit-identical to the same calls made
+serially (``tests/test_fuzz_entry_points.py``). Changing ``backend`` while other threads evaluate
+is not supported.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -41,16 +50,17 @@ from aiauv_hydro.laws.fluid_terms import CROSSFLOW_NODES, FluidModel, add_body_f
 from aiauv_hydro.laws.kirchhoff import momentum_in_world
 from aiauv_hydro.numerics.spatial import motion_transform
 from aiauv_hydro.spec import HydroSpec
-from aiauv_pin.errors import ArgumentError
-from aiauv_pin.kernels.records import Model, Thrusters, rigid_bodies, unsupported_reason
-from aiauv_pin.model.array_checks import (
+from aiauv_pin._internal.array_checks import (
     EXACT_QUATERNION_DEVIATION,
     QUATERNION_TOLERANCE,
     configuration,
     finite_time,
     float_array,
+    frame_index,
     optional_current,
 )
+from aiauv_pin.errors import ArgumentError, project_errors
+from aiauv_pin.kernels.records import Model, Thrusters, rigid_bodies, unsupported_reason
 
 _LOCAL = pin.ReferenceFrame.LOCAL
 
@@ -99,8 +109,17 @@ class FluidForces:
     bias: np.ndarray
 
 
+class _PinocchioScratch(threading.local):
+    """One thread's Pinocchio ``Data`` of the vehicle and of its displaced water, and fluid
+    scratch arrays (made on the thread's first use; see :class:`Vehicle`)."""
+
+    data = None
+    buoyancy_data = None
+    scratch = None
+
+
 class Vehicle:
-    """An underwater multibody vehicle ready for simulation.
+    r"""An underwater multibody vehicle ready for simulation.
 
     Build it with :func:`aiauv_pin.load_vehicle`. The arrays it returns are in Pinocchio's conventions:
     ``q`` has the base position, base orientation quaternion ``(x, y, z, w)`` and joint angles
@@ -115,6 +134,16 @@ class Vehicle:
         name: Robot name from the URDF.
         added_mass, damping, restoring: Which fluid effects are on.
         backend: ``"auto"``, ``"numba"`` or ``"pinocchio"`` (see the module docstring); settable.
+        data: Pinocchio's ``Data`` of the calling thread (each thread has its own).
+
+    Thread safety: the methods may be called from several threads at once on either backend; each
+    thread evaluates on its own Pinocchio data and compiled workspace, and gets bit for bit what
+    the same calls give serially (see the module docstring). :func:`aiauv_pin.simulation.rollout` runs its
+    runs on threads with a workspace of their own.
+
+    Every method checks its arguments before Pinocchio or compiled code sees them
+    (:mod:`aiauv_pin._internal.array_checks`), and raises only :class:`aiauv_pin.errors.AiauvError` on bad
+    input (:func:`aiauv_pin.errors.project_errors` converts what Pinocchio or numba raise).
     """
 
     def __init__(
@@ -138,11 +167,11 @@ class Vehicle:
         self.model.gravity = pin.Motion(
             np.array([0.0, 0.0, -hydro.gravity if restoring else 0.0]), np.zeros(3)
         )
-        self.data = model.createData()
+        self._pinocchio = _PinocchioScratch()
+        self._pinocchio.data = model.createData()
         self._packed: Model | None = None
         self._setup_fluid()
         self._setup_thrusters()
-        self._scratch = (np.zeros((model.njoints - 1, 6)), np.zeros((3, 6)))
         self._fast = None
         self._fast_reason: str | None = None
         self.backend = os.environ.get("AIAUV_BACKEND", "auto") if backend is None else backend
@@ -276,7 +305,7 @@ class Vehicle:
             buoyancy_model.inertias[joint] = buoyancy_model.inertias[joint] + displaced
         buoyancy_model.gravity = model.gravity
         self._buoyancy_model = buoyancy_model
-        self._buoyancy_data = buoyancy_model.createData()
+        self._pinocchio.buoyancy_data = buoyancy_model.createData()
         self._has_buoyancy = any(link.volume != 0.0 for link in self.hydro.links)
 
     def _setup_thrusters(self) -> None:
@@ -320,6 +349,43 @@ class Vehicle:
                 thrusters=self._thrusters,
             )
         return self._packed
+
+    # ------------------------------------------------------------------ per-thread data
+    def __getstate__(self) -> dict:
+        """Picklable state: the per-thread Pinocchio data are made again on use."""
+        state = self.__dict__.copy()
+        del state["_pinocchio"]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._pinocchio = _PinocchioScratch()
+
+    def _per_thread(self, name: str, make):
+        """The calling thread's ``name`` in :class:`_PinocchioScratch`, made by ``make()`` on the
+        thread's first use."""
+        local = self._pinocchio
+        value = getattr(local, name)
+        if value is None:
+            value = make()
+            setattr(local, name, value)
+        return value
+
+    @property
+    def data(self) -> pin.Data:
+        """Pinocchio's ``Data`` of the calling thread (``model.createData()`` on first use)."""
+        return self._per_thread("data", self.model.createData)
+
+    @property
+    def _buoyancy_data(self) -> pin.Data:
+        """The calling thread's ``Data`` of the displaced-water model."""
+        return self._per_thread("buoyancy_data", self._buoyancy_model.createData)
+
+    @property
+    def _scratch(self) -> tuple[np.ndarray, np.ndarray]:
+        """The calling thread's fluid scratch: body wrenches (nb, 6) and (3, 6)."""
+        nb = self.model.njoints - 1
+        return self._per_thread("scratch", lambda: (np.zeros((nb, 6)), np.zeros((3, 6))))
 
     # ------------------------------------------------------------------ backend
     @property
@@ -513,14 +579,20 @@ class Vehicle:
             if out is not None:
                 return out
         q, v, tau = self._q(q), self._v(v), self._v(tau, "tau")
-        current = optional_current(current)
         t = finite_time(t)
-        if self._fast is not None:
-            return self._fast.acceleration(q, v, tau, current, t=t)
+        fast = self._fast
+        if fast is not None:  # environment() checks the current
+            env = fast.environment(current)
+            return fast.acceleration_unchecked(q, v, tau, env, fast.no_servo, t)
+        return self._pinocchio_acceleration(q, v, tau, optional_current(current), t)
+
+    @project_errors("Vehicle.acceleration")
+    def _pinocchio_acceleration(self, q, v, tau, current, t: float) -> np.ndarray:
         with single_threaded_blas(self.nv):
             mass, bias = self._hydro_terms(q, v, current, t)
             return np.linalg.solve(mass, tau - bias)
 
+    @project_errors("Vehicle.acceleration_derivatives")
     def acceleration_derivatives(
         self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, current=None, *, t: float = 0.0
     ):
@@ -535,15 +607,18 @@ class Vehicle:
 
         return acceleration_derivatives(self, q, v, tau, current, t=t)
 
+    @project_errors("Vehicle.fluid_forces")
     def fluid_forces(
         self, q: np.ndarray, v: np.ndarray, current=None, *, t: float = 0.0
     ) -> FluidForces:
         """Mass matrix and bias of the equations of motion ``M dv + bias = tau``."""
         q, v, current = self._q(q), self._v(v), optional_current(current)
+        t = finite_time(t)
         with single_threaded_blas(self.nv):
             mass, bias = self._hydro_terms(q, v, current, t)
         return FluidForces(mass, bias)
 
+    @project_errors("Vehicle.mass_matrix")
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """``M(q) = M_RB(q) + sum_i J_i^T M_A,i J_i`` (nv x nv), symmetric positive definite."""
         q = self._q(q)
@@ -560,6 +635,7 @@ class Vehicle:
         v = self._v(v)
         return 0.5 * float(v @ self.mass_matrix(q) @ v)
 
+    @project_errors("Vehicle.restoring_forces")
     def restoring_forces(self, q: np.ndarray) -> np.ndarray:
         """Hydrostatic generalised force ``g(q)`` (weight minus buoyancy) as on the left-hand side [N, N m].
 
@@ -570,17 +646,18 @@ class Vehicle:
         """
         q = self._q(q)
         if self._fast is not None:
-            return self._fast.restoring_forces(q)
+            return self._fast.restoring_forces_unchecked(q)
         weight = pin.computeGeneralizedGravity(self.model, self.data, q)
         if not self._has_buoyancy:
             return weight
         return weight - pin.computeGeneralizedGravity(self._buoyancy_model, self._buoyancy_data, q)
 
+    @project_errors("Vehicle.thrust_matrix")
     def thrust_matrix(self, q: np.ndarray) -> np.ndarray:
         """``B(q)`` (nv x m): generalised forces of unit thrusts (the paper's eq. (20))."""
         q = self._q(q)
         if self._fast is not None:
-            return self._fast.thrust_matrix(q)
+            return self._fast.thrust_matrix_unchecked(q)
         pin.computeJointJacobians(self.model, self.data, q)
         matrix = np.zeros((self.nv, len(self.hydro.thrusters)))
         for k, (b, wrench) in enumerate(
@@ -590,6 +667,7 @@ class Vehicle:
             matrix[:, k] = jac.T @ wrench
         return matrix
 
+    @project_errors("Vehicle.momentum_in_world")
     def momentum_in_world(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Impulse of body plus fluid about the world origin, in world axes (6,).
 
@@ -611,12 +689,14 @@ class Vehicle:
             raise ArgumentError(f"unknown link or frame {name!r:.80}")
         return self.model.getFrameId(name)
 
+    @project_errors("Vehicle.frame_placement")
     def frame_placement(self, q: np.ndarray, name: str) -> pin.SE3:
         """Pose of a link or frame in the world."""
         q = self._q(q)
         pin.framesForwardKinematics(self.model, self.data, q)
         return self.data.oMf[self.frame_id(name)].copy()
 
+    @project_errors("Vehicle.frame_motion")
     def frame_motion(
         self, q: np.ndarray, v: np.ndarray, frame_id: int
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -631,20 +711,15 @@ class Vehicle:
             ``(rotation to world (3x3), position in world [m], twist (v, omega) in the frame's axes)``.
         """
         q, v = self._q(q), self._v(v)
-        if isinstance(frame_id, bool) or not isinstance(frame_id, (int, np.integer)):
-            raise ArgumentError(f"frame_id must be a frame index (int), got {frame_id!r:.40}")
-        if not 0 <= int(frame_id) < len(self.model.frames):
-            raise ArgumentError(
-                f"frame_id must be in [0, {len(self.model.frames)}), got {int(frame_id)}"
-            )
-        frame_id = int(frame_id)
+        frame_id = frame_index(frame_id, len(self.model.frames))
         if self._fast is not None:
-            return self._fast.frame_motion(q, v, frame_id)
+            return self._fast.frame_motion_unchecked(q, v, frame_id)
         pin.forwardKinematics(self.model, self.data, q, v)
         pose = pin.updateFramePlacement(self.model, self.data, frame_id)
         twist = pin.getFrameVelocity(self.model, self.data, frame_id, _LOCAL)
         return pose.rotation.copy(), pose.translation.copy(), twist.vector.copy()
 
+    @project_errors("Vehicle.link_placements")
     def link_placements(self, q: np.ndarray, links: list[str] | None = None) -> list[pin.SE3]:
         """World poses of several links (default: every link with hydrodynamics)."""
         names = [link.link for link in self.hydro.links] if links is None else links

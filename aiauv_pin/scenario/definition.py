@@ -665,8 +665,8 @@ def warm_up(vehicle, scenario) -> None:
     """
     if vehicle.active_backend != "numba":
         return
+    from aiauv_pin._internal.array_checks import check_timing
     from aiauv_pin.errors import SimulationDiverged
-    from aiauv_pin.model.array_checks import check_timing
 
     check_timing(scenario.duration, scenario.dt)  # the whole run's error before the short one runs
 

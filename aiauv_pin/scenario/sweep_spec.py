@@ -701,7 +701,7 @@ def resolve_parameters(
     if unknown:
         raise ValueError(f"unknown parameter '{unknown[0]}'")
     scenario = scenario_from_mapping(apply_parameters(base, canonical))
-    from aiauv_pin.model.array_checks import check_timing
+    from aiauv_pin._internal.array_checks import check_timing
 
     check_timing(scenario.duration, scenario.dt)  # the verdict simulate() gives (ArgumentError)
     steps = scenario.duration / scenario.dt

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from functools import lru_cache
 
-from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled, project_packages
+from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled, is_project_function
 from aiauv_pin.controllers.dispatch import run_controller
 from aiauv_pin.kernels.articulated_body import (
     MIDPOINT,
@@ -204,12 +204,6 @@ def _dispatchers(value, found: list) -> list:
         for item in value:
             _dispatchers(item, found)
     return found
-
-
-def is_project_function(function) -> bool:
-    """Whether a compiled function is one of the project's own (its module is in its packages)."""
-    module = getattr(function, "__module__", "") or ""
-    return module.split(".")[0] in project_packages()
 
 
 @lru_cache(maxsize=1)

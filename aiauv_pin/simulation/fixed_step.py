@@ -17,7 +17,14 @@ import numpy as np
 
 from aiauv_hydro.currents import as_current
 from aiauv_hydro.laws.fluid_terms import UUV_SIMULATOR_FILTER
-from aiauv_pin.controllers.compiled_controller import CompiledController
+from aiauv_pin._internal.array_checks import (
+    check_timing,
+    configuration,
+    float_array,
+    optional_current,
+    positive_seconds,
+)
+from aiauv_pin.controllers.compiled_controller import CompiledController, check_compiled_controller
 from aiauv_pin.dynamics.integrators import (
     INTEGRATORS,
     SAMPLES_INSIDE_STEP,
@@ -26,15 +33,8 @@ from aiauv_pin.dynamics.integrators import (
 )
 from aiauv_pin.dynamics.joint_servo import JointServo
 from aiauv_pin.dynamics.lagged_added_mass import LaggedAddedMass, check_filter, check_scheme
-from aiauv_pin.errors import ArgumentError, SimulationDiverged
+from aiauv_pin.errors import ArgumentError, SimulationDiverged, bounds_checked_call
 from aiauv_pin.kernels.disturbances import Disturbance
-from aiauv_pin.model.array_checks import (
-    check_timing,
-    configuration,
-    float_array,
-    optional_current,
-    positive_seconds,
-)
 from aiauv_pin.model.vehicle import Vehicle
 from aiauv_pin.simulation.schedule import step_actions, steps_to_next_event
 from aiauv_pin.simulation.step_stability import warn_if_step_near_limit
@@ -361,7 +361,7 @@ def simulate(
         if fast is not None:
             packed = servo.packed() if servo is not None else None
             tau_c = np.ascontiguousarray(tau, dtype=float)
-            return fast.run(
+            return fast.run_unchecked(  # q, v its own; tau's shape checked by sample()
                 q,
                 v,
                 tau_c,
@@ -510,6 +510,7 @@ def _simulate_compiled(
     v = np.array(v0, dtype=float)
     if q.shape != (nq,) or v.shape != (nv,):
         raise ValueError(f"q0 must have {nq} and v0 {nv} entries")
+    check_compiled_controller(controller, nq, nv, fast.n_thrusters)  # records it writes (issue 29)
     if controller.reset is not None:
         controller.reset()
     environment = fast.environment(as_current(current), disturbance)
@@ -544,28 +545,29 @@ def _simulate_compiled(
         while True:
             stop = min(k + chunk, n_steps)
             start_log = logged
-            logged, done = run_chunk(
-                fast.model,
-                environment,
-                servo_record,
-                controller.loop_function,
-                controller.parameters,
-                controller.state,
-                q,
-                v,
-                tau,
-                info,
-                float(dt),
-                METHOD_MARKERS[method],
-                k,
-                stop,
-                n_steps,
-                steps_per_control,
-                log_every,
-                log,
-                logged,
-                workspace,
-            )
+            with bounds_checked_call("simulate"):
+                logged, done = run_chunk(
+                    fast.model,
+                    environment,
+                    servo_record,
+                    controller.loop_function,
+                    controller.parameters,
+                    controller.state,
+                    q,
+                    v,
+                    tau,
+                    info,
+                    float(dt),
+                    METHOD_MARKERS[method],
+                    k,
+                    stop,
+                    n_steps,
+                    steps_per_control,
+                    log_every,
+                    log,
+                    logged,
+                    workspace,
+                )
             if on_log is not None:
                 for row in log[start_log:logged]:
                     on_log(

@@ -19,7 +19,11 @@ controller's parameters and state, so results are bit-identical to :func:`aiauv_
 by run (a test checks this), in any order and with any number of threads.
 
 Arguments are checked at the boundary, with one-line :class:`~aiauv_pin.errors.ArgumentError`\\ s
-for bad shapes (as MuJoCo's ``rollout`` does), before any thread starts.
+for bad shapes (as MuJoCo's ``rollout`` does), before any thread starts; so are the controllers'
+records (:func:`aiauv_pin.controllers.compiled_controller.check_compiled_controller`), and a user's
+controller runs
+bounds-checked, so a write past its declared ``info_shapes`` is a
+:class:`~aiauv_pin.errors.RecordSizeError`, never a corrupted heap.
 """
 
 from __future__ import annotations
@@ -32,11 +36,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from aiauv_hydro.currents import Current, as_current
-from aiauv_pin.controllers.compiled_controller import CompiledController
+from aiauv_pin._internal.array_checks import configuration, float_array
+from aiauv_pin.controllers.compiled_controller import CompiledController, check_compiled_controller
 from aiauv_pin.dynamics.joint_servo import JointServo
-from aiauv_pin.errors import ArgumentError
+from aiauv_pin.errors import ArgumentError, bounds_checked_call
 from aiauv_pin.kernels.disturbances import Disturbance
-from aiauv_pin.model.array_checks import configuration, float_array
 from aiauv_pin.simulation.fixed_step import check_log_size, check_run_arguments
 from aiauv_pin.simulation.step_stability import warn_if_step_near_limit
 
@@ -221,6 +225,8 @@ def rollout(
     q_rows, n_q = _states(q0, nq, "q0", lambda row, name: configuration(row, nq, name))
     v_rows, n_v = _states(v0, nv, "v0", lambda row, name: float_array(row, name, (nv,)))
     laws, n_c = _controllers(controller)
+    for law in laws:
+        check_compiled_controller(law, nq, nv, fast.n_thrusters)
     waters, n_w = _currents(current)
     n_runs = _batch_size({"q0": n_q, "v0": n_v, "controller": n_c, "current": n_w})
     if disturbance is not None and not isinstance(disturbance, Disturbance):
@@ -302,13 +308,16 @@ def rollout(
         counts[i] = logged, done
 
     pool_size = min(threads, n_runs)
-    if pool_size == 1:
-        for i in range(n_runs):
-            run(i)
-    else:
-        with ThreadPoolExecutor(max_workers=pool_size, thread_name_prefix="aiauv-rollout") as pool:
-            for future in [pool.submit(run, i) for i in range(n_runs)]:
-                future.result()
+    with bounds_checked_call("rollout"):  # a user's controller writing out of bounds
+        if pool_size == 1:
+            for i in range(n_runs):
+                run(i)
+        else:
+            with ThreadPoolExecutor(
+                max_workers=pool_size, thread_name_prefix="aiauv-rollout"
+            ) as pool:
+                for future in [pool.submit(run, i) for i in range(n_runs)]:
+                    future.result()
 
     steps = counts[:, 1].copy()
     # the loop logs at t = k dt for k = 0, log_every, 2 log_every, ... and at n_steps

@@ -121,6 +121,12 @@ def project_path(py_file: str | os.PathLike) -> PurePosixPath | None:
     return None
 
 
+def is_project_function(function) -> bool:
+    """Whether a compiled function is one of the project's own (its module is in its packages)."""
+    module = getattr(function, "__module__", "") or ""
+    return module.split(".")[0] in project_packages()
+
+
 def _project_sources() -> list[tuple[PurePosixPath, Path]]:
     """Every ``.py`` file of :func:`compiled_sources`: (project path, file), in a fixed order."""
     roots = package_roots()

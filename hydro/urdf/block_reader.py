@@ -74,6 +74,35 @@ from aiauv_hydro.urdf.xml_reading import (  # noqa: F401  (re-exported: the bloc
 
 DEFAULT_FLUID_DENSITY = 1025.0
 
+#: Plausible range of a cylinder's length and radius [m] (the table of
+#: :data:`aiauv_pin.description.plausible_ranges.PLAUSIBLE_RANGES`): checked here before anything
+#: is computed from
+#: them (a length of 1e308 overflowed computing the cylinder's inertia, issue 29).
+LENGTH_RANGE = (1e-4, 1e3)
+#: Largest dimensionless slender-cylinder coefficient (drag coefficients of cylinders are 0.1
+#: to 2 and added-mass coefficients about 1; Hoerner 1965, Fossen 2021 Sec. 6.4).
+MAX_DIMENSIONLESS = 1e3
+#: Plausible range of the reference speed ``v_ref`` [m/s].
+V_REF_RANGE = (1e-3, 1e3)
+
+
+def _check_slender_ranges(length: float, radius: float, coefficients, what: str) -> None:
+    """Refuse a slender cylinder outside the plausible ranges above (one line naming it)."""
+    for name, value in (("length", length), ("radius", radius)):
+        if not LENGTH_RANGE[0] <= value <= LENGTH_RANGE[1]:
+            raise HydroError(
+                f"{what}: cylinder {name} = {value:.4g} m outside the plausible range "
+                f"[{LENGTH_RANGE[0]:g}, {LENGTH_RANGE[1]:g}]"
+            )
+    for item in fields(coefficients):
+        value = getattr(coefficients, item.name)
+        low, high = V_REF_RANGE if item.name == "v_ref" else (0.0, MAX_DIMENSIONLESS)
+        if not low <= value <= high:
+            raise HydroError(
+                f"{what}: {item.name} = {value:.4g} outside the plausible range [{low:g}, {high:g}]"
+            )
+
+
 _COEFFICIENT_NAMES = tuple(item.name for item in fields(SlenderCylinderCoefficients))
 
 
@@ -176,6 +205,7 @@ def _slender_cylinder_link(
         )
     if not (length > 0.0 and radius > 0.0):
         raise HydroError(f"{what}: length and radius must be positive")
+    _check_slender_ranges(length, radius, coefficients, what)
     center = None
     if "center_of_buoyancy" in children:
         center = parse_vector(children["center_of_buoyancy"].text, 3, f"{what} center_of_buoyancy")
