@@ -665,7 +665,8 @@ class CommandBuffers(NamedTuple):
     x_ref_dot: np.ndarray  # (3,) [1/s]
     x_ref_ddot: np.ndarray  # (3,) [1/s^2]
     cross_track: np.ndarray  # (2,) [m] along N1, N2
-    scalars: np.ndarray  # (2,): phi_tilde [rad], path parameter s [m]
+    phi_tilde: np.ndarray  # (1,) [rad] (eq. 4)
+    path_s: np.ndarray  # (1,) path parameter s [m]
 
 
 def new_command_buffers(n_joints: int, n_thrusters: int) -> CommandBuffers:
@@ -680,7 +681,8 @@ def new_command_buffers(n_joints: int, n_thrusters: int) -> CommandBuffers:
         np.zeros(3),
         np.zeros(3),
         np.zeros(2),
-        np.zeros(2),
+        np.zeros(1),
+        np.zeros(1),
     )
 
 
@@ -830,5 +832,5 @@ def path_following_command(
         out.x_ref_ddot[i] = x_ddot[i]
     out.cross_track[0] = errors[0]
     out.cross_track[1] = errors[1]
-    out.scalars[0] = command.phi_tilde
-    out.scalars[1] = point.s
+    out.phi_tilde[0] = command.phi_tilde
+    out.path_s[0] = point.s

@@ -65,13 +65,22 @@ class TurningBuffers(NamedTuple):
     omega_tilde: np.ndarray  # (2,) [rad/s] (eq. 8)
     x_ref: np.ndarray  # (3,) reference direction (eq. 21)
     cross_track: np.ndarray  # (2,) [m] along N1, N2
-    scalars: np.ndarray  # (3,): phi_tilde [rad], path parameter s [m], saturation scale [-]
+    phi_tilde: np.ndarray  # (1,) [rad] (eq. 4)
+    path_s: np.ndarray  # (1,) path parameter s [m]
+    saturation_scale: np.ndarray  # (1,) scale of the tunnel thrusts [-]
 
 
 def new_turning_buffers(n_thrusters: int) -> TurningBuffers:
     """Zeroed :class:`TurningBuffers`."""
     return TurningBuffers(
-        np.zeros(n_thrusters), np.zeros(2), np.zeros(2), np.zeros(3), np.zeros(2), np.zeros(3)
+        np.zeros(n_thrusters),
+        np.zeros(2),
+        np.zeros(2),
+        np.zeros(3),
+        np.zeros(2),
+        np.zeros(1),
+        np.zeros(1),
+        np.zeros(1),
     )
 
 
@@ -240,6 +249,6 @@ def thruster_turning_command(
     errors = cross_track_errors(point, position, velocity)
     out.cross_track[0] = errors[0]
     out.cross_track[1] = errors[1]
-    out.scalars[0] = command.phi_tilde
-    out.scalars[1] = point.s
-    out.scalars[2] = scale
+    out.phi_tilde[0] = command.phi_tilde
+    out.path_s[0] = point.s
+    out.saturation_scale[0] = scale
