@@ -34,6 +34,7 @@ import numpy as np
 
 from control.paths import path_point_of
 from hydro.jit import compiled
+from hydro.spatial import cross3
 
 from .laws import cross_track_errors, los_guidance, reduced_attitude_law, surge_pi
 
@@ -136,10 +137,11 @@ def tunnel_allocation(moment_y, moment_z, plane, force_coeff, moment_coeff, max_
 def _rodrigues(k0, k1, k2, c, f, y):
     """``c y + k x y + (k . y) k f`` for a 3-sequence ``y`` (see :func:`sideslip_compensated`)."""
     ky = k0 * y[0] + k1 * y[1] + k2 * y[2]
+    x0, x1, x2 = cross3(k0, k1, k2, y[0], y[1], y[2])
     return (
-        c * y[0] + (k1 * y[2] - k2 * y[1]) + ky * k0 * f,
-        c * y[1] + (k2 * y[0] - k0 * y[2]) + ky * k1 * f,
-        c * y[2] + (k0 * y[1] - k1 * y[0]) + ky * k2 * f,
+        c * y[0] + x0 + ky * k0 * f,
+        c * y[1] + x1 + ky * k1 * f,
+        c * y[2] + x2 + ky * k2 * f,
     )
 
 
@@ -159,7 +161,7 @@ def sideslip_compensated(velocity, rotation, x_ref, x_dot, x_ddot):
     c = w0 * b0 + w1 * b1 + w2 * b2
     if c <= 0.0:
         return x_ref, x_dot, x_ddot
-    k0, k1, k2 = w1 * b2 - w2 * b1, w2 * b0 - w0 * b2, w0 * b1 - w1 * b0
+    k0, k1, k2 = cross3(w0, w1, w2, b0, b1, b2)
     f = 1.0 / (1.0 + c)
     return (
         _rodrigues(k0, k1, k2, c, f, x_ref),

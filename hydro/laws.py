@@ -790,15 +790,7 @@ def add_link_damping(fluid, rotation, twist, current, bias, d_twist, d_current, 
         )
         relative[3], relative[4], relative[5] = twist[b, 3], twist[b, 4], twist[b, 5]
         is_body = link_is_body[k]
-        if is_body:
-            for i in range(6):
-                link_twist[i] = relative[i]
-        else:
-            for i in range(6):
-                s = 0.0
-                for j in range(6):
-                    s += link_from_body[k, i, j] * relative[j]
-                link_twist[i] = s
+        _move_twist(link_from_body, k, is_body, relative, link_twist)
         # linear and quadratic damping
         if bias is not None:
             w = damping_wrench(linear[k], quadratic[k], quadratic_is_diagonal[k], link_twist)
@@ -820,15 +812,7 @@ def add_link_damping(fluid, rotation, twist, current, bias, d_twist, d_current, 
             length = cylinder_length[k]
             coefficient = strip_coefficient[k]
             on_link = cylinder_is_link[k]
-            if on_link:
-                for i in range(6):
-                    cylinder_twist[i] = link_twist[i]
-            else:
-                for i in range(6):
-                    s = 0.0
-                    for j in range(6):
-                        s += cylinder_from_link[k, i, j] * link_twist[j]
-                    cylinder_twist[i] = s
+            _move_twist(cylinder_from_link, k, on_link, link_twist, cylinder_twist)
             if bias is not None:
                 w = crossflow_wrench(cylinder_twist, length, coefficient, nodes, weights)
                 if on_link:
@@ -872,6 +856,20 @@ def add_link_damping(fluid, rotation, twist, current, bias, d_twist, d_current, 
                     d_twist[b, i, j] -= link_jac[i, j]
                 for j in range(3):
                     d_current[b, i, j] += link_jac[i, j]
+
+
+@compiled(fastmath=True, borrows_only=True)
+def _move_twist(transforms, k, is_identity, twist, out):
+    """``out = X_k twist`` with ``X_k = transforms[k]`` (a copy where ``is_identity``) (6,)."""
+    if is_identity:
+        for i in range(6):
+            out[i] = twist[i]
+        return
+    for i in range(6):
+        s = 0.0
+        for j in range(6):
+            s += transforms[k, i, j] * twist[j]
+        out[i] = s
 
 
 @compiled(fastmath=True, borrows_only=True)

@@ -337,13 +337,8 @@ def thrust_matrix_at(model, q, W, D):
     """``B(q)`` into ``D.thrust_matrix`` and the placements into ``D.xform`` (kinematics at ``q``)."""
     kinematics(model.bodies, q, W.zero_velocity, W)
     for b in range(model.bodies.parent.shape[0]):
-        motion_transform_into(
-            W.placement[b, :3],
-            W.placement[b, 3, 0],
-            W.placement[b, 3, 1],
-            W.placement[b, 3, 2],
-            D.xform[b],
-        )
+        xl = W.placement[b]
+        motion_transform_into(xl[:3], xl[3, 0], xl[3, 1], xl[3, 2], D.xform[b])
     _thrust_matrix(model, D)
 
 
@@ -527,13 +522,8 @@ def acceleration_derivatives_into(
     sample_current(model, env, t, W)
     body_bias(model, W)
     for b in range(nb):
-        motion_transform_into(
-            W.placement[b, :3],
-            W.placement[b, 3, 0],
-            W.placement[b, 3, 1],
-            W.placement[b, 3, 2],
-            D.xform[b],
-        )
+        xl = W.placement[b]
+        motion_transform_into(xl[:3], xl[3, 0], xl[3, 1], xl[3, 2], D.xform[b])
         for i in range(4):
             for j in range(3):
                 D.placement[b, i, j] = W.placement[b, i, j]
