@@ -30,6 +30,7 @@ def annotate_file(
     neutral: bool = False,
     xacro_args: Mapping[str, str] | None = None,
     package_path: Sequence[str | os.PathLike] = (),
+    trust_xacro: bool = False,
 ) -> Annotation:
     """Annotate a URDF (or ``.xacro``) file and write the result.
 
@@ -40,6 +41,7 @@ def annotate_file(
         neutral: Volumes ``m / rho`` per link instead of the shapes' volumes.
         xacro_args: ``$(arg NAME)`` values for a xacro file.
         package_path: Folders searched for ``$(find pkg)`` and ``package://`` first.
+        trust_xacro: Expand a xacro file with full xacro (see :func:`aiauv_pin.load_vehicle`).
 
     Returns:
         The annotation (its ``links`` are the per-link table).
@@ -50,7 +52,7 @@ def annotate_file(
     from .loading import _read_text, load_vehicle
 
     path = Path(path)
-    text = read_description(path, xacro_args, package_path)
+    text = read_description(path, xacro_args, package_path, trust_xacro=trust_xacro)
     if text is None:
         text = _read_text(path).removeprefix("\ufeff")
     search_path = package_search_path(package_path)

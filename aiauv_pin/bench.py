@@ -814,6 +814,10 @@ def add_bench_parser(subparsers) -> None:
 
 
 def _run_bench_command(args) -> int:
+    from .atomic import check_output_file
+
+    for path in (args.out, Path(args.out).parent / "scaling.png"):  # refused before measuring
+        check_output_file(path)
     if args.only:
         results = {}
         if args.out.is_file():

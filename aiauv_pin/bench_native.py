@@ -333,8 +333,10 @@ def scaling_figure(result: dict, path: Path) -> Path:
     ratio.legend()
     figure.suptitle("Cost of one dynamics evaluation, both native, interleaved in one process")
     figure.tight_layout()
+    from .atomic import atomic_path
+
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=120)
+    with atomic_path(path) as temporary:  # never through a FIFO, device or link at ``path``
+        figure.savefig(temporary, dpi=120, format=path.suffix.lstrip(".") or "png")
     plt.close(figure)
     return path

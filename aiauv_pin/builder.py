@@ -38,7 +38,6 @@ from __future__ import annotations
 import importlib.resources
 import math
 import os
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Literal
@@ -251,48 +250,28 @@ def write_urdf(spec: VehicleSpec, path: str | os.PathLike[str]) -> Path:
     Args:
         spec: The vehicle.
         path: Output file: a new path or an existing regular file (a FIFO, device, folder or
-            symbolic link is refused); its folder must exist.
+            symbolic link is refused); a missing folder is created.
 
     Returns:
         The output path.
 
     Raises:
-        SpecError: ``path`` is not a regular file or a new path, or the URDF does not load back.
+        SpecError: The URDF does not load back.
+        OutputPathError: ``path`` is not a regular file or a new path (:mod:`aiauv_pin.atomic`).
     """
-    import stat
-
+    from .atomic import atomic_path
     from .errors import AiauvError
     from .loading import load_vehicle
 
     path = Path(path)
-    try:
-        mode = os.lstat(path).st_mode
-    except FileNotFoundError:
-        mode = None
-    except OSError as exc:
-        raise SpecError(f"{path}: cannot use as output ({exc.strerror})") from None
-    if mode is not None and not stat.S_ISREG(mode):
-        raise SpecError(
-            f"{path}: exists and is not a regular file (folder, link, FIFO or device); "
-            "give a new path or a regular file"
-        )
     text = build_urdf(spec)
-    handle, temporary = tempfile.mkstemp(
-        prefix=f".{path.name}.", suffix=".tmp", dir=path.parent if str(path.parent) else "."
-    )
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8", newline="\n") as stream:
-            stream.write(text)
+    with atomic_path(path) as temporary:  # refuses a FIFO, device, folder or link at ``path``
+        temporary.write_text(text, encoding="utf-8", newline="\n")
         try:
             load_vehicle(temporary, backend="pinocchio")
         except AiauvError as exc:
             message = str(exc).replace(str(temporary), "the URDF")
             raise SpecError(f"{path}: the built URDF does not load back: {message}") from None
-        os.chmod(temporary, 0o644)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
     return path
 
 

@@ -159,10 +159,9 @@ def scenario_for_args(args):
 def _run_simulate(args) -> int:
     from . import loading
     from .errors import AiauvError, SimulationDiverged
-    from .outputs import live_path_points, preload_plotting, write_results
+    from .outputs import final_line, live_path_points, preload_plotting, write_results
     from .result_folder import check_output_folder, staged_folder
-    from .scenario import ScenarioResult, run_scenario
-    from .text import signed
+    from .scenario import ScenarioResult, joint_position_units, run_scenario
     from .validation import explain_divergence
 
     scenario = scenario_for_args(args)
@@ -173,12 +172,13 @@ def _run_simulate(args) -> int:
             "use a larger --dt or a shorter --duration"
         )
     path = scenario.vehicle if scenario.vehicle is not None else loading.bundled_urdf(scenario.case)
-    from .compilation import announce_compilation, warm_up
+    from .compilation import CompilationWatch, warm_up
 
     compile_start = time.perf_counter()
     vehicle = loading.load_vehicle(path, **_description_options(args))
-    # announced once the vehicle passed the validation gate: a refused file gets its one line only
-    compiling = announce_compilation()
+    # watched once the vehicle passed the validation gate: a refused file gets its one line only;
+    # the notice is printed when numba starts compiling (set-up or run), and only then
+    compilation = CompilationWatch()
     if vehicle.fallback_reason is not None:
         print(
             f"aiauv: warning: compiled backend unavailable ({vehicle.fallback_reason}); "
@@ -187,8 +187,9 @@ def _run_simulate(args) -> int:
         )
     # compile (or load) the kernels before the timed run: summary.json's real-time factor is the
     # simulation's alone; the set-up time is recorded beside it
-    warm_up(vehicle, scenario)
-    timing = {"setup_time": time.perf_counter() - compile_start, "compiled_now": compiling}
+    with compilation:
+        warm_up(vehicle, scenario)
+    timing = {"setup_time": time.perf_counter() - compile_start}
     if args.scenario is not None:
         name = args.scenario.stem
     elif scenario.vehicle is not None:
@@ -196,6 +197,7 @@ def _run_simulate(args) -> int:
     else:
         name = scenario.case
     out = args.out if args.out is not None else Path("results") / name
+    title = Path(out).resolve().name or name  # the figures' titles name the folder
     check_output_folder(out)  # refuse a file or a foreign folder before simulating
     if not args.no_html:  # a shape the playback cannot draw: say so before the run, not after it
         from .viewer import vehicle_visuals
@@ -213,14 +215,16 @@ def _run_simulate(args) -> int:
         on_log = live_view(vehicle, path_points=live_path_points(scenario))
     start = time.perf_counter()
     try:
-        result = run_scenario(
-            vehicle,
-            scenario,
-            progress=not args.quiet,
-            on_log=on_log,
-            after_first_chunk=preload_plotting,
-        )
+        with compilation:
+            result = run_scenario(
+                vehicle,
+                scenario,
+                progress=not args.quiet,
+                on_log=on_log,
+                after_first_chunk=preload_plotting,
+            )
     except SimulationDiverged as exc:
+        timing["compiled_now"] = compilation.compiled_now
         cause = " ".join(explain_divergence(vehicle, scenario.dt, str(exc)).split())
         partial = exc.trajectory
         if partial is None or len(partial.t) == 0:
@@ -234,15 +238,21 @@ def _run_simulate(args) -> int:
             time.perf_counter() - start,
             vehicle.joint_names,
             vehicle.thruster_names,
+            joint_units=joint_position_units(vehicle),
         )
         with staged_folder(out) as staging:  # nothing of an earlier run survives
             write_results(
-                result, staging, {"vehicle": str(path), **timing}, figure_format=args.figure_format
+                result,
+                staging,
+                {"vehicle": str(path), **timing},
+                figure_format=args.figure_format,
+                vehicle_name=title,
             )
         raise AiauvError(
             f"simulation diverged: {cause}; partial results up to t = {partial.t[-1]:.6g} s "
             f"({len(partial.t)} samples) written to {out}"
         ) from None
+    timing["compiled_now"] = compilation.compiled_now
     with staged_folder(out) as staging:  # in place only once every file is written
         also = []
         if not args.no_html:  # the page, written beside the figures (by whichever process is free)
@@ -264,18 +274,12 @@ def _run_simulate(args) -> int:
             {"vehicle": str(path), **timing},
             figure_format=args.figure_format,
             also=also,
+            vehicle_name=title,
         )
-    final = content["final"]
-    errors = (
-        f"final p_y = {signed(final['p_y'], 4)} m, p_z = {signed(final['p_z'], 4)} m"
-        if "p_y" in final
-        else f"final cross-track error = {final['cross_track_error']:.4f} m"
-    )
-    if "u" in final:
-        errors += f", u = {final['u']:.4f} m/s, phi_tilde = {final['phi_tilde']:.4f} rad"
     print(
-        f"{name}: {content['simulated_time']:.1f} s simulated in {content['wall_time']:.1f} s "
-        f"({content['real_time_factor']:.0f}x real time); {errors} -> {out}"
+        f"{name}: {content['simulated_time']:.1f} s simulated (set-up {timing['setup_time']:.1f} s, "
+        f"simulation {content['wall_time']:.1f} s, {content['real_time_factor']:.0f}x real time); "
+        f"{final_line(content)} -> {out}"
     )
     return 0
 
@@ -354,7 +358,7 @@ def _xacro_argument(text: str) -> tuple[str, str]:
 
 
 def _add_description_options(parser) -> None:
-    """``--arg`` and ``--package-path``: for ``.xacro`` files and ``package://`` URIs."""
+    """``--arg``, ``--package-path``, ``--trust-xacro``: for ``.xacro`` files and ``package://``."""
     parser.add_argument(
         "--arg",
         dest="xacro_args",
@@ -374,10 +378,21 @@ def _add_description_options(parser) -> None:
         help="folder searched for ROS packages named by $(find pkg) and package:// "
         "(repeatable; searched before ROS_PACKAGE_PATH and example-robot-data)",
     )
+    parser.add_argument(
+        "--trust-xacro",
+        action="store_true",
+        help="expand a .xacro vehicle with full xacro, whose ${...} expressions are Python eval "
+        "and can run code: only for a file you trust (default: a safe evaluator of arithmetic, "
+        "comparisons and math functions)",
+    )
 
 
 def _description_options(args) -> dict:
-    return {"xacro_args": dict(args.xacro_args), "package_path": list(args.package_path)}
+    return {
+        "xacro_args": dict(args.xacro_args),
+        "package_path": list(args.package_path),
+        "trust_xacro": args.trust_xacro,
+    }
 
 
 def _add_annotate(subparsers) -> None:
@@ -465,12 +480,14 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     from .bench import add_bench_parser
     from .interop.cli import add_interop_subcommands
     from .linearize_cli import add_linearize_parser
+    from .schema_command import add_schema_parser
     from .sweep import add_sweep_subcommand
 
     add_bench_parser(subparsers)
     add_sweep_subcommand(subparsers)
     add_interop_subcommands(subparsers)
     add_linearize_parser(subparsers)
+    add_schema_parser(subparsers)
     return parser
 
 

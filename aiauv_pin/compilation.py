@@ -1,23 +1,25 @@
-"""The one-time numba compilation: a notice while it runs, and a warm-up outside timed runs.
+"""The numba compilations of a run: seen as they happen, announced, and kept out of timed runs.
 
-numba compiles :mod:`aiauv_pin.fast`'s kernels on their first use in an installation (about a
-minute of CPU time on a 2-core machine, numba 0.68, 2026-11) and caches them on disk
-(``cache=True``); later processes load them in well under a second. Where the package ships them
-(:mod:`hydro.prebuilt`), they are unpacked into that cache instead and nothing is compiled. The
-command line prints :data:`COMPILE_NOTICE` when no cache of the compiled scenario loop is found,
-and runs a few steps of the scenario before the timed run (:func:`warm_up`), so that the real-time
+numba compiles the project's kernels on their first use and caches them in the per-user cache
+folder (:func:`hydro.jit.cache_folder`); later processes load them in well under a second. Where
+the package ships them (:mod:`hydro.prebuilt`) and the installed numba is the one they were built
+with, they are unpacked into that folder instead and nothing is compiled. Otherwise they are
+compiled once (about a minute of CPU time on a 2-core machine, numba 0.68, 2026-11).
+
+Whether a run compiled is not guessed from files: :class:`CompilationWatch` listens to numba's
+``numba:compile`` event, which numba sends only when it compiles a function (not when it loads one
+from the cache), prints :data:`COMPILE_NOTICE` at the first and counts them. The command line also
+runs a few steps of the scenario before the timed run (:func:`warm_up`), so that the real-time
 factor in ``summary.json`` measures the simulation and not the compilation.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import os
 import sys
-from pathlib import Path
 
-#: Printed (to standard error) before the first compilation in an installation.
+#: Printed (to standard error) when numba starts compiling the project's kernels in a run.
 COMPILE_NOTICE = "aiauv: compiling kernels once for this installation (about a minute of CPU time)"
 
 
@@ -37,61 +39,61 @@ def default_target_environment(environ=None) -> dict[str, str]:
     return {k: v for k, v in environ.items() if k not in TARGET_SETTINGS}
 
 
-def _cache_folders() -> list[Path]:
-    """Where numba may keep this package's cache (its locators, in order)."""
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        return [Path(os.environ["NUMBA_CACHE_DIR"])]  # numba then uses this folder only
-    folders = []
-    spec = importlib.util.find_spec("aiauv_pin.fast")
-    if spec is not None and spec.submodule_search_locations:
-        folders.extend(Path(p) / "__pycache__" for p in spec.submodule_search_locations)
-    folders.append(Path.home() / ".cache" / "numba")
-    return folders
+class CompilationWatch:
+    """numba's compilations while the watch is on (a context manager; nothing without numba).
 
-
-def _index_is_current(index: Path) -> bool:
-    """Whether a numba cache index was written for the current sources and holds code for this
-    process's CPU target (numba keys each entry on its code generator's magic tuple: triple, CPU
-    name and features; :func:`hydro.prebuilt.read_index`)."""
-    from numba.core.registry import cpu_target
-
-    from hydro.jit import source_hash
-    from hydro.prebuilt import read_index
-
-    read = read_index(index)
-    if read is None or read[0] != source_hash():
-        return False
-    target = cpu_target.target_context.codegen().magic_tuple()
-    return any(isinstance(key, tuple) and key[1:2] == (target,) for key in read[1])
-
-
-def kernels_cached() -> bool:
-    """Whether numba's on-disk cache holds the compiled simulation loop for the current sources.
-
-    Defining the loop unpacks the kernels shipped with the package (:mod:`hydro.prebuilt`), so
-    the loop's module is imported first.
+    Attributes:
+        compiled: Qualified names of the functions compiled, in order (one entry per signature).
     """
-    import aiauv_pin.fast.loop  # noqa: F401  (its definition seeds the cache)
 
-    for folder in _cache_folders():
-        if not folder.is_dir():
-            continue
-        for index in folder.rglob("loop.run_chunk-*.nbi"):
-            if _index_is_current(index):
-                return True
-    return False
+    def __init__(self, stream=None, notice: bool = True):
+        """
+        Args:
+            stream: Where :data:`COMPILE_NOTICE` goes (standard error by default).
+            notice: Whether to print it at the first compilation.
+        """
+        self.compiled: list[str] = []
+        self._stream = stream
+        self._notice = notice
+        self._listener = None
 
+    @property
+    def compiled_now(self) -> bool:
+        """Whether anything was compiled while the watch was on."""
+        return bool(self.compiled)
 
-def announce_compilation(stream=None) -> bool:
-    """Print :data:`COMPILE_NOTICE` if the kernels will be compiled now; return whether they will.
+    def _started(self, dispatcher) -> None:
+        if not self.compiled and self._notice:
+            stream = self._stream if self._stream is not None else sys.stderr
+            print(COMPILE_NOTICE, file=stream, flush=True)
+        function = getattr(dispatcher, "py_func", None)
+        self.compiled.append(getattr(function, "__qualname__", repr(dispatcher)))
 
-    Args:
-        stream: Where to print (standard error by default).
-    """
-    if importlib.util.find_spec("numba") is None or kernels_cached():
-        return False
-    print(COMPILE_NOTICE, file=stream if stream is not None else sys.stderr, flush=True)
-    return True
+    def __enter__(self) -> CompilationWatch:
+        from hydro.jit import NUMBA_AVAILABLE
+
+        if NUMBA_AVAILABLE:
+            from numba.core import event
+
+            watch = self
+
+            class _Listener(event.Listener):
+                def on_start(self, started):
+                    watch._started((started.data or {}).get("dispatcher"))
+
+                def on_end(self, ended):
+                    pass
+
+            self._listener = _Listener()
+            event.register("numba:compile", self._listener)
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        if self._listener is not None:
+            from numba.core import event
+
+            event.unregister("numba:compile", self._listener)
+            self._listener = None
 
 
 def warm_up(vehicle, scenario) -> None:

@@ -143,6 +143,7 @@ def load_vehicle(
     backend: str | None = None,
     xacro_args: dict[str, str] | None = None,
     package_path: list[str | os.PathLike] | tuple = (),
+    trust_xacro: bool = False,
 ) -> Vehicle:
     """Load an underwater vehicle from a URDF with an optional ``<hydrodynamics>`` block.
 
@@ -160,6 +161,9 @@ def load_vehicle(
             (:mod:`aiauv_pin.xacro_loading`).
         package_path: Folders searched first for ``$(find pkg)`` and ``package://``
             (then ``ROS_PACKAGE_PATH``, example-robot-data).
+        trust_xacro: Expand a ``.xacro`` file with full xacro, whose expressions are Python
+            ``eval`` and can run code: only for a file you trust. By default its expressions go
+            to the safe evaluator (:mod:`aiauv_pin.xacro_safe_eval`).
 
     Returns:
         The vehicle, with a free-flyer joint on the URDF's root link.
@@ -173,7 +177,8 @@ def load_vehicle(
         text = _read_text(source)
     elif isinstance(path, (str, os.PathLike)):
         source = Path(path)
-        text = read_description(source, xacro_args, package_path)  # None unless .xacro
+        # None unless .xacro
+        text = read_description(source, xacro_args, package_path, trust_xacro=trust_xacro)
         if text is None:
             # refuses URDF text passed as a path, FIFOs, devices, huge files
             text = _read_text(path)

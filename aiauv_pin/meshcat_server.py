@@ -5,6 +5,10 @@ and the websocket a browser connects to) to every network interface. This module
 server (:class:`meshcat.servers.zmqserver.ZMQWebSocketBridge`) in a subprocess with the web server
 bound to the requested address only (``python -m aiauv_pin.meshcat_server --host ADDRESS``), and
 prints ``zmq_url=...`` and ``web_url=...`` lines as ``meshcat-server`` does.
+
+The server ends with the process that started it, also when that process is killed with SIGKILL
+(``--parent PID``: :func:`aiauv_pin.parent_death.die_with_parent`, a parent-death signal on Linux, a
+watchdog elsewhere); it runs in its own session, so a Ctrl-C in a notebook cell does not stop it.
 """
 
 from __future__ import annotations
@@ -48,6 +52,7 @@ def start_server(host: str = DEFAULT_HOST, timeout: float = 60.0) -> MeshcatServ
         RuntimeError: The server did not start (its message, one line).
     """
     command = [sys.executable, "-u", "-m", "aiauv_pin.meshcat_server", "--host", host]
+    command += ["--parent", str(os.getpid())]  # it ends when this process ends
     process = subprocess.Popen(
         command,
         stdout=subprocess.PIPE,
@@ -74,7 +79,14 @@ def main(argv: list[str] | None = None) -> None:
     """Run the server (blocks)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--host", default=DEFAULT_HOST, help="address to listen on (127.0.0.1)")
+    parser.add_argument(
+        "--parent", type=int, default=None, help="end when the process with this id ends"
+    )
     args = parser.parse_args(argv)
+    if args.parent is not None:
+        from .parent_death import die_with_parent
+
+        die_with_parent(args.parent)
 
     import tornado.web
     from meshcat.servers.zmqserver import ZMQWebSocketBridge

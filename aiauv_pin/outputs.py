@@ -1,4 +1,10 @@
-"""Result files of a path-following run: ``timeseries.csv``, ``summary.json`` and ``figures/``.
+"""Result files of a run: ``timeseries.csv``, ``summary.json`` and ``figures/``.
+
+What they hold fits the run: path errors, named in the path's frame, only for a run that follows
+a path (:func:`aiauv_pin.scenario.followed_path`), the motion of the base for one that does not
+(:func:`figures_of`, :func:`aiauv_pin.scenario.summary`); ``timeseries.csv`` has a unit in every
+header cell and the whole state, written so that it reads back exactly
+(:func:`timeseries_table`, :func:`read_timeseries`, :func:`timeseries_trajectory`).
 
 The run is logged at every controller sample (every step by default) and ``summary.json``'s
 integrals (work) and settling times use every logged sample. ``timeseries.csv`` holds every
@@ -17,15 +23,19 @@ from __future__ import annotations
 
 import functools
 import json
+import os
 import sys
 import threading
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .atomic import atomic_path, write_text
-from .scenario import ScenarioResult, summary
+from .scenario import ScenarioResult, cross_track_axes, summary
+from .simulation import Trajectory
+from .text import signed
 
 _preload: threading.Thread | None = None
 _stop_warming = threading.Event()  # set when the figures are due: the warm-up stops early
@@ -40,6 +50,9 @@ _MATH_TEXT = (
     "$p_z$",
     "$e_1$",
     "$e_2$",
+    "$e_1$ (horizontal)",
+    "$e_2$ (vertical)",
+    r"$\tilde\omega$ [rad/s]",
     "$u$",
     "$u_d$",
     r"$\tilde\phi$ [rad]",
@@ -143,54 +156,155 @@ def _wait_for_preload() -> None:
         _preload.join()
 
 
-def timeseries_columns(result: ScenarioResult) -> dict[str, np.ndarray]:
-    """Columns of ``timeseries.csv`` by name, in order.
+@dataclass(frozen=True)
+class TimeseriesColumn:
+    """One column of ``timeseries.csv``: its name, unit and values (one per logged sample)."""
 
-    Always: time, the end-effector's world position ``p_x, p_y, p_z``, the cross-track errors
-    along the path's normals ``e_1, e_2`` and the path parameter ``s``, every joint angle and the base
-    position. With the paper's controller also its diagnostics (surge, errors, base angles,
-    reference and actual pointing direction, joint references and torques, thrusts).
+    name: str
+    unit: str
+    values: np.ndarray
+
+
+#: Diagnostics the controllers log, as columns: ``(info key, column names, unit)``; the paper's
+#: controller logs all of them, every run ``p``, a run that follows a path also ``cross_track``
+#: and ``path_s`` (:func:`aiauv_pin.scenario.add_path_errors`).
+_INFO_COLUMNS = (
+    ("p", ("p_x", "p_y", "p_z"), "m"),
+    ("cross_track", ("e_1", "e_2"), "m"),
+    ("path_s", ("s",), "m"),
+    ("u", ("u",), "m/s"),
+    ("phi_tilde", ("phi_tilde",), "rad"),
+    ("omega_tilde", ("omega_tilde_y", "omega_tilde_z"), "rad/s"),
+    ("base_angles", ("q_y0", "q_z0"), "rad"),
+    ("x_ref", ("x_ref_x", "x_ref_y", "x_ref_z"), "-"),
+    ("pointing", ("pointing_x", "pointing_y", "pointing_z"), "-"),
+)
+#: Per-joint and per-thruster diagnostics of the paper's controller: ``(info key, column prefix)``
+#: (joint references in the joint's unit, torques [N m] or [N], thrusts [N]).
+_NAMED_COLUMNS = (
+    ("joint_references", "qref_"),
+    ("joint_torque", "tau_"),
+    ("thrust", "thrust_"),
+)
+#: The base's configuration and twist (Pinocchio's free flyer: ``q[:7]`` = position [m] and
+#: quaternion ``(x, y, z, w)``, ``v[:6]`` = linear [m/s] and angular [rad/s] velocity in the body
+#: frame) as columns: ``(name, unit)``.
+BASE_CONFIGURATION = (
+    ("base_x", "m"),
+    ("base_y", "m"),
+    ("base_z", "m"),
+    ("base_quat_x", "-"),
+    ("base_quat_y", "-"),
+    ("base_quat_z", "-"),
+    ("base_quat_w", "-"),
+)
+BASE_TWIST = (
+    ("base_u", "m/s"),
+    ("base_v", "m/s"),
+    ("base_w", "m/s"),
+    ("base_p", "rad/s"),
+    ("base_q", "rad/s"),
+    ("base_r", "rad/s"),
+)
+#: Number format of ``timeseries.csv``: 17 significant digits, which read back to the same float,
+#: so :func:`read_timeseries` returns the logged values bit for bit (Python's shortest such text,
+#: ``repr``, takes 1.6 times as long to write; it is kept for the time, ``0.04`` rather than
+#: ``0.040000000000000001``).
+CSV_FORMAT = "%.17g"
+TIME_FORMAT = "%r"
+
+
+def _rate_unit(unit: str) -> str:
+    return f"{unit}/s"
+
+
+def _effort_unit(unit: str) -> str:
+    return "N" if unit == "m" else "N m"
+
+
+def timeseries_table(result: ScenarioResult) -> list[TimeseriesColumn]:
+    """The columns of ``timeseries.csv``, in order, with their units.
+
+    Every run: time ``t`` [s], the end-effector's world position ``p_x, p_y, p_z`` [m], every joint
+    angle ``q_<joint>`` [rad] (or [m] for a prismatic joint), the base's position ``base_x, base_y,
+    base_z`` [m] and quaternion ``base_quat_x, _y, _z, _w`` [-] (Pinocchio's order), its twist in
+    the body frame ``base_u, base_v, base_w`` [m/s] and ``base_p, base_q, base_r`` [rad/s], and
+    every joint rate ``v_<joint>`` [rad/s] (or [m/s]): the whole state ``(q, v)``
+    (:func:`timeseries_trajectory` reads it back). A run that follows a path adds the cross-track
+    errors ``e_1, e_2`` [m] along the path frame's normals (named in ``summary.json``'s
+    ``cross_track_axes``) and the path parameter ``s`` [m]; the paper's controller adds its
+    diagnostics (surge ``u`` [m/s], pointing error ``phi_tilde`` [rad], ``omega_tilde_y, _z``
+    [rad/s], base angles ``q_y0, q_z0`` [rad], reference and actual pointing directions [-], joint
+    references ``qref_<joint>``, torques ``tau_<joint>`` [N m] and thrusts ``thrust_<name>`` [N]).
     """
     tr = result.trajectory
     info = tr.info
-    columns: dict[str, np.ndarray] = {
-        "t": tr.t,
-        "p_x": info["p"][:, 0],
-        "p_y": info["p"][:, 1],
-        "p_z": info["p"][:, 2],
-        "e_1": info["cross_track"][:, 0],
-        "e_2": info["cross_track"][:, 1],
-        "s": info["path_s"],
-    }
+    q, v = np.asarray(tr.q), np.asarray(tr.v)
+    units = result.position_units
+    table = [TimeseriesColumn("t", "s", np.asarray(tr.t))]
+
+    def add_info(key: str, names, unit: str) -> None:
+        values = np.asarray(info[key]).reshape(len(tr.t), -1)
+        table.extend(TimeseriesColumn(name, unit, values[:, k]) for k, name in enumerate(names))
+
     paper = "u" in info
+    for key, names, unit in _INFO_COLUMNS:
+        if key in info and (paper or key in ("p", "cross_track", "path_s")):
+            add_info(key, names, unit)
+    table.extend(
+        TimeseriesColumn(f"q_{name}", unit, q[:, 7 + k])
+        for k, (name, unit) in enumerate(zip(result.joint_names, units, strict=True))
+    )
     if paper:
-        columns.update(
-            {
-                "u": info["u"],
-                "phi_tilde": info["phi_tilde"],
-                "omega_tilde_y": info["omega_tilde"][:, 0],
-                "omega_tilde_z": info["omega_tilde"][:, 1],
-                "q_y0": info["base_angles"][:, 0],
-                "q_z0": info["base_angles"][:, 1],
-            }
-        )
-        for k, axis in enumerate("xyz"):
-            columns[f"x_ref_{axis}"] = info["x_ref"][:, k]
-        for k, axis in enumerate("xyz"):
-            columns[f"pointing_{axis}"] = info["pointing"][:, k]
-    for k, name in enumerate(result.joint_names):
-        columns[f"q_{name}"] = tr.q[:, 7 + k]
-    if paper:
-        for k, name in enumerate(result.joint_names):
-            columns[f"qref_{name}"] = info["joint_references"][:, k]
-        for k, name in enumerate(result.joint_names):
-            columns[f"tau_{name}"] = info["joint_torque"][:, k]
-        for k, name in enumerate(result.thruster_names):
-            columns[f"thrust_{name}"] = info["thrust"][:, k]
-    base = tr.q[:, :3]
-    for k, axis in enumerate("xyz"):
-        columns[f"base_{axis}"] = base[:, k]
-    return columns
+        for key, prefix in _NAMED_COLUMNS:
+            values = np.asarray(info[key])
+            if key == "thrust":
+                owners = [(name, "N") for name in result.thruster_names]
+            else:
+                effort = key == "joint_torque"
+                owners = [
+                    (name, _effort_unit(unit) if effort else unit)
+                    for name, unit in zip(result.joint_names, units, strict=True)
+                ]
+            table.extend(
+                TimeseriesColumn(f"{prefix}{name}", unit, values[:, k])
+                for k, (name, unit) in enumerate(owners)
+            )
+    table.extend(
+        TimeseriesColumn(name, unit, q[:, k]) for k, (name, unit) in enumerate(BASE_CONFIGURATION)
+    )
+    table.extend(TimeseriesColumn(name, unit, v[:, k]) for k, (name, unit) in enumerate(BASE_TWIST))
+    table.extend(
+        TimeseriesColumn(f"v_{name}", _rate_unit(unit), v[:, 6 + k])
+        for k, (name, unit) in enumerate(zip(result.joint_names, units, strict=True))
+    )
+    seen: set[str] = set()
+    for column in table:
+        if column.name in seen:
+            raise ValueError(
+                f"timeseries.csv: two columns named '{column.name}' (rename the joint or thruster)"
+            )
+        seen.add(column.name)
+    return table
+
+
+def timeseries_columns(result: ScenarioResult) -> dict[str, np.ndarray]:
+    """Columns of ``timeseries.csv`` by name, in order (:func:`timeseries_table` without units)."""
+    return {column.name: column.values for column in timeseries_table(result)}
+
+
+def column_header(name: str, unit: str) -> str:
+    """Header cell of a column: ``"name [unit]"`` (``[-]`` for a dimensionless one)."""
+    return f"{name} [{unit}]"
+
+
+def parse_header(cell: str) -> tuple[str, str]:
+    """``(name, unit)`` of a header cell written by :func:`column_header` (unit ``""`` if none)."""
+    cell = cell.strip()
+    if cell.endswith("]") and " [" in cell:
+        name, unit = cell[:-1].rsplit(" [", 1)
+        return name, unit
+    return cell, ""
 
 
 #: Largest number of min/max buckets per plotted curve (each contributes two points).
@@ -211,20 +325,124 @@ def csv_rows(result: ScenarioResult) -> np.ndarray:
     return rows
 
 
-def format_table(header: list[str], table: np.ndarray, fmt: str = "%.9g") -> str:
-    """CSV text of a 2-D float table (same text as ``np.savetxt(..., delimiter=",")``)."""
+def format_table(header: list[str], table: np.ndarray, fmt: str | Sequence[str] = "%.9g") -> str:
+    """CSV text of a 2-D float table (same text as ``np.savetxt(..., delimiter=",")``).
+
+    ``fmt`` is a ``%`` format of one number, or one per column; ``"%r"`` writes Python's ``repr``
+    (the shortest text that reads back to the same float)."""
     n_rows, n_columns = table.shape
-    line = ",".join([fmt] * n_columns) + "\n"
+    formats = [fmt] * n_columns if isinstance(fmt, str) else list(fmt)
+    line = ",".join(formats) + "\n"
     body = (line * n_rows) % tuple(table.ravel().tolist()) if n_rows else ""
     return ",".join(header) + "\n" + body
 
 
 def write_timeseries(result: ScenarioResult, path: Path) -> Path:
-    """Write ``timeseries.csv`` (one row per ``csv_period``, see the module docstring; SI, rad)."""
-    columns = timeseries_columns(result)
+    """Write ``timeseries.csv``: one row per ``csv_period`` (see the module docstring), a header
+    of ``name [unit]`` cells (:func:`timeseries_table`), numbers that read back exactly
+    (:data:`CSV_FORMAT`, :data:`TIME_FORMAT`)."""
+    columns = timeseries_table(result)
     rows = csv_rows(result)
-    table = np.column_stack([column[rows] for column in columns.values()])
-    return write_text(path, format_table(list(columns), table))
+    table = np.column_stack([np.asarray(column.values, dtype=float)[rows] for column in columns])
+    header = [column_header(column.name, column.unit) for column in columns]
+    formats = [TIME_FORMAT if column.name == "t" else CSV_FORMAT for column in columns]
+    return write_text(path, format_table(header, table, formats))
+
+
+@dataclass(frozen=True)
+class Timeseries:
+    """A ``timeseries.csv`` read back (:func:`read_timeseries`).
+
+    Attributes:
+        columns: Values by column name (without the unit), in the file's order.
+        units: Unit of each column (``"-"``: dimensionless; ``""``: none given).
+    """
+
+    columns: dict[str, np.ndarray]
+    units: dict[str, str]
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+    @property
+    def joint_names(self) -> list[str]:
+        """Joints with both an angle ``q_<joint>`` and a rate ``v_<joint>`` column, in order."""
+        return [
+            name[2:]
+            for name in self.columns
+            if name.startswith("v_") and f"q_{name[2:]}" in self.columns
+        ]
+
+
+def read_timeseries(path: str | os.PathLike) -> Timeseries:
+    """Read a ``timeseries.csv`` written by :func:`write_timeseries`: every value exactly as logged.
+
+    Raises:
+        ValueError: Not such a file (no header, a ragged row, a cell that is not a number), one line
+            naming the file and the row.
+    """
+    import csv
+
+    with open(path, newline="", encoding="utf-8") as handle:
+        rows = list(csv.reader(handle))
+    if not rows or not rows[0]:
+        raise ValueError(f"{path}: empty, expected a header of 'name [unit]' cells")
+    header = [parse_header(cell) for cell in rows[0]]
+    values = np.empty((len(rows) - 1, len(header)))
+    for k, row in enumerate(rows[1:]):
+        if len(row) != len(header):
+            raise ValueError(f"{path}: row {k + 2} has {len(row)} cells, the header {len(header)}")
+        try:
+            values[k] = [float(cell) for cell in row]
+        except ValueError:
+            raise ValueError(f"{path}: row {k + 2} holds a cell that is not a number") from None
+    return Timeseries(
+        columns={name: values[:, j] for j, (name, _) in enumerate(header)},
+        units={name: unit for name, unit in header},
+    )
+
+
+#: Diagnostics :func:`timeseries_trajectory` puts back into ``info`` (the playback draws ``p``,
+#: ``thrust`` and ``x_ref``).
+_INFO_READ_BACK = {key: names for key, names, _ in _INFO_COLUMNS}
+
+
+def timeseries_trajectory(path: str | os.PathLike | Timeseries) -> Trajectory:
+    """The run of a ``timeseries.csv`` as a :class:`aiauv_pin.simulation.Trajectory`: times, the
+    configurations ``q`` (base position, quaternion ``x, y, z, w``, joint angles) and velocities
+    ``v`` (base twist in the body frame, joint rates) of its rows, exactly as logged, and the
+    diagnostics it holds (``p``, ``cross_track``, ``path_s``, the paper controller's, ``thrust``)
+    in ``info``. The generalised forces are not in the file: ``tau`` is NaN.
+
+    Raises:
+        ValueError: A file without the state columns (one line naming the first one missing).
+    """
+    series = path if isinstance(path, Timeseries) else read_timeseries(path)
+    joints = series.joint_names
+    names = (
+        ["t"]
+        + [name for name, _ in BASE_CONFIGURATION]
+        + [f"q_{joint}" for joint in joints]
+        + [name for name, _ in BASE_TWIST]
+        + [f"v_{joint}" for joint in joints]
+    )
+    for name in names:
+        if name not in series.columns:
+            where = path if not isinstance(path, Timeseries) else "timeseries"
+            raise ValueError(f"{where}: no column '{name}', so no state to rebuild the run from")
+    t = series["t"]
+    q = np.column_stack([series[name] for name in names[1 : 8 + len(joints)]])
+    v = np.column_stack([series[name] for name in names[8 + len(joints) :]])
+    info: dict[str, np.ndarray] = {}
+    for key, columns in _INFO_READ_BACK.items():
+        if all(name in series.columns for name in columns):
+            stacked = np.column_stack([series[name] for name in columns])
+            info[key] = stacked[:, 0] if len(columns) == 1 else stacked
+    for key, prefix in _NAMED_COLUMNS:
+        columns = [name for name in series.columns if name.startswith(prefix)]
+        if columns:
+            info[key] = np.column_stack([series[name] for name in columns])
+    return Trajectory(t=t, q=q, v=v, tau=np.full(v.shape, np.nan), info=info)
 
 
 def envelope(t: np.ndarray, y: np.ndarray, buckets: int = PLOT_BUCKETS):
@@ -281,16 +499,31 @@ FIGURES = (
 #: level 6 in about half the encoding time (files about 20 % larger).
 _SAVE_OPTIONS = {"png": {"pil_kwargs": {"compress_level": 1}}}
 
-#: Figures every run has (the others need the paper controller's diagnostics).
+#: Figures of a run that follows a path without the paper controller's diagnostics.
 PATH_FIGURES = ("fig2_cross_track.png", "path_3d.png")
+#: Figures of a run that follows no path (a passive run): the base's displacement from its start
+#: and speed against time, and the 3-D trajectories of the base and the end-effector.
+MOTION_FIGURES = ("base_motion.png", "motion_3d.png")
 
 
 def figures_of(result: ScenarioResult) -> tuple[str, ...]:
-    """The figures drawn for ``result``: all of :data:`FIGURES` with the paper's controller, else
-    :data:`PATH_FIGURES`."""
+    """The figures drawn for ``result``: all of :data:`FIGURES` with the paper's controller's
+    diagnostics, :data:`PATH_FIGURES` for another run that follows a path, else
+    :data:`MOTION_FIGURES`."""
+    if result.followed_path is None:
+        return MOTION_FIGURES
     if "u" in result.trajectory.info:
         return FIGURES
     return PATH_FIGURES
+
+
+#: Legend labels of the cross-track errors by what they measure
+#: (:func:`aiauv_pin.scenario.cross_track_axes`).
+_CROSS_TRACK_LABELS = {
+    ("p_y", "p_z"): ("$p_y$", "$p_z$"),
+    ("horizontal", "vertical"): ("$e_1$ (horizontal)", "$e_2$ (vertical)"),
+    ("N1", "N2"): ("$e_1$ (along $N_1$)", "$e_2$ (along $N_2$)"),
+}
 
 
 def _error_axes(plt, title: str):
@@ -301,6 +534,11 @@ def _error_axes(plt, title: str):
     ax.set_title(title)
     ax.axhline(0.0, color="k", lw=0.5)
     ax_log.set_yscale("log")
+    # minor ticks (labelled over less than a decade) as plain numbers, "2e-02", not "2 x 10^-2":
+    # narrow enough to leave the axis label in the figure
+    from matplotlib.ticker import LogFormatter
+
+    ax_log.yaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(1, 0.4)))
     ax_log.set_xlabel("t [s]")
     ax_log.grid(True, which="major", lw=0.3)
     return fig, ax, ax_log
@@ -313,13 +551,45 @@ def _plot_error(ax, ax_log, t, y, **kwargs) -> None:
     _plot(ax_log, t, np.where(magnitude > 0.0, magnitude, np.nan), **kwargs)
 
 
-def default_path_points(result: ScenarioResult, n: int = 400) -> np.ndarray:
-    """The drawn path when none is given: the scenario's path over the arc length the end-effector
-    covered (its closest points' range, with a margin), (n, 3) world points [m]."""
+def default_path_points(result: ScenarioResult, n: int = 400) -> np.ndarray | None:
+    """The drawn path when none is given: the path the run followed over the arc length the
+    end-effector covered (its closest points' range, with a margin), (n, 3) world points [m];
+    ``None`` for a run that follows no path (a passive run)."""
+    path = result.followed_path
+    if path is None:
+        return None
     s = result.trajectory.info["path_s"]
     low, high = float(np.min(s)), float(np.max(s))
     margin = 0.05 * max(high - low, 1.0)
-    return result.scenario.path_to_follow.sample((low - margin, high + margin), n)
+    return path.sample((low - margin, high + margin), n)
+
+
+def final_line(content: dict) -> str:
+    """What ``aiauv simulate`` prints of a run's final state, from its ``summary.json`` content:
+    the errors from the path it followed, in the path's frame (``p_y``, ``p_z`` on the paper's
+    x-axis; else the distance and its components named by ``cross_track_axes``, and the arc
+    length reached), or for a run that follows no path the base's position, its distance from its
+    start and its speed; the paper controller's surge and pointing error when it ran."""
+    final = content["final"]
+    axes = content.get("cross_track_axes")
+    if axes is None:
+        x, y, z = final["base_position"]
+        text = (
+            f"final base position = ({signed(x, 3)}, {signed(y, 3)}, {signed(z, 3)}) m, "
+            f"{final['base_distance']:.4f} m from its start, speed {final['base_speed']:.4f} m/s"
+        )
+    elif "p_y" in final:
+        text = f"final p_y = {signed(final['p_y'], 4)} m, p_z = {signed(final['p_z'], 4)} m"
+    else:
+        e_1, e_2 = final["cross_track"]
+        text = (
+            f"final cross-track error = {final['cross_track_error']:.4f} m "
+            f"({axes[0]} {signed(e_1, 4)} m, {axes[1]} {signed(e_2, 4)} m) "
+            f"at along-track s = {final['along_track']:.2f} m"
+        )
+    if "u" in final:
+        text += f", u = {final['u']:.4f} m/s, phi_tilde = {final['phi_tilde']:.4f} rad"
+    return text
 
 
 def live_path_points(scenario, n: int = 400) -> np.ndarray:
@@ -340,6 +610,10 @@ def _set_equal_axes(ax, points: np.ndarray) -> None:
     ax.set_ylim(centre[1] - half, centre[1] + half)
     ax.set_zlim(centre[2] - half, centre[2] + half)
     ax.set_box_aspect((1.0, 1.0, 1.0))
+    from matplotlib.ticker import MaxNLocator
+
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):  # tick labels that do not run into each other
+        axis.set_major_locator(MaxNLocator(5))
 
 
 def _draw(
@@ -350,13 +624,14 @@ def _draw(
     vehicle_name: str | None = None,
     path_points: np.ndarray | None = None,
 ):
-    """The figure ``name`` of :data:`FIGURES`, titled with the vehicle's name.
+    """The figure ``name`` of :data:`FIGURES` or :data:`MOTION_FIGURES`, titled with a name.
 
     Args:
-        name: One of :data:`FIGURES`.
+        name: One of :data:`FIGURES` or :data:`MOTION_FIGURES`.
         result: The run.
         plt: ``matplotlib.pyplot``.
-        vehicle_name: Name in the titles (default: the scenario's case).
+        vehicle_name: Name in the titles (``aiauv simulate``: its output folder's; default: the
+            scenario's case).
         path_points: World points of the path the 3-D figure draws, (N, 3) [m] (default:
             :func:`default_path_points`).
     """
@@ -366,7 +641,9 @@ def _draw(
     if name == "fig2_cross_track.png":
         fig, ax, ax_log = _error_axes(plt, f"Cross-track errors ({case})")
         # on the paper's x-axis the path normals are y and z: e_1 = p_y, e_2 = p_z
-        labels = ("$p_y$", "$p_z$") if result.scenario.on_x_axis else ("$e_1$", "$e_2$")
+        s = info["path_s"]
+        axes = cross_track_axes(result.scenario, (float(np.min(s)), float(np.max(s))))
+        labels = _CROSS_TRACK_LABELS[axes]
         _plot_error(ax, ax_log, t, info["cross_track"][:, 0], label=labels[0])
         _plot_error(ax, ax_log, t, info["cross_track"][:, 1], label=labels[1])
         ax.set_ylabel("cross-track error [m]")
@@ -388,14 +665,14 @@ def _draw(
         fig, ax, ax_log = _error_axes(plt, f"Angular velocity error ({case})")
         _plot_error(ax, ax_log, t, info["omega_tilde"][:, 0], label=r"$\tilde\omega_y$")
         _plot_error(ax, ax_log, t, info["omega_tilde"][:, 1], label=r"$\tilde\omega_z$")
-        ax.set_ylabel("[rad/s]")
+        ax.set_ylabel(r"$\tilde\omega$ [rad/s]")
         ax_log.set_ylabel("|error| [rad/s]")
         ax.legend()
     elif name == "fig6_base_angles.png":
         fig, ax = plt.subplots(figsize=(6, 3.2))
         _plot(ax, t, info["base_angles"][:, 0], label="$q_{y,0}$")
         _plot(ax, t, info["base_angles"][:, 1], label="$q_{z,0}$")
-        ax.set(xlabel="t [s]", ylabel="[rad]", title=f"Base angles ({case})")
+        ax.set(xlabel="t [s]", ylabel="base angle [rad]", title=f"Base angles ({case})")
         ax.legend()
     elif name == "fig7_pointing.png":
         fig, axes = plt.subplots(3, 1, figsize=(6, 5), sharex=True)
@@ -403,6 +680,7 @@ def _draw(
             _plot(axes[k], t, info["pointing"][:, k], label=f"$x^I_{axis}$")
             _plot(axes[k], t, info["x_ref"][:, k], ls="--", label=rf"$x_{{ref,{axis}}}$")
             axes[k].legend(loc="right")
+            axes[k].set_ylabel(f"{axis} [-]")
         axes[-1].set_xlabel("t [s]")
         axes[0].set_title(f"End-effector and reference pointing direction ({case})")
     elif name == "path_3d.png":
@@ -420,6 +698,30 @@ def _draw(
         ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"Path ({case})")
         _set_equal_axes(ax, np.concatenate((path, drawn)))
         ax.legend()
+    elif name == "base_motion.png":
+        fig, (ax, ax_speed) = plt.subplots(2, 1, figsize=(6, 4.6), sharex=True)
+        q, v = np.asarray(tr.q), np.asarray(tr.v)
+        for k, axis in enumerate("xyz"):
+            _plot(ax, t, q[:, k] - q[0, k], label=f"${axis}$")
+        ax.set(ylabel="displacement [m]", title=f"Base motion from its start ({case})")
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.legend()
+        # the body-frame linear velocity's length is the world speed of the base origin
+        _plot(ax_speed, t, np.linalg.norm(v[:, :3], axis=1))
+        ax_speed.set(xlabel="t [s]", ylabel="speed [m/s]")
+    elif name == "motion_3d.png":
+        fig = plt.figure(figsize=(6, 4.5))
+        ax = fig.add_subplot(projection="3d")
+        drawn = []
+        for label, points in (("base", np.asarray(tr.q)[:, :3]), ("end-effector", info["p"])):
+            stride = max(1, len(points) // (2 * PLOT_BUCKETS))
+            points = np.concatenate((points[::stride], points[-1:]))
+            (line,) = ax.plot(points[:, 0], points[:, 1], points[:, 2], label=label)
+            ax.scatter(*points[0], marker="o", s=12, color=line.get_color())  # the start
+            drawn.append(points)
+        ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"Trajectory ({case})")
+        _set_equal_axes(ax, np.concatenate(drawn))
+        ax.legend()
     else:
         raise ValueError(f"unknown figure {name!r}")
     return fig
@@ -436,10 +738,12 @@ def figure_path(folder: Path, name: str, figure_format: str = "png") -> Path:
 _MARGINS = {
     "error": {"left": 0.13, "right": 0.97, "bottom": 0.1, "top": 0.93, "hspace": 0.08},
     "single": {"left": 0.12, "right": 0.97, "bottom": 0.15, "top": 0.9},
-    "three": {"left": 0.1, "right": 0.97, "bottom": 0.09, "top": 0.94, "hspace": 0.1},
+    "three": {"left": 0.13, "right": 0.97, "bottom": 0.09, "top": 0.94, "hspace": 0.1},
     "3d": {"left": 0.02, "right": 0.92, "bottom": 0.06, "top": 0.93},
 }
 _LAYOUT_OF = {
+    "base_motion.png": "error",
+    "motion_3d.png": "3d",
     "fig2_cross_track.png": "error",
     "fig4_phi_tilde.png": "error",
     "fig5_omega_tilde.png": "error",
@@ -487,22 +791,13 @@ def _fork_context():
 
 
 def _die_with_parent(parent: int) -> None:
-    """Initializer of the figure worker: it is killed when the process that forked it dies.
-
-    Linux ``prctl(PR_SET_PDEATHSIG, SIGKILL)``; if the parent is already gone, exit at once.
-    """
-    import ctypes
-    import ctypes.util
-    import os
+    """Initializer of the figure worker: it is killed (SIGKILL) when the process that forked it
+    dies, however it dies (:func:`aiauv_pin.parent_death.die_with_parent`)."""
     import signal
 
-    try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
-        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
-    except (OSError, AttributeError):
-        pass
-    if os.getppid() != parent:
-        os._exit(1)
+    from .parent_death import die_with_parent
+
+    die_with_parent(parent, signal.SIGKILL)
 
 
 #: The figures from the slowest to draw to the fastest (measured, 2026-11), the order in which
@@ -515,6 +810,8 @@ _SLOWEST_FIRST = (
     "path_3d.png",
     "fig3_surge.png",
     "fig6_base_angles.png",
+    "motion_3d.png",
+    "base_motion.png",
 )
 
 
@@ -641,7 +938,10 @@ def write_figures(
     vehicle_name: str | None = None,
     path_points: np.ndarray | None = None,
 ) -> list[Path]:
-    """Figures mirroring the paper's Figs. 2-7, plus the 3-D path (:data:`FIGURES`).
+    """The figures of ``result`` (:func:`figures_of`): the paper's Figs. 2-7 and the 3-D path
+    (:data:`FIGURES`) with its controller, the cross-track errors and the 3-D path for another run
+    that follows a path, the base's motion and the 3-D trajectories for a run that follows none.
+    Every axis is labelled with its unit.
 
     Error figures (cross-track, ``phi_tilde``, ``omega_tilde``) have a log-scale panel of the
     error's magnitude under the linear one, so that final errors of 1e-5 are visible; the 3-D path
@@ -655,11 +955,11 @@ def write_figures(
         parallel: Draw in two processes where possible.
         figure_format: ``"png"`` (:data:`FIGURE_DPI` dpi), ``"svg"`` or ``"pdf"``.
         vehicle_name: Name in the titles (default: the scenario's case).
-        path_points: The path drawn in the 3-D figure, world points (N, 3) [m] (default: the
-            x-axis over the run's x-range).
+        path_points: The path drawn in the 3-D figure, world points (N, 3) [m] (default:
+            :func:`default_path_points`).
 
     Returns:
-        The files written, in the order of :data:`FIGURES`.
+        The files written, in the order of :func:`figures_of`.
     """
     _prepare_figures(figure_format)
     folder = Path(folder)

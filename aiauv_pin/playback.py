@@ -6,8 +6,12 @@ commands in JSON, replayed into ``MeshCat.Viewer.handle_command`` on load. The m
 meshcat animation (``set_animation``): per moving node, three.js keyframe tracks with ``times`` in
 seconds (clip ``fps`` = 1, so a key's time is its simulated time) and flat ``values``; meshcat's
 animation panel gives play / pause / reset, a time scrubber and the speed (``timeScale``, 1 = real
-time). ``/aiauv`` is animated by minus the vehicle's centroid, so the vehicle stays framed all the
-way (see :mod:`aiauv_pin.viewer` for why the world moves rather than the camera).
+time). The camera frames the vehicle's own motion (:func:`camera_framing`): the box of every link
+position over the run (and of the path, when one is followed) from a fixed camera, ``/aiauv``
+shifted once so that the box's centre is at the page's origin, where the camera looks; a motion
+too long for that (the vehicle would be a few pixels) is followed instead, ``/aiauv`` animated by
+minus the vehicle's centroid (see :mod:`aiauv_pin.viewer` for why the world moves rather than the
+camera).
 
 Frames are decimated to ``fps`` per simulated second and to at most ``max_frames`` (by default as
 many as fit a budget of about 16 MB of keyframes), so a 300 s run gives a file of about 7 MB.
@@ -19,6 +23,7 @@ import importlib.util
 import json
 import math
 import os
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -27,8 +32,11 @@ from .atomic import atomic_path
 from .simulation import Trajectory
 from .vehicle import Vehicle
 from .viewer import (
+    CAMERA_DIRECTION,
+    CAMERA_FOV,
     FRAME_INFO,
     LEGEND,
+    LINKS,
     LOS,
     PATH,
     ROOT,
@@ -174,6 +182,101 @@ def _distance_to_path(point: np.ndarray, path: np.ndarray) -> float:
     return float(_distances_to_path(np.asarray(point, dtype=float)[None], path)[0])
 
 
+#: The playback frames the whole motion from a fixed camera unless that camera would stand more
+#: than this many times as far as one that fits the vehicle alone (the vehicle would fill less than
+#: two thirds of what it fills on its own: an arm that sways or drifts a little is seen whole from
+#: a fixed place, a vehicle that swims away is followed).
+FOLLOW_BEYOND = 1.5
+#: Margin around the link origins in a frame, as a fraction of the vehicle's size (their shapes
+#: reach beyond their origins) [-].
+FRAME_PADDING = 0.1
+#: Width over height of the view the camera is placed for: a landscape window (a narrower one cuts
+#: the sides off; meshcat's controls zoom out).
+VIEW_ASPECT = 4.0 / 3.0
+
+
+@dataclass(frozen=True)
+class CameraFraming:
+    """How a playback frames the vehicle's motion (:func:`camera_framing`).
+
+    Attributes:
+        follow: ``/aiauv`` moves by minus the vehicle's centroid, so that the vehicle stays at the
+            page's origin, where the camera looks; else it is shifted by minus :attr:`centre` once.
+        centre: Centre of the box of the whole motion, the world point at the page's origin when
+            not following (3,) [m].
+        distance: Distance of the camera from the page's origin [m].
+    """
+
+    follow: bool
+    centre: np.ndarray
+    distance: float
+
+
+def _camera_axes() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit vectors towards the camera, to the right and up of its view (world frame)."""
+    back = np.array(CAMERA_DIRECTION) / np.linalg.norm(CAMERA_DIRECTION)
+    right = np.cross(-back, [0.0, 0.0, 1.0])  # three.js cameras keep world up (z here) upright
+    right /= np.linalg.norm(right)
+    return back, right, np.cross(right, -back)
+
+
+def fitting_distance(points: np.ndarray, pad: float = 0.0) -> float:
+    """Distance [m] from the looked-at point at which meshcat's camera, looking from
+    :data:`aiauv_pin.viewer.CAMERA_DIRECTION`, sees every point (N, 3) [m] (relative to the
+    looked-at point) grown by ``pad`` [m] inside its view (:data:`aiauv_pin.viewer.CAMERA_FOV`
+    vertically, :data:`VIEW_ASPECT`), with a 10 % margin.
+
+    A point at depth ``b`` towards the camera, ``x`` to the right and ``y`` up is in view from a
+    distance ``D`` when ``|y| <= tan(fov / 2) (D - b)`` and ``|x| <= aspect tan(fov / 2) (D - b)``.
+    """
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    back, right, up = _camera_axes()
+    half = math.tan(math.radians(CAMERA_FOV) / 2.0)
+    depth = points @ back + pad
+    vertical = (np.abs(points @ up) + pad) / half
+    horizontal = (np.abs(points @ right) + pad) / (VIEW_ASPECT * half)
+    return 1.1 * float(np.max(depth + np.maximum(vertical, horizontal)))
+
+
+def camera_framing(
+    points: np.ndarray,
+    centroids: np.ndarray,
+    vehicle_size: float,
+    path_points: np.ndarray | None = None,
+) -> CameraFraming:
+    """Frame the vehicle's own motion: every link position over the run, and the path when one is
+    followed, seen whole from a fixed camera that looks at the centre of their box
+    (:func:`fitting_distance`), unless that camera would stand more than :data:`FOLLOW_BEYOND`
+    times as far as one fitting the vehicle alone (a vehicle that swims away would shrink to a few
+    pixels); then the camera follows the vehicle, fitting it and the path's distance from it.
+
+    Args:
+        points: World positions of the links (and the end-effector) in each frame (F, L, 3) [m].
+        centroids: The vehicle's centroid in each frame (F, 3) [m].
+        vehicle_size: The vehicle's size (:attr:`aiauv_pin.viewer.VehicleScene.size`) [m]; every
+            position is grown by :data:`FRAME_PADDING` of it.
+        path_points: The path drawn, world points (N, 3) [m], or ``None``.
+    """
+    points = np.asarray(points, dtype=float).reshape(len(centroids), -1, 3)
+    pad = FRAME_PADDING * vehicle_size
+    shown = points.reshape(-1, 3)
+    if path_points is not None:
+        shown = np.concatenate((shown, np.asarray(path_points, dtype=float)))
+    centre = 0.5 * (shown.min(axis=0) + shown.max(axis=0))
+    whole = fitting_distance(shown - centre, pad)
+    first = points[0]
+    alone = fitting_distance(first - 0.5 * (first.min(axis=0) + first.max(axis=0)), pad)
+    if whole <= FOLLOW_BEYOND * alone:
+        return CameraFraming(False, centre, whole)
+    # following: the vehicle around its centroid, and the path from wherever the vehicle is (a
+    # sphere of that radius fits the vertical view from radius / sin(fov / 2))
+    distance = fitting_distance(points - centroids[:, None, :], pad)
+    if path_points is not None:
+        offset = float(np.max(_distances_to_path(centroids, path_points)))
+        distance = max(distance, 1.1 * offset / math.sin(math.radians(CAMERA_FOV) / 2.0))
+    return CameraFraming(True, centre, distance)
+
+
 def rotation_quaternions(rotations: np.ndarray) -> np.ndarray:
     """Unit quaternions ``(x, y, z, w)`` of rotation matrices (..., 3, 3) -> (..., 4).
 
@@ -264,8 +367,8 @@ def playback_commands(
 
     Besides the vehicle: the thruster arrows, the LOS arrow, the path
     (:func:`aiauv_pin.viewer.path_segments` of ``path_points``), the end-effector trail over the
-    whole run (:data:`aiauv_pin.viewer.TRAIL`) and a camera distance that keeps the path in view
-    from every position of the vehicle.
+    whole run (:data:`aiauv_pin.viewer.TRAIL`) and a camera that frames the vehicle's motion and
+    the path (:func:`camera_framing`).
 
     Args:
         vehicle: The simulated vehicle.
@@ -273,8 +376,8 @@ def playback_commands(
         fps: Frames per simulated second [1/s].
         max_frames: Upper bound on the number of frames; default from :data:`KEYFRAME_BUDGET`.
         urdf: URDF with the visuals (see :func:`aiauv_pin.viewer.vehicle_visuals`).
-        path_points: The path drawn, world points in order (N, 3) [m]; default the world x-axis
-            over the run.
+        path_points: The path drawn, world points in order (N, 3) [m]; ``None`` draws no path (a
+            run that follows none), the grid then lies under the box of the motion.
 
     Raises:
         ValueError: A malformed trajectory (one line).
@@ -293,14 +396,7 @@ def playback_commands(
             raise ValueError(
                 f"trajectory.info['{key}'] has {info[key].shape[0]} rows, not {t.size}"
             )
-    base_x = q[:, 0]
-    margin = 5.0
-    scene = VehicleScene(
-        vehicle,
-        urdf=urdf,
-        path_range=(float(base_x.min()) - margin, float(base_x.max()) + margin),
-        path_points=path_points,
-    )
+    scene = VehicleScene(vehicle, urdf=urdf, path_points=path_points)
     show_los = scene.head_frame is not None and "x_ref" in info
 
     if max_frames is None:
@@ -314,11 +410,16 @@ def playback_commands(
     if not show_los:
         poses.pop(LOS, None)
     times = _round(t[index] - t[0])
-    # camera: far enough to show the path from wherever the vehicle is (the view is centred on it)
-    offset = float(np.max(_distances_to_path(centroid, scene.path_points)))
-    scene.camera_distance = max(scene.camera_distance, 1.2 * offset)
+    links = [frames[:, :3, 3] for path, frames in poses.items() if path.startswith(LINKS)]
+    points = np.stack([*links, states.trail], axis=1)  # (F, links + 1, 3)
+    framing = camera_framing(points, centroid, scene.size, path_points)
+    scene.camera_distance = framing.distance
+    if path_points is None:  # no path: the grid lies under the box of the motion
+        scene.path_points = np.array([points.reshape(-1, 3).min(0), points.reshape(-1, 3).max(0)])
 
     commands = scene.static_commands()
+    if path_points is None:
+        commands = [c for c in commands if c.get("path") != PATH]
     if len(states.trail) >= 2:
         points = states.trail
         segments = np.stack((points[:-1], points[1:]), axis=1).reshape(-1, 3)
@@ -328,7 +429,8 @@ def playback_commands(
         commands.append(set_transform(path, frames[0]))
     for path, frames in scales.items():
         commands.append(set_transform(path, np.diag([*frames[0], 1.0])))
-    commands.append(set_transform(ROOT, translation(-centroid[0])))
+    shift = -centroid if framing.follow else np.tile(-framing.centre, (len(centroid), 1))
+    commands.append(set_transform(ROOT, translation(shift[0])))
     if show_los:
         commands.append(set_property(LOS, "visible", True))
 
@@ -348,7 +450,8 @@ def playback_commands(
         animations.append({"path": path, "clip": clip(tracks)})
     for path, frames in scales.items():
         animations.append({"path": path, "clip": clip([track("scale", "vector3", frames)])})
-    animations.append({"path": ROOT, "clip": clip([track("position", "vector3", -centroid)])})
+    if framing.follow:
+        animations.append({"path": ROOT, "clip": clip([track("position", "vector3", shift)])})
     commands.append(
         {
             "type": "set_animation",
@@ -383,7 +486,7 @@ def write_playback(
         max_frames: Upper bound on the number of frames; default keeps the file under about 20 MB.
         fps: Frames per simulated second [1/s].
         urdf: URDF with the visuals (see :func:`aiauv_pin.viewer.vehicle_visuals`).
-        path_points: The path drawn (N, 3) [m]; default the world x-axis.
+        path_points: The path drawn (N, 3) [m]; ``None`` draws none.
 
     Returns:
         The path written.

@@ -24,19 +24,22 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-from hydro import prebuilt
-from hydro.jit import _project_files, source_hash
+from hydro import jit, prebuilt
+from hydro.jit import source_hash
 
 from .compilation import default_target_environment
 
-#: What the build runs (``aiauv`` command lines, and the README's batch rollout): the quick start
-#: and the commands a new user tries next. Each simulates 1 s; the compiled code does not depend on
-#: the duration.
+#: What the build runs (``aiauv`` command lines, and the README's batch rollout): the quick start,
+#: the commands a new user tries next, and each built-in controller (a passive run serves any
+#: vehicle: the loop's types do not depend on the vehicle). Each simulates 1 s; the compiled code
+#: does not depend on the duration.
 WORKLOADS = (
     ("simulate", "--duration", "1"),
     ("simulate", "--duration", "1", "--no-html", "--method", "rk4"),
     ("simulate", "--duration", "1", "--no-html", "--case", "stabilised"),
     ("simulate", "--duration", "1", "--no-html", "--method", "midpoint", "--dt", "0.02"),
+    ("simulate", "--duration", "1", "--no-html", "--controller", "none"),
+    ("simulate", "--duration", "1", "--no-html", "--controller", "thruster_turning"),
     ("rollout",),
 )
 
@@ -44,8 +47,8 @@ _ROOT = Path(__file__).resolve().parent.parent
 
 
 def compiled_folders() -> list[str]:
-    """The source folders (relative to the project root) that hold compiled functions."""
-    return sorted({f.parent.relative_to(_ROOT).as_posix() for f in _project_files()})
+    """The source folders (project paths, :func:`hydro.jit.project_path`) of compiled functions."""
+    return sorted({str(jit.project_path(f).parent) for f in jit._project_files()})
 
 
 def _rollout_workload() -> None:
@@ -94,20 +97,31 @@ def _run_workloads(out: Path) -> None:
 def pack(cache_dir: Path, archive: Path) -> int:
     """Pack the cache files numba wrote under ``cache_dir`` into ``archive``; return their number.
 
-    numba's ``NUMBA_CACHE_DIR`` layout puts the functions of the source folder ``F`` in
-    ``<cache_dir>/<name of F>_<sha1 of F's absolute path>``; the archive names them ``<F relative
-    to the project root>/<file>`` instead, so that they can be unpacked under any installation.
+    Runs in the build's child process, whose ``NUMBA_CACHE_DIR`` is ``cache_dir``: the project's
+    functions are in its folder :func:`hydro.jit.cache_folder`, each at its source folder's project
+    path (e.g. ``aiauv_pin/fast``); the archive keeps those paths, so that they can be unpacked into
+    the cache folder of any installation of the same sources.
     """
-    from hydro.jit import _numba_name
-
-    locator = _numba_name("CacheLocator")
-    subpaths = {
-        locator.get_suitable_cache_subpath(str(_ROOT / folder / "_.py")): folder
-        for folder in compiled_folders()
-    }
     import llvmlite.binding as llvm
     import numba
 
+    folder = jit.cache_folder()  # this process's: the build's child, whose cache is cache_dir
+    if not folder.is_relative_to(cache_dir):
+        raise SystemExit(f"aiauv: error: the project's cache {folder} is not in {cache_dir}")
+    outside = [p for p in cache_dir.rglob("*") if p.is_file() and not p.is_relative_to(folder)]
+    if outside:
+        raise SystemExit(f"aiauv: error: numba cached functions outside the project: {outside[0]}")
+    known = set(compiled_folders())
+    entries = []
+    for file in sorted(folder.rglob("*")) if folder.is_dir() else []:
+        if file.suffix not in (".nbi", ".nbc"):
+            continue
+        name = file.relative_to(folder).as_posix()
+        if name.rpartition("/")[0] not in known:
+            raise SystemExit(f"aiauv: error: a cache file of no compiled source folder: {file}")
+        entries.append((name, file))
+    if not any(name.endswith(".nbi") for name, _ in entries):
+        raise SystemExit("aiauv: error: the workloads left numba's cache empty")
     manifest = prebuilt.Manifest(
         source_hash=source_hash(),
         numba=numba.__version__,
@@ -116,24 +130,17 @@ def pack(cache_dir: Path, archive: Path) -> int:
         cpu_name=prebuilt.PORTABLE_CPU_NAME,
         workloads=tuple(" ".join(w) for w in WORKLOADS),
     )
-    entries = []
-    for sub in sorted(p for p in cache_dir.iterdir() if p.is_dir()):
-        if sub.name not in subpaths:
-            raise SystemExit(f"aiauv: error: numba cached functions outside the project: {sub}")
-        entries.extend(
-            (f"{subpaths[sub.name]}/{file.name}", file)
-            for file in sorted(sub.iterdir())
-            if file.suffix in (".nbi", ".nbc")
-        )
-    if not any(name.endswith(".nbi") for name, _ in entries):
-        raise SystemExit("aiauv: error: the workloads left numba's cache empty")
+    from .atomic import atomic_path
+
     archive.parent.mkdir(parents=True, exist_ok=True)
-    partial = archive.with_name(archive.name + ".partial")
-    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as packed:
+    # a killed build leaves the previous archive whole; a link or FIFO at ``archive`` is refused
+    with (
+        atomic_path(archive) as partial,
+        zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as packed,
+    ):
         packed.writestr(prebuilt.MANIFEST, manifest.to_json())
         for name, file in entries:
             packed.write(file, name)
-    os.replace(partial, archive)  # a killed build leaves the previous archive whole
     return len(entries)
 
 
@@ -145,8 +152,9 @@ def build_here(out_dir: Path) -> Path:
         env = default_target_environment()
         env.update(NUMBA_CACHE_DIR=str(cache_dir), AIAUV_PREBUILT_KERNELS="0")
         code = [sys.executable, "-m", "aiauv_pin.prebuilt", "--workloads", temporary]
-        subprocess.run(code, env=env, check=True)
-        count = pack(cache_dir, archive)
+        subprocess.run([*code, "--archive", str(archive)], env=env, check=True)
+    with zipfile.ZipFile(archive) as packed:
+        count = len(packed.namelist()) - 1  # the manifest
     print(f"{archive}: {count} files, {archive.stat().st_size / 1e6:.2f} MB")
     return archive
 
@@ -183,12 +191,14 @@ def main(argv: list[str] | None = None) -> int:
         "--python", nargs="+", metavar="EXE", help="build for these Python interpreters instead"
     )
     parser.add_argument(
-        "--out-dir", type=Path, default=_ROOT / "hydro" / "prebuilt", help="where archives go"
+        "--out-dir", type=Path, default=prebuilt.archive_path().parent, help="where archives go"
     )
     parser.add_argument("--workloads", type=Path, help=argparse.SUPPRESS)  # the child's part
+    parser.add_argument("--archive", type=Path, help=argparse.SUPPRESS)  # the child's output
     args = parser.parse_args(argv)
     if args.workloads is not None:
         _run_workloads(args.workloads)
+        pack(Path(os.environ["NUMBA_CACHE_DIR"]).resolve(), args.archive)
         return 0
     if args.python:
         for python in args.python:

@@ -268,6 +268,10 @@ class ScenarioResult:
         wall_time: Wall-clock time of the simulation loop [s].
         joint_names: Names of the actuated joints.
         thruster_names: Names of the thrusters.
+        extra: Backend facts (``backend``, ``compiled_controller``).
+        joint_units: Unit of each joint's position, ``"rad"`` (revolute) or ``"m"``
+            (prismatic), in the order of ``joint_names`` (:func:`joint_position_units`); empty means
+            every joint is revolute.
     """
 
     scenario: PaperScenario
@@ -276,6 +280,38 @@ class ScenarioResult:
     joint_names: list[str]
     thruster_names: list[str]
     extra: dict = field(default_factory=dict)
+    joint_units: list[str] = field(default_factory=list)
+
+    @property
+    def followed_path(self) -> Path | None:
+        """The path the run followed (:func:`followed_path`), ``None`` for a passive run."""
+        return followed_path(self.scenario)
+
+    @property
+    def position_units(self) -> list[str]:
+        """:attr:`joint_units`, or ``"rad"`` for every joint when it was not recorded."""
+        return list(self.joint_units) or ["rad"] * len(self.joint_names)
+
+
+def followed_path(scenario: Scenario) -> Path | None:
+    """The path a run of ``scenario`` follows: its path in force with a path-following controller
+    (``"paper"``, ``"thruster_turning"``), ``None`` for a passive run (``controller = "none"``),
+    which follows nothing and so has no path errors."""
+    return None if scenario.controller == "none" else scenario.path_to_follow
+
+
+#: Position unit of each one-degree-of-freedom joint type of Pinocchio that moves along an axis
+#: (the others, revolute, turn: "rad").
+_PRISMATIC_TYPES = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
+
+
+def joint_position_units(vehicle: Vehicle) -> list[str]:
+    """Unit of each actuated joint's position (``q[7:]``): ``"m"`` for a prismatic joint, else
+    ``"rad"``; its rate is that unit per second, its effort [N] or [N m]."""
+    return [
+        "m" if joint.shortname() in _PRISMATIC_TYPES else "rad"
+        for joint in vehicle.model.joints[2:]
+    ]
 
 
 def run_scenario(
@@ -395,16 +431,20 @@ def run_scenario(
         joint_names=vehicle.joint_names,
         thruster_names=vehicle.thruster_names,
         extra={"backend": vehicle.active_backend, "compiled_controller": use_compiled},
+        joint_units=joint_position_units(vehicle),
     )
 
 
 def add_path_errors(vehicle: Vehicle, scenario: Scenario, trajectory: Trajectory) -> None:
-    """Log the end-effector position ``p`` and the cross-track errors when the controller did not.
+    """Log the end-effector position ``p`` and, when a path is followed (:func:`followed_path`),
+    the cross-track errors ``cross_track`` [m] and path parameter ``path_s`` [m], when the
+    controller did not.
 
-    A passive run (or a user's controller) logs no path quantities; they are computed here from
-    the logged configurations (:meth:`Vehicle.frame_placement`, :meth:`control.paths.Path.closest`).
-    So are they for the midpoint method, whose rows hold the controller's measurement at the
-    middle of their step (:func:`aiauv_pin.simulate`): the files then show the rows' own.
+    A user's controller logs no path quantities; they are computed here from the logged
+    configurations (:meth:`Vehicle.frame_placement`, :meth:`control.paths.Path.closest`). So are
+    they for the midpoint method, whose rows hold the controller's measurement at the middle of
+    their step (:func:`aiauv_pin.simulate`): the files then show the rows' own. A passive run
+    follows no path: it gets ``p`` only.
     """
     from control.laws import path_errors_of_positions
 
@@ -422,8 +462,11 @@ def add_path_errors(vehicle: Vehicle, scenario: Scenario, trajectory: Trajectory
         else:
             zero = np.zeros(vehicle.nv)
             info["p"] = np.array([vehicle.frame_motion(q, zero, frame)[1] for q in trajectory.q])
-    if "cross_track" not in info:
-        path = scenario.path_to_follow
+    path = followed_path(scenario)
+    if path is None:
+        for key in ("cross_track", "path_s"):
+            info.pop(key, None)
+    elif "cross_track" not in info:
         s, errors = np.empty(n), np.empty((n, 2))
         path_errors_of_positions(
             path.user_function,
@@ -473,10 +516,50 @@ def _parameters(scenario: Scenario) -> dict:
     return out
 
 
+#: Largest vertical component of a normal counted as horizontal in :func:`cross_track_axes` [-].
+HORIZONTAL_TOLERANCE = 1e-9
+
+
+def cross_track_axes(scenario: Scenario, s_range: tuple[float, float]) -> tuple[str, str]:
+    """Names of the cross-track errors ``(e_1, e_2)`` of a run of ``scenario``: the components of
+    the end-effector's offset from its closest path point along the path frame's normals
+    ``(N1, N2)`` (:mod:`control.paths`), named by what those normals are over ``s_range`` [m]:
+
+    * ``("p_y", "p_z")`` on the paper's path, the world x-axis (``N1, N2`` are world ``y, z``);
+    * ``("horizontal", "vertical")`` where ``N1`` is horizontal and ``N2`` points up at every
+      sampled point (a line that is not vertical, waypoints in one horizontal plane, a circle about
+      an upward axis): ``e_1`` is the horizontal error, positive to the left of the direction of
+      travel (``N1 = N2 x T``), ``e_2`` the error in the vertical plane through the tangent,
+      positive upwards;
+    * ``("N1", "N2")`` elsewhere (a helix with a pitch, a climbing waypoint path, a vertical line, a
+      user's path): the rotation-minimising frame's normals, which turn along the path.
+
+    The frame is read with :meth:`control.paths.Path.closest` at 33 points of the path evenly
+    spaced over ``s_range``.
+    """
+    if scenario.on_x_axis:
+        return ("p_y", "p_z")
+    path = scenario.path_to_follow
+    low, high = (float(x) for x in s_range)
+    s = np.linspace(low, high, 33) if high > low else np.array([low])
+    for point in path.points_at(s):
+        frame = path.closest(point)
+        if abs(frame.normal1[2]) > HORIZONTAL_TOLERANCE or frame.normal2[2] <= HORIZONTAL_TOLERANCE:
+            return ("N1", "N2")
+    return ("horizontal", "vertical")
+
+
 def summary(result: ScenarioResult) -> dict:
     """Figures of merit of a run (all SI units).
 
-    For every path: ``final.cross_track_error`` (distance from the end-effector to the path [m]) and
+    Every run: ``final.position`` (the end-effector's world position [m]), ``final.base_position``
+    [m], ``final.base_displacement`` (from the start, world frame [m]), ``final.base_distance``
+    (its length [m]) and ``final.base_speed`` (speed of the base origin [m/s]).
+
+    A run that follows a path (:func:`followed_path`; not a passive run) also has
+    ``final.cross_track_error`` (distance from the end-effector to the path [m]),
+    ``final.cross_track`` (its components ``e_1, e_2`` [m], named by ``cross_track_axes``,
+    :func:`cross_track_axes`), ``final.along_track`` (arc length of the closest path point [m]) and
     ``settling_time.cross_track_5cm``; on the paper's x-axis also ``p_y``, ``p_z`` (the same
     errors, in world axes). The paper controller's quantities (surge, pointing error, work) are
     reported when it ran.
@@ -485,28 +568,45 @@ def summary(result: ScenarioResult) -> dict:
     tr = result.trajectory
     t, info = tr.t, tr.info
     p = info["p"]
-    cross = info["cross_track"]
-    distance = np.hypot(cross[:, 0], cross[:, 1])
+    q, v = np.asarray(tr.q), np.asarray(tr.v)
     last30 = t >= t[-1] - 30.0
     dt_log = np.diff(t)
+    displacement = q[-1, :3] - q[0, :3]
     final: dict = {
         "position": [float(x) for x in p[-1]],
-        "cross_track_error": float(distance[-1]),
-        "cross_track": [float(x) for x in cross[-1]],
-        "max_cross_track_error_last_30s": float(distance[last30].max()),
+        "base_position": [float(x) for x in q[-1, :3]],
+        "base_displacement": [float(x) for x in displacement],
+        "base_distance": float(np.linalg.norm(displacement)),
+        # the body-frame linear velocity's length is the world speed of the base origin
+        "base_speed": float(np.linalg.norm(v[-1, :3])),
     }
-    settling = {"cross_track_5cm": settling_time(t, distance, 0.05)}
-    if scenario.on_x_axis:
-        final["p_y"], final["p_z"] = float(p[-1, 1]), float(p[-1, 2])
-        settling["p_y_5cm"] = settling_time(t, p[:, 1], 0.05)
-        settling["p_z_5cm"] = settling_time(t, p[:, 2], 0.05)
+    settling: dict = {}
+    axes = None
+    if result.followed_path is not None:
+        cross = info["cross_track"]
+        path_s = info["path_s"]
+        distance = np.hypot(cross[:, 0], cross[:, 1])
+        axes = cross_track_axes(scenario, (float(np.min(path_s)), float(np.max(path_s))))
+        final.update(
+            {
+                "cross_track_error": float(distance[-1]),
+                "cross_track": [float(x) for x in cross[-1]],
+                "along_track": float(path_s[-1]),
+                "max_cross_track_error_last_30s": float(distance[last30].max()),
+            }
+        )
+        settling["cross_track_5cm"] = settling_time(t, distance, 0.05)
+        if scenario.on_x_axis:
+            final["p_y"], final["p_z"] = float(p[-1, 1]), float(p[-1, 2])
+            settling["p_y_5cm"] = settling_time(t, p[:, 1], 0.05)
+            settling["p_z_5cm"] = settling_time(t, p[:, 2], 0.05)
     content = {
         "case": scenario.case,
         "controller": scenario.controller,
         "status": tr.status,
         "message": tr.message,
         "parameters": _parameters(scenario),
-        "path": scenario.path_to_follow.describe(),
+        "path": None if result.followed_path is None else result.followed_path.describe(),
         "dt": scenario.dt,
         "method": scenario.method,
         "steps": len(t) - 1,
@@ -518,6 +618,8 @@ def summary(result: ScenarioResult) -> dict:
         "final": final,
         "settling_time": settling,
     }
+    if axes is not None:
+        content["cross_track_axes"] = list(axes)
     if "u" in info:
         gains = scenario.controller_gains
         u = info["u"]

@@ -36,26 +36,33 @@ The parameter names are those of sweep specs (:mod:`aiauv_pin.sweep_spec`): the 
 are the same, ``[controller]`` holds the gains under their sweep names, ``start.position`` is the
 sweep's ``initial_offset`` (with x), ``start.surge`` its ``initial_surge`` and
 ``current.velocity`` its ``current.x/y/z``; a sweep spec may name a scenario file as its ``base``.
-A bad file (unknown key, wrong type, degenerate path) gets one line naming the key and the problem.
+A bad file (unknown key, wrong type, a value outside its plausible range, degenerate path) gets
+one line naming the key path and what is expected, e.g. ``controller.k_d: expected a number in
+(0, 1e4] (a bool is not a number), got True``; the schema is
+:class:`aiauv_pin.file_schemas.ScenarioFile` (``aiauv schema scenario`` prints it).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from control.path_following import CASES, PathFollowingGains
+from pydantic import BaseModel, model_validator
+
+from control.path_following import PathFollowingGains
 from control.paths import PathError
 from control.paths import from_mapping as path_from_mapping
 from hydro.currents import current_from_mapping
 from hydro.spec import HydroError
 
 from .errors import AiauvError
-from .lagged import ADDED_MASS_SCHEMES
-from .scenario import CONTROLLERS, Scenario
-from .scenario_schema import METHODS, TABLES, TOP_LEVEL
+from .file_schemas import ScenarioFile
+from .scenario import Scenario
+from .scenario_schema import TABLES, TOP_LEVEL
+from .schema_validation import given, validate
+
+__all__ = ["TABLES", "TOP_LEVEL", "ScenarioFileError", "load_scenario", "scenario_from_mapping"]
 
 try:
     import tomllib
@@ -67,129 +74,87 @@ class ScenarioFileError(AiauvError, ValueError):
     """A scenario file that cannot be used (one line naming the key)."""
 
 
-# Keys of the top level, and the tables with their keys: one schema for scenario files and sweep
-# specs (path and current tables are checked by control.paths and hydro.currents).
-
 #: Largest scenario file read [bytes] (a scenario is a few hundred bytes).
 MAX_FILE_BYTES = 1_000_000
 
-
-def _shown(value) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
+_DEFAULTS = Scenario()
 
 
-def _number(value, key: str, *, positive: bool = False, minimum: float | None = None) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ScenarioFileError(f"{key}: expected a number, got {_shown(value)}")
-    number = float(value)
-    if not math.isfinite(number):
-        raise ScenarioFileError(f"{key}: expected a finite number, got {_shown(value)}")
-    if positive and number <= 0.0:
-        raise ScenarioFileError(f"{key}: must be > 0, got {_shown(value)}")
-    if minimum is not None and number < minimum:
-        raise ScenarioFileError(f"{key}: must be >= {minimum:g}, got {_shown(value)}")
-    return number
+class _CheckedScenario(ScenarioFile):
+    """:class:`ScenarioFile` with the checks between keys (against the scenario's defaults)."""
+
+    @model_validator(mode="after")
+    def _within_duration(self):
+        duration = self.duration if self.duration is not None else _DEFAULTS.duration
+        periods = {
+            "dt": self.dt if self.dt is not None else _DEFAULTS.dt,
+            "control_period": self.control_period,
+            "output.csv_period": self.output.csv_period if self.output is not None else None,
+        }
+        for name, period in periods.items():
+            if period is not None and period > duration:
+                raise ValueError(
+                    f"{name}: must not exceed the duration ({duration:g} s), got {period:g} s"
+                )
+        heading = self.start.heading if self.start is not None else None
+        if heading is not None and not any(heading):
+            raise ValueError("start.heading: zero vector")
+        return self
 
 
-def _vector3(value, key: str) -> tuple[float, float, float]:
-    if not isinstance(value, list) or len(value) != 3:
-        raise ScenarioFileError(f"{key}: expected a list of 3 numbers, got {_shown(value)}")
-    return tuple(_number(v, key) for v in value)
-
-
-def _choice(value, key: str, options) -> str:
-    if value not in options:
-        raise ScenarioFileError(f"{key}: expected one of {', '.join(options)}, got {_shown(value)}")
-    return value
+def _plain(table: BaseModel | None) -> dict:
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in given(table).items()}
 
 
 def scenario_from_mapping(table: Mapping[str, Any], base_dir: str | Path = ".") -> Scenario:
     """A :class:`aiauv_pin.scenario.Scenario` from a parsed scenario file.
+
+    The table is checked by the schema (:class:`aiauv_pin.file_schemas.ScenarioFile`: types,
+    unknown keys, plausible ranges), then the path, the current and the gains are built by their
+    own readers (degenerate geometry, non-physical combinations).
 
     Args:
         table: The file's content (nested tables).
         base_dir: Folder that a relative ``vehicle`` path is taken from.
 
     Raises:
-        ScenarioFileError: Unknown key, wrong type, non-physical or degenerate value (one line).
+        ScenarioFileError: Unknown key, wrong type, implausible, non-physical or degenerate value
+            (one line naming the key).
     """
-    if not isinstance(table, Mapping):
-        raise ScenarioFileError(f"scenario: expected a table, got {type(table).__name__}")
-    for key, value in table.items():
-        if key in TABLES:
-            if not isinstance(value, Mapping):
-                raise ScenarioFileError(f"{key}: expected a table [{key}], got {_shown(value)}")
-            allowed = TABLES[key]
-            if allowed is not None:
-                for sub in value:
-                    if sub not in allowed:
-                        raise ScenarioFileError(
-                            f"{key}.{sub}: unknown key (expected one of {', '.join(allowed)})"
-                        )
-        elif key not in TOP_LEVEL:
-            known = ", ".join([*TOP_LEVEL, *(f"[{t}]" for t in TABLES)])
-            raise ScenarioFileError(f"{key}: unknown key (expected one of {known})")
-    options: dict[str, Any] = {}
-    case = _choice(table.get("case", "uniform"), "case", CASES)
-    options["case"] = case
-    if "vehicle" in table:
-        vehicle = table["vehicle"]
-        if not isinstance(vehicle, str) or not vehicle:
-            raise ScenarioFileError(f"vehicle: expected a file name, got {_shown(vehicle)}")
-        options["vehicle"] = str(Path(base_dir) / vehicle)
-    for key in ("duration", "dt"):
-        if key in table:
-            options[key] = _number(table[key], key, positive=True)
-    if "method" in table:
-        options["method"] = _choice(table["method"], "method", METHODS)
-    if "control_period" in table:
-        options["control_period"] = _number(
-            table["control_period"], "control_period", positive=True
-        )
-    if "added_mass" in table:
-        options["added_mass"] = _choice(table["added_mass"], "added_mass", ADDED_MASS_SCHEMES)
-    if "lagged_filter" in table:
-        alpha = _number(table["lagged_filter"], "lagged_filter", positive=True)
-        if alpha > 1.0:
-            raise ScenarioFileError(f"lagged_filter: must be <= 1, got {_shown(alpha)}")
-        options["lagged_filter"] = alpha
-    if "continuous_joints" in table:
-        if not isinstance(table["continuous_joints"], bool):
-            raise ScenarioFileError(
-                f"continuous_joints: expected true or false, got {_shown(table['continuous_joints'])}"
-            )
-        options["continuous_joints"] = table["continuous_joints"]
-    start = table.get("start", {})
-    if "position" in start:
-        options["start_position"] = _vector3(start["position"], "start.position")
-    if "heading" in start:
-        heading = _vector3(start["heading"], "start.heading")
-        if math.hypot(*heading) == 0.0:
-            raise ScenarioFileError("start.heading: zero vector")
-        options["heading"] = heading
+    checked = validate(_CheckedScenario, table, ScenarioFileError, "scenario")
+    top = given(checked)
+    options: dict[str, Any] = {
+        name: top[name]
+        for name in ("case", "duration", "dt", "method", "control_period", "continuous_joints")
+        if name in top
+    }
+    options.update({k: top[k] for k in ("added_mass", "lagged_filter") if k in top})
+    case = top.get("case", _DEFAULTS.case)
+    if "vehicle" in top:
+        options["vehicle"] = str(Path(base_dir) / top["vehicle"])
+    start = given(checked.start)
+    for key, option in (("position", "start_position"), ("heading", "heading")):
+        if key in start:
+            options[option] = tuple(start[key])
     if "surge" in start:
-        options["initial_surge"] = _number(start["surge"], "start.surge")
-    if "path" in table:
-        try:
-            options["path"] = path_from_mapping(table["path"], where="path")
-        except (PathError, ValueError) as exc:
-            raise ScenarioFileError(str(exc)) from None
-    if "current" in table:
-        try:
-            options["current"] = current_from_mapping(table["current"], where="current")
-        except HydroError as exc:
-            raise ScenarioFileError(str(exc)) from None
-    controller = dict(table.get("controller", {}))
-    options["controller"] = _choice(controller.pop("type", "paper"), "controller.type", CONTROLLERS)
+        options["initial_surge"] = start["surge"]
+    try:
+        if "path" in top:
+            options["path"] = path_from_mapping(_plain(checked.path), where="path")
+        if "current" in top:
+            options["current"] = current_from_mapping(_plain(checked.current), where="current")
+    except (PathError, HydroError, ValueError) as exc:
+        raise ScenarioFileError(" ".join(str(exc).split())) from None
+    controller = _plain(checked.controller)
+    options["controller"] = controller.pop("type", "paper")
     if controller:
         try:
             options["gains"] = PathFollowingGains.for_case(case, **controller)
         except (TypeError, ValueError) as exc:
             raise ScenarioFileError(f"controller: {' '.join(str(exc).split())}") from None
-    output = table.get("output", {})
+    output = given(checked.output)
     if "csv_period" in output:
-        options["csv_period"] = _number(output["csv_period"], "output.csv_period", positive=True)
+        options["csv_period"] = output["csv_period"]
     try:
         return Scenario(**options)
     except ValueError as exc:

@@ -2,11 +2,11 @@
 
 :data:`SCHEMA` lists every key a scenario file (:mod:`aiauv_pin.scenario_file`) may hold, by its
 dotted name (``duration``, ``start.position``, ``path.radius``, ``controller.k_d``), with its kind,
-unit and meaning. The path keys are generated from the path classes of
-:data:`control.paths.PATH_TYPES`, the current keys from :data:`hydro.currents.CURRENT_KEYS` and the
-controller keys from :class:`control.path_following.PathFollowingGains`, so a new path type, current
-type or gain appears here (and in the documentation tables) by itself; only its unit and meaning
-are written here (an undocumented key stops the import).
+unit, plausible range and meaning. It is read off the pydantic model of scenario files
+(:class:`aiauv_pin.file_schemas.ScenarioFile`), so the table, the JSON Schema (``aiauv schema
+scenario``) and the checks are one declaration; the path and current keys are those of the path
+and current tables (one per ``type``, the same keys as :data:`control.paths.PATH_TYPES` and
+:data:`hydro.currents.CURRENT_KEYS`; ``tests/test_schemas.py`` checks that they agree).
 
 Sweep specs (:mod:`aiauv_pin.sweep_spec`) use the same names: a scalar key is a sweep parameter as
 it is (``path.radius``), a vector key either whole (``start.position = [x, y, z]``) or by component
@@ -18,18 +18,18 @@ it is (``path.radius``), a vector key either whole (``start.position = [x, y, z]
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, NamedTuple
+import types
+import typing
+from typing import Any, Literal, NamedTuple
 
-from control.path_following import CURRENT_COMPENSATION_OPTIONS, PathFollowingGains
-from control.paths import PATH_TYPES
-from control.reduced_attitude import FEEDFORWARD_OPTIONS
-from hydro.currents import CURRENT_KEYS
+from pydantic import BaseModel
 
-from .lagged import ADDED_MASS_SCHEMES
-from .scenario import CASES, CONTROLLERS
+from control.path_following import PathFollowingGains
 
-#: Integrators of :func:`aiauv_pin.simulate`.
-METHODS = ("rk4", "euler", "midpoint")
+from .file_schemas import CURRENT_TABLES, METHODS, PATH_TABLES, ScenarioFile
+from .schema_validation import bounds_of
+
+__all__ = ["METHODS"]
 #: Components of a vector in world axes.
 XYZ = ("x", "y", "z")
 
@@ -46,6 +46,8 @@ class Parameter(NamedTuple):
         applies_to: Path or current types the key belongs to (empty: always).
         sweepable: Whether a sweep spec may set it (the path and current ``type`` and the waypoint
             list come from the base scenario; outputs do not change a run's results).
+        annotation: The key's type in the pydantic model (a value of the whole key).
+        range: Plausible range of a number or of each component (``""``: none).
     """
 
     name: str
@@ -54,6 +56,8 @@ class Parameter(NamedTuple):
     meaning: str
     applies_to: tuple[str, ...] = ()
     sweepable: bool = True
+    annotation: Any = None
+    range: str = ""
 
     @property
     def components(self) -> tuple[str, ...]:
@@ -62,217 +66,102 @@ class Parameter(NamedTuple):
             return tuple(f"{self.name}.{c}" for c in self.kind[1])
         return ()
 
-
-def _vector(components=XYZ) -> tuple:
-    return ("vector", components)
-
-
-_RUN = (
-    Parameter("case", ("choice", CASES), "-", "paper case: the bundled vehicle and its k_d"),
-    Parameter(
-        "vehicle",
-        "file",
-        "-",
-        "URDF of the vehicle, relative to the file naming it (default: the bundled URDF of case)",
-    ),
-    Parameter("duration", "number", "s", "simulated time"),
-    Parameter("dt", "number", "s", "integration step"),
-    Parameter("method", ("choice", METHODS), "-", "integrator"),
-    Parameter(
-        "control_period",
-        "number",
-        "s",
-        "sampling period of the guidance, base-angle and surge loops, a whole multiple of dt "
-        "(default: every step)",
-    ),
-    Parameter(
-        "continuous_joints",
-        "bool",
-        "-",
-        "joint PD (eq. 24) as a continuous servo (true) or sampled with the controller (false)",
-    ),
-    Parameter(
-        "start.position",
-        _vector(),
-        "m",
-        "end-effector start, world axes; the vehicle straight (default 0, 2, 2)",
-    ),
-    Parameter(
-        "start.heading",
-        _vector(),
-        "-",
-        "direction the vehicle points at the start (default: the path's tangent there)",
-    ),
-    Parameter("start.surge", "number", "m/s", "initial forward speed"),
-    Parameter(
-        "added_mass",
-        ("choice", ADDED_MASS_SCHEMES),
-        "-",
-        "exact (in the mass matrix) or lagged (UUV Simulator's and gz-sim's scheme, from the "
-        "previous steps' filtered acceleration; Python controller)",
-        sweepable=False,
-    ),
-    Parameter(
-        "lagged_filter",
-        "number",
-        "-",
-        "filter coefficient alpha of the lagged scheme, in (0, 1]: 0.3 UUV Simulator, 1 gz-sim",
-        sweepable=False,
-    ),
-)
-
-#: Unit and meaning of each key of the path classes (``type`` is added by :func:`_path_keys`).
-_PATH_KEYS = {
-    "point": ("vector", "m", "a point of the line (s = 0 there)"),
-    "direction": ("vector", "-", "direction of the line (normalised)"),
-    "centre": ("vector", "m", "a point of the helix axis"),
-    "axis": ("vector", "-", "helix axis (normalised; pitch > 0 turns right-handed about it)"),
-    "radius": ("number", "m", "helix radius"),
-    "pitch": ("number", "m/turn", "advance along the axis per turn (0: a circle)"),
-    "start_angle": ("number", "rad", "angle of the point s = 0 about the axis"),
-    "points": ("points", "m", "waypoints [[x, y, z], ...], at least 2"),
-    "corner_radius": ("number", "m", "radius of the arcs rounding the corners"),
-}
-
-#: Unit and meaning of each key of the current tables (``type`` is added by :func:`_current_keys`).
-_CURRENT_KEYS = {
-    "velocity": (
-        "vector",
-        "m/s",
-        "water velocity, world axes (the mean for tidal, at z_0 for shear)",
-    ),
-    "amplitude": ("vector", "m/s", "amplitude A of V(t) = V_0 + A sin(2 pi t / T + phi)"),
-    "period": ("number", "s", "period T of the tidal oscillation"),
-    "phase": ("number", "rad", "phase phi of the tidal oscillation"),
-    "gradient": ("vector", "1/s", "shear G of V(z) = V_0 + G (z - z_0)"),
-    "reference_z": ("number", "m", "depth z_0 where the shear current is V_0"),
-}
-
-#: Unit and meaning of each gain of :class:`control.path_following.PathFollowingGains`.
-_GAIN_KEYS = {
-    "u_d": ("number", "m/s", "desired surge speed (eq. 21, 25)"),
-    "k_e": ("k_e", "1/s", "cross-track gain (eq. 21), a number or [k_y, k_z]; default u_d / 10"),
-    "alpha": ("number", "-", "joint-reference shape parameter (eq. 22)"),
-    "k_p": ("number", "-", "pointing-error gain (eq. 23)"),
-    "k_d": ("number", "s", "angular-velocity-error gain (eq. 23); default 19 or 12 by case"),
-    "k_qp": ("number", "N m/rad", "joint proportional gain (eq. 24)"),
-    "k_qd": ("number", "N m s/rad", "joint derivative gain (eq. 24)"),
-    "k_1p": ("number", "N s/m", "surge proportional gain (eq. 25)"),
-    "k_1i": ("number", "N/m", "surge integral gain (eq. 25)"),
-    "q_max": ("number", "rad", "saturation of the base angles (eq. 22)"),
-    "feedforward": ("feedforward", "-", "feedforward of eq. (23): exact or as printed"),
-    "turn_feedforward": (
-        "bool",
-        "-",
-        "beyond the paper: feed the reference turn rate (path curvature) forward through the "
-        "identified turn dynamics",
-    ),
-    "turn_curvature_gain": (
-        "number",
-        "1/(m rad)",
-        "turn model: steady path curvature per radian of base angle (identified)",
-    ),
-    "turn_time_constant": (
-        "number",
-        "s",
-        "turn model: time constant of the turn rate (identified)",
-    ),
-    "current_compensation": (
-        "current_compensation",
-        "-",
-        "none (the paper's LOS) or integral_los (integral LOS against currents)",
-    ),
-    "los_integral_gain": ("number", "-", "integral gain sigma of the integral LOS"),
-    "hydrostatic_compensation": (
-        "bool",
-        "-",
-        "beyond the paper: base angles balance the vehicle's restoring moment",
-    ),
-    "turn_moment_gain": (
-        "number",
-        "N m/rad",
-        "effective hydrodynamic moment per radian of base angle (calibrated)",
-    ),
-}
+    @property
+    def item(self) -> Any:
+        """The type of one component of a vector (of the value itself for a scalar)."""
+        if not self.components:
+            return self.annotation
+        for member in (self.annotation, *typing.get_args(self.annotation)):
+            inner = typing.get_args(member)
+            if inner and typing.get_origin(inner[0]) is list:
+                return typing.get_args(inner[0])[0]
+        return self.annotation
 
 
-def _kind(tag: str):
-    if tag == "vector":
-        return _vector()
-    if tag == "k_e":
-        return _vector(("y", "z"))
-    if tag == "feedforward":
-        return ("choice", FEEDFORWARD_OPTIONS)
-    if tag == "current_compensation":
-        return ("choice", CURRENT_COMPENSATION_OPTIONS)
-    return tag
+def _plain(annotation):
+    """The annotation without ``| None``."""
+    args = typing.get_args(annotation)
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
+        members = [a for a in args if a is not type(None)]
+        if len(members) == 1:
+            return members[0]
+        return typing.Union[tuple(members)]  # noqa: UP007 - a runtime union of annotated types
+    return annotation
 
 
-def _path_keys() -> tuple[Parameter, ...]:
-    out = [Parameter("path.type", ("choice", tuple(PATH_TYPES)), "-", "path type", sweepable=False)]
+def _kind(name: str, annotation) -> Any:
+    text = str(annotation)
+    if annotation is bool:
+        return "bool"
+    if typing.get_origin(annotation) is Literal:
+        return ("choice", typing.get_args(annotation))
+    if name == "controller.k_e":
+        return ("vector", ("y", "z"))
+    if text.startswith("typing.Annotated[list[typing.Annotated[list["):
+        return "points"
+    if text.startswith("typing.Annotated[list["):
+        return ("vector", XYZ)
+    if "str" in text and "float" not in text:
+        return "file"
+    return "number"
+
+
+def _parameter(name: str, model: type[BaseModel], field: str, **options) -> Parameter:
+    info = model.model_fields[field]
+    unit = (info.json_schema_extra or {}).get("unit", "-")
+    meaning = (info.description or "").rsplit(f" [{unit}]", 1)[0]
+    annotation = _plain(info.rebuild_annotation())
+    bounds = bounds_of(annotation)
+    return Parameter(
+        name,
+        _kind(name, annotation),
+        unit,
+        meaning,
+        annotation=annotation,
+        range=bounds.text() if bounds else "",
+        **options,
+    )
+
+
+def _table_keys(section: str, tables: dict[str, type[BaseModel]]) -> tuple[Parameter, ...]:
+    """The keys of the path or current tables: each key once, with the types it applies to."""
     owners: dict[str, list[str]] = {}
-    for type_name, cls in PATH_TYPES.items():
-        for f in dataclasses.fields(cls):
-            if f.init:
-                owners.setdefault(f.name, []).append(type_name)
-    for key, types in owners.items():
-        tag, unit, meaning = _PATH_KEYS[key]  # KeyError: document a new path key above
-        out.append(
-            Parameter(f"path.{key}", _kind(tag), unit, meaning, tuple(types), tag != "points")
-        )
+    for type_name, model in tables.items():
+        for field in model.model_fields:
+            owners.setdefault(field, []).append(type_name)
+    out = []
+    for field, owned in owners.items():
+        model = tables[owned[0]]
+        applies = () if len(owned) == len(tables) or field == "type" else tuple(owned)
+        parameter = _parameter(f"{section}.{field}", model, field, applies_to=applies)
+        if field == "type":
+            parameter = parameter._replace(kind=("choice", tuple(tables)), sweepable=False)
+        elif parameter.kind == "points":
+            parameter = parameter._replace(sweepable=False)
+        out.append(parameter)
     return tuple(out)
 
 
-def _current_keys() -> tuple[Parameter, ...]:
-    out = [
-        Parameter(
-            "current.type",
-            ("choice", tuple(CURRENT_KEYS)),
-            "-",
-            "current type (default constant)",
-            sweepable=False,
-        )
-    ]
-    owners: dict[str, list[str]] = {}
-    for type_name, keys in CURRENT_KEYS.items():
-        for key in keys:
-            if key != "type":
-                owners.setdefault(key, []).append(type_name)
-    for key, types in owners.items():
-        tag, unit, meaning = _CURRENT_KEYS[key]  # KeyError: document a new current key above
-        applies = () if len(types) == len(CURRENT_KEYS) else tuple(types)
-        out.append(Parameter(f"current.{key}", _kind(tag), unit, meaning, applies))
-    return tuple(out)
-
-
-def _controller_keys() -> tuple[Parameter, ...]:
-    out = [
-        Parameter(
-            "controller.type",
-            ("choice", CONTROLLERS),
-            "-",
-            "paper (path following) or none (passive: thrusters and joints idle)",
-        )
-    ]
-    for f in dataclasses.fields(PathFollowingGains):
-        tag, unit, meaning = _GAIN_KEYS[f.name]  # KeyError: document a new gain above
-        out.append(Parameter(f"controller.{f.name}", _kind(tag), unit, meaning))
-    return tuple(out)
+def _schema() -> dict[str, Parameter]:
+    out: list[Parameter] = []
+    tables = {"path": PATH_TABLES, "current": CURRENT_TABLES}
+    for name, info in ScenarioFile.model_fields.items():
+        if name in tables:
+            out.extend(_table_keys(name, tables[name]))
+            continue
+        annotation = _plain(info.annotation)
+        if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+            for field in annotation.model_fields:
+                sweepable = name != "output"
+                out.append(_parameter(f"{name}.{field}", annotation, field, sweepable=sweepable))
+            continue
+        sweepable = name not in ("added_mass", "lagged_filter")
+        out.append(_parameter(name, ScenarioFile, name, sweepable=sweepable))
+    return {p.name: p for p in out}
 
 
 #: Every key of a scenario file, in the order of the documentation.
-SCHEMA: dict[str, Parameter] = {
-    p.name: p
-    for p in (
-        *_RUN,
-        *_path_keys(),
-        *_current_keys(),
-        *_controller_keys(),
-        Parameter(
-            "output.csv_period", "number", "s", "time between rows of timeseries.csv", (), False
-        ),
-    )
-}
+SCHEMA: dict[str, Parameter] = _schema()
 
 #: Keys of a scenario file's top level.
 TOP_LEVEL: tuple[str, ...] = tuple(name for name in SCHEMA if "." not in name)
@@ -334,10 +223,11 @@ def describe_kind(parameter: Parameter) -> str:
 
 def markdown_table() -> str:
     """The scenario keys as a Markdown table (for the documentation site)."""
-    lines = ["| key | kind | unit | meaning |", "|---|---|---|---|"]
+    lines = ["| key | kind | unit | range | meaning |", "|---|---|---|---|---|"]
     for p in SCHEMA.values():
         meaning = p.meaning + (f" ({', '.join(p.applies_to)})" if p.applies_to else "")
         lines.append(
-            f"| `{p.name}` | {describe_kind(p)} | {p.unit} | {meaning.replace('|', '/')} |"
+            f"| `{p.name}` | {describe_kind(p)} | {p.unit} | {p.range} "
+            f"| {meaning.replace('|', '/')} |"
         )
     return "\n".join(lines) + "\n"

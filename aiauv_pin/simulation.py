@@ -29,6 +29,7 @@ from .arguments import (
 from .controllers import CompiledController
 from .disturbances import Disturbance
 from .errors import ArgumentError, SimulationDiverged
+from .fast.schedule import step_actions, steps_to_next_event
 from .integrators import INTEGRATORS, SAMPLES_INSIDE_STEP, midpoint_final, midpoint_stage
 from .lagged import LaggedAddedMass, check_filter, check_scheme
 from .step_stability import warn_if_step_near_limit
@@ -509,27 +510,26 @@ def simulate(
 
         bar = tqdm(total=n_steps, unit="step", desc=f"simulate {duration:g} s", leave=False)
 
-    # the midpoint method samples the controller inside every step and at the end (fast.loop)
+    # the midpoint method samples the controller inside every step (fast.schedule)
     inside = method in SAMPLES_INSIDE_STEP and controller is not None
     logged = 0
     tau, info = zero_tau, {}
     try:
         k = 0
+        # without a controller there is no sample: one "sample period" longer than the run
+        period = steps_per_control if controller is not None else n_steps + 1
         while True:
             t = k * dt
             stage = None
-            if (
-                k % steps_per_control == 0
-                and controller is not None
-                and (not inside or k == n_steps)
-            ):
+            act = step_actions(k, n_steps, period, log_every, inside)
+            if act.sample and controller is not None:
                 tau, info = sample(t, q, v)
-            elif inside:  # the output applied over this step, sampled at its middle
+            elif act.sample_at_stage:  # the output applied over this step, sampled at its middle
                 stage = sample_at_stage(t)
-            if k % log_every == 0 or k == n_steps:
+            if act.log:
                 log(logged, t, tau, info)
                 logged += 1
-            if k == n_steps:
+            if act.last:
                 break
             if inside:
                 if stage is None or not complete_sampled(t, stage):
@@ -540,11 +540,7 @@ def simulate(
                     bar.update(1)
                 continue
             # run up to the next controller call or log point
-            n = min(
-                steps_per_control - k % steps_per_control if controller is not None else n_steps,
-                log_every - k % log_every,
-                n_steps - k,
-            )
+            n = steps_to_next_event(k, n_steps, period, log_every)
             done = advance(tau, n, t)
             if done < n:
                 trajectory = _trajectory(t_log, q_log, v_log, tau_log, info_log, logged)

@@ -23,11 +23,15 @@ the message names the time); ``error`` (the simulation raised; the message is th
 run whose worker dies is submitted again). ``lost`` runs are run again by the next invocation; the
 other three are deterministic and kept.
 
-Safety: a sweep holds an exclusive lock on its output folder (``.sweep.lock``; a second sweep on the
-same folder stops with one line); ``--workers`` is at most :data:`MAX_WORKERS_PER_CORE` per usable
-core; workers load each vehicle from a private per-user cache (:func:`vehicle_cache_folder`, mode
-0700, owner and mode checked) whose files are used only if their content has the expected SHA-256;
-``aiauv sweep`` exits non-zero when every run failed (none ``complete``) or runs were lost.
+Safety: the output folder is new, empty or one a sweep wrote (its manifest ``.aiauv-run.json``,
+:func:`aiauv_pin.result_folder.claim_folder`), and every file is written through
+:mod:`aiauv_pin.atomic` inside it, never through a link planted in it (``runs``, ``figures``); a
+sweep holds an exclusive lock on its output folder (``.sweep.lock``, opened inside it with
+``O_NOFOLLOW``; a second sweep on the same folder stops with one line); ``--workers`` is at most
+:data:`MAX_WORKERS_PER_CORE` per usable core; workers load each vehicle from a private per-user
+cache (:func:`vehicle_cache_folder`, mode 0700, owner and mode checked) whose files are used only if
+their content has the expected SHA-256; ``aiauv sweep`` exits non-zero when every run failed (none
+``complete``) or runs were lost.
 """
 
 from __future__ import annotations
@@ -178,8 +182,9 @@ def flatten_summary(summary: dict) -> dict:
     """The metrics of :func:`aiauv_pin.scenario.summary` as flat ``a.b`` keys (no parameters).
 
     ``final.cross_track_error`` [m] and ``settling_time.cross_track_5cm`` [s] are there for every
-    path, ``final.p_y``, ``final.p_z`` and their settling times on the paper's x-axis only, the
-    surge, pointing error and work when the paper's controller ran.
+    run that follows a path (not a passive one), ``final.p_y``, ``final.p_z`` and their settling
+    times on the paper's x-axis only, the surge, pointing error and work when the paper's
+    controller ran, the base's motion (``final.base_*``) for every run.
     """
     flat: dict = {}
     skip = {"parameters", "case", "status", "message", "dt", "method", "path", "controller"}
@@ -265,7 +270,7 @@ def runs_folder(out: str | os.PathLike) -> Path:
 def write_record(out: str | os.PathLike, record: dict) -> Path:
     """Write one run record atomically to ``runs/<run_id>.json``."""
     path = runs_folder(out) / f"{record['run_id']}.json"
-    write_text(path, json.dumps(record, indent=1, allow_nan=True) + "\n")
+    write_text(path, json.dumps(record, indent=1, allow_nan=True) + "\n", root=out)
     return path
 
 
@@ -316,7 +321,9 @@ def table_rows(points: Sequence[SweepPoint], records: dict[str, dict]) -> list[d
     return rows
 
 
-def write_table(rows: Sequence[dict], path: str | os.PathLike) -> Path:
+def write_table(
+    rows: Sequence[dict], path: str | os.PathLike, *, root: str | os.PathLike | None = None
+) -> Path:
     """Write rows as CSV atomically: the run, its resolved parameters, the metrics present in some
     row (``final.p_y`` only on the x-axis path, ``final.u`` only with the paper's controller), then
     per-thruster and per-joint work."""
@@ -332,7 +339,7 @@ def write_table(rows: Sequence[dict], path: str | os.PathLike) -> Path:
     writer.writerow(columns)
     for row in rows:
         writer.writerow([_cell(row.get(column)) for column in columns])
-    return write_text(path, buffer.getvalue())
+    return write_text(path, buffer.getvalue(), root=root)
 
 
 def read_table(path: str | os.PathLike) -> list[dict[str, str]]:
@@ -387,6 +394,7 @@ def plot_sweep(
     folder: str | os.PathLike,
     *,
     figure_format: str = "png",
+    root: str | os.PathLike | None = None,
 ) -> list[Path]:
     """Summary plots of a sweep (matplotlib, Agg; each file written atomically).
 
@@ -410,7 +418,7 @@ def plot_sweep(
 
     def save(fig, name: str) -> None:
         path = folder / Path(name).with_suffix(f".{figure_format}")
-        with atomic_path(path) as temporary:
+        with atomic_path(path, root=root) as temporary:  # root: the sweep's --out
             fig.savefig(temporary, dpi=200, format=figure_format)
         written.append(path)
 
@@ -610,10 +618,12 @@ def output_lock(out: Path):
     except ImportError:  # not POSIX: no lock
         yield
         return
-    handle = open(out / LOCK_FILE, "a+b")
+    from .atomic import open_inside
+
+    handle = open_inside(out, LOCK_FILE)  # inside out, never through a link
     try:
         try:
-            fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             raise SweepError(
                 f"{out}: another sweep is running on this output folder; wait for it or use "
@@ -621,7 +631,7 @@ def output_lock(out: Path):
             ) from None
         yield
     finally:
-        handle.close()
+        os.close(handle)
 
 
 def _lost_record(point: SweepPoint, reason: str) -> dict:
@@ -641,13 +651,13 @@ def _lost_record(point: SweepPoint, reason: str) -> dict:
 def _write_outputs(out: Path, points, spec_text: str | None) -> tuple[Path, dict[str, int]]:
     records = read_records(out)
     rows = table_rows(points, records)
-    table = write_table(rows, out / "results.csv")
+    table = write_table(rows, out / "results.csv", root=out)
     counts = {s: sum(r["status"] == s for r in rows) for s in STATUSES}
     counts["pending"] = len(points) - len(rows)
     manifest = {"runs": [p.run_id for p in points], "counts": counts}
-    write_text(out / "sweep.json", json.dumps(manifest, indent=1) + "\n")
+    write_text(out / "sweep.json", json.dumps(manifest, indent=1) + "\n", root=out)
     if spec_text is not None:
-        write_text(out / "spec.toml", spec_text)
+        write_text(out / "spec.toml", spec_text, root=out)
     return table, counts
 
 
@@ -669,7 +679,9 @@ def run_sweep(
 
     Args:
         spec: A parsed spec, or the path of a spec TOML file (copied to ``out/spec.toml``).
-        out: Output folder (created).
+        out: Output folder: new (created), empty, or one a sweep wrote (it carries the manifest
+            of :func:`aiauv_pin.result_folder.claim_folder`); a real folder, and so are its
+            ``runs`` and ``figures`` (links are refused, never written through).
         scheduler: Address of an existing Dask scheduler; ``None`` starts a local cluster.
         workers: Runs at once on the local cluster (threads of its worker process; default: the
             usable cores).
@@ -685,6 +697,7 @@ def run_sweep(
         SweepSpecError: A bad spec (one line).
         VehicleLoadError: A vehicle that cannot be loaded.
         SweepError: No scheduler or no worker.
+        OutputPathError: ``out`` holds foreign content or links (one line).
     """
 
     spec_text = None
@@ -694,9 +707,14 @@ def run_sweep(
         source = spec
         spec = load_sweep_spec(source)
         spec_text = read_text(source, "sweep spec")
+    from .atomic import real_folder
+    from .result_folder import claim_folder
+
     out = Path(out)
     points = spec.points()
-    out.mkdir(parents=True, exist_ok=True)
+    claim_folder(out, "sweep", allowed=(LOCK_FILE,))  # new, empty, or a sweep's: never foreign
+    for folder in (runs_folder(out), out / "figures"):  # a planted link: refused, never followed
+        real_folder(out, folder, create=False)
     with output_lock(out):
         return _run_locked(
             spec,
@@ -751,6 +769,7 @@ def _run_locked(
             table_rows(points, read_records(out)),
             out / "figures",
             figure_format=figure_format,
+            root=out,
         )
     return SweepReport(
         out=out,

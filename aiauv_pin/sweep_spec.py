@@ -36,13 +36,26 @@ import math
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
+from functools import cache, lru_cache
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any, Union
 
 import numpy as np
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    ValidationError,
+    create_model,
+    model_validator,
+)
+from pydantic.json_schema import SkipJsonSchema
+from typing_extensions import TypeAliasType
 
 from control.path_following import PathFollowingGains
-from control.reduced_attitude import FEEDFORWARD_OPTIONS
 
 from .errors import AiauvError
 from .loading import BUNDLED_CASES, bundled_urdf
@@ -55,6 +68,7 @@ from .scenario_file import (
 )
 from .scenario_schema import ALIASES, SCHEMA, XYZ, Parameter, scalar_parameters
 from .scenario_schema import METHODS as METHODS
+from .schema_validation import number_text, shown, validate
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -72,10 +86,6 @@ RUN_KEY_VERSION = "aiauv-sweep-run/2"
 MAX_RUNS = 100_000
 #: Largest number of integration steps of one run (``duration / dt``).
 MAX_STEPS_PER_RUN = 5_000_000
-#: Feedforward options of :class:`control.path_following.PathFollowingGains`.
-FEEDFORWARD = FEEDFORWARD_OPTIONS
-#: Keys of a spec that are not parameters.
-RESERVED = ("base", "grid", "random")
 
 #: Every scalar of the schema a spec may set: its key and component.
 _SCALARS: dict[str, tuple[Parameter, str | None]] = scalar_parameters()
@@ -141,93 +151,42 @@ def _is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def _shown(value) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
+def _as_components(name: str, value) -> dict:
+    """A value of a (possibly vector) parameter as a dict of its canonical components.
 
-
-def _check_value(name: str, value, where: str):
-    """Validate one value of a (possibly vector) parameter; return it as a dict of components."""
-    if name in VECTORS:
-        components = VECTORS[name]
-        if name in _SCALAR_VECTORS and _is_number(value):
-            value = [value] * len(components)
-        if not isinstance(value, list) or len(value) != len(components):
-            raise SweepSpecError(
-                f"{where}: expected a list of {len(components)} numbers "
-                f"({', '.join(c.split('.')[1] for c in components)}), got {_shown(value)}"
-            )
-        out = {}
-        for component, item in zip(components, value, strict=True):
-            out.update(_check_value(component, item, where))
-        return out
-    kind = PARAMETERS[name][0]
-    key = CANONICAL[name]
-    if kind == "number":
-        if not _is_number(value) or not math.isfinite(value):
-            raise SweepSpecError(f"{where}: expected a finite number, got {_shown(value)}")
-        return {key: float(value)}
-    if kind == "bool":
-        if not isinstance(value, bool):
-            raise SweepSpecError(f"{where}: expected true or false, got {_shown(value)}")
-        return {key: value}
-    if kind == "path":
-        if not isinstance(value, str) or not value:
-            raise SweepSpecError(f"{where}: expected a file name, got {_shown(value)}")
-        return {key: value}
-    options = kind[1]
-    if value not in options:
-        raise SweepSpecError(f"{where}: expected one of {', '.join(options)}, got {_shown(value)}")
-    return {key: value}
-
-
-def _check_name(name, section: str) -> None:
-    if isinstance(name, str) and name in SCHEMA and not SCHEMA[name].sweepable:
-        raise SweepSpecError(
-            f"{section}: '{name}' is set in the base scenario file (base = \"scenario.toml\"), "
-            "not in a sweep spec"
+    The types were checked by the schema (:func:`sweep_file_model`); a vector of the wrong length
+    is refused here too, never cut to length.
+    """
+    if name not in VECTORS:
+        return {CANONICAL.get(name, name): value}
+    parts = VECTORS[name]
+    if name in _SCALAR_VECTORS and _is_number(value):
+        value = [value] * len(parts)
+    if not isinstance(value, (list, tuple)) or len(value) != len(parts):
+        raise ValueError(
+            f"{name}: expected a list of {len(parts)} numbers "
+            f"({', '.join(c.rsplit('.', 1)[1] for c in parts)}), got {shown(value)}"
         )
-    if not isinstance(name, str) or (name not in PARAMETERS and name not in VECTORS):
-        known = ", ".join([*PARAMETERS, *VECTORS])
-        raise SweepSpecError(f"{section}: unknown parameter '{name}' (known: {known})")
+    return dict(zip(parts, value, strict=True))
 
 
 _components = components
 
 
-def _grid_values(name: str, entry, where: str) -> list[dict]:
-    """The list of values of a grid entry, each as a dict of components."""
+def _grid_length(entry) -> int:
+    """Number of values of a checked grid entry, counted before any is made."""
     if isinstance(entry, dict):
-        if len(entry) != 1 or next(iter(entry)) not in _GRID_FORMS:
-            raise SweepSpecError(
-                f"{where}: expected a list or a table with one of {', '.join(_GRID_FORMS)}, "
-                f"got {_shown(entry)}"
-            )
-        form, args = next(iter(entry.items()))
-        if PARAMETERS.get(name, ("",))[0] != "number":
-            raise SweepSpecError(f"{where}: {form} needs a scalar number parameter")
-        if (
-            not isinstance(args, list)
-            or len(args) != 3
-            or not all(_is_number(a) and math.isfinite(a) for a in args)
-        ):
-            raise SweepSpecError(
-                f"{where}: {form} expects [start, stop, count], got {_shown(args)}"
-            )
-        start, stop, count = args
-        if not (isinstance(count, int) and count >= 1):
-            raise SweepSpecError(f"{where}: {form} count must be a whole number >= 1, got {count}")
-        if form == "geomspace" and (start <= 0 or stop <= 0):
-            raise SweepSpecError(
-                f"{where}: geomspace needs start and stop > 0, got {start}, {stop}"
-            )
+        return int(next(iter(entry.values()))[2])
+    return len(entry)
+
+
+def _grid_values(name: str, entry) -> list[dict]:
+    """The values of a checked grid entry, each as a dict of components."""
+    if isinstance(entry, dict):
+        form, (start, stop, count) = next(iter(entry.items()))
         grid = np.linspace if form == "linspace" else np.geomspace
-        entry = [float(x) for x in grid(start, stop, count)]
-    if not isinstance(entry, list):
-        raise SweepSpecError(f"{where}: expected a list of values, got {_shown(entry)}")
-    if not entry:
-        raise SweepSpecError(f"{where}: empty list of values")
-    return [_check_value(name, value, f"{where}[{k}]") for k, value in enumerate(entry)]
+        entry = [float(x) for x in grid(start, stop, int(count))]
+    return [_as_components(name, value) for value in entry]
 
 
 @dataclass(frozen=True)
@@ -255,33 +214,288 @@ class Distribution:
         return self.args[int(rng.integers(len(self.args)))]
 
 
-def _distribution(name: str, entry, where: str) -> Distribution:
-    if not isinstance(entry, dict) or len(entry) != 1 or next(iter(entry)) not in _RANDOM_FORMS:
-        raise SweepSpecError(
-            f"{where}: expected a table with one of {', '.join(_RANDOM_FORMS)}, got {_shown(entry)}"
-        )
+def _distribution(name: str, entry) -> Distribution:
+    """The distribution of a checked ``[random]`` entry."""
     form, args = next(iter(entry.items()))
-    if not isinstance(args, list):
-        raise SweepSpecError(f"{where}: {form} expects a list, got {_shown(args)}")
     if form == "choice":
-        if not args:
-            raise SweepSpecError(f"{where}: choice from an empty list")
-        for k, value in enumerate(args):
-            _check_value(name, value, f"{where}.choice[{k}]")
         return Distribution(name, form, tuple(args))
-    if PARAMETERS.get(name, ("",))[0] != "number":
-        raise SweepSpecError(f"{where}: {form} needs a scalar number parameter (use choice)")
-    if len(args) != 2 or not all(_is_number(a) and math.isfinite(a) for a in args):
-        raise SweepSpecError(f"{where}: {form} expects two finite numbers, got {_shown(args)}")
-    a, b = (float(x) for x in args)
-    if form == "normal":
-        if b < 0:
-            raise SweepSpecError(f"{where}: normal standard deviation must be >= 0, got {b}")
-    elif a >= b:
-        raise SweepSpecError(f"{where}: empty range [{a}, {b}] (need low < high)")
-    elif form == "loguniform" and a <= 0:
-        raise SweepSpecError(f"{where}: loguniform needs low > 0, got {a}")
-    return Distribution(name, form, (a, b))
+    return Distribution(name, form, tuple(float(x) for x in args))
+
+
+# --------------------------------------------------------------------------------------------------
+# The schema of sweep specs, generated from the scenario file's (aiauv_pin.file_schemas)
+
+
+def _named(kind: str):
+    """The type a function returns for a name, as one JSON-Schema ``$defs`` entry with the name's
+    meaning (a reference wherever it is used)."""
+
+    def decorate(function):
+        @cache
+        def named(name: str):
+            meaning = PARAMETERS.get(name, ("", None))[1]
+            alias = f"{kind}_{name.replace('.', '_')}"  # a dot would lengthen the $defs name
+            return TypeAliasType(alias, Annotated[function(name), Field(description=meaning)])
+
+        named.__doc__ = function.__doc__
+        return named
+
+    return decorate
+
+
+@_named("value")
+def _value_type(name: str):
+    """The pydantic type of one value of a parameter name (scalar, component, vector, alias)."""
+    if name in SCHEMA and SCHEMA[name].components:  # a whole vector of the scenario file
+        return SCHEMA[name].annotation
+    if name in VECTORS:  # an older name of a vector: its components' type, as a list
+        parts = VECTORS[name]
+        item = _SCALARS[parts[0]][0].item
+        whole = Annotated[list[item], Field(min_length=len(parts), max_length=len(parts))]
+        return item | whole if name in _SCALAR_VECTORS else whole
+    parameter, component = _SCALARS[CANONICAL[name]]
+    return parameter.item if component is not None else parameter.annotation
+
+
+def _is_number_parameter(name: str) -> bool:
+    return PARAMETERS.get(name, ("",))[0] == "number"
+
+
+def _refuse_base_key(value):
+    raise ValueError('set in the base scenario file (base = "scenario.toml"), not in a sweep spec')
+
+
+#: A scenario key a spec may not set: refused with its reason, absent from the JSON Schema.
+_BASE_ONLY = SkipJsonSchema[Annotated[Any, AfterValidator(_refuse_base_key)]]
+
+_FINITE = Annotated[float, Field(allow_inf_nan=False)]
+_PAIR = Annotated[list[_FINITE], Field(min_length=2, max_length=2)]
+_TRIPLE = Annotated[list[_FINITE], Field(min_length=3, max_length=3)]
+_SPEC_CONFIG = {"strict": True, "extra": "forbid", "allow_inf_nan": False, "frozen": True}
+
+
+def _check_count(self):
+    start, stop, count = self.args
+    if not (count == int(count) and 1 <= count <= MAX_RUNS):
+        raise ValueError(
+            f"count must be a whole number >= 1 and <= {MAX_RUNS}, got {number_text(count)}"
+        )
+    if self.form == "geomspace" and (start <= 0 or stop <= 0):
+        raise ValueError(f"geomspace needs start and stop > 0, got {start:g}, {stop:g}")
+    return self
+
+
+def _check_range(self):
+    low, high = self.args
+    if self.form == "normal":
+        if high < 0:
+            raise ValueError(f"normal standard deviation must be >= 0, got {high:g}")
+    elif low >= high:
+        raise ValueError(f"empty range [{low:g}, {high:g}] (need low < high)")
+    elif self.form == "loguniform" and low <= 0:
+        raise ValueError(f"loguniform needs low > 0, got {low:g}")
+    return self
+
+
+@cache
+def _form_model(form: str, args_type, meaning: str, check, label: str = "") -> type[BaseModel]:
+    """A one-key table ``{ form = [...] }`` of a grid or random entry (``label``: of a name)."""
+    model = create_model(
+        f"{form}_{label.replace('.', '_')}" if label else f"{form.capitalize()}Form",
+        __config__=ConfigDict(**_SPEC_CONFIG, title=form),
+        **{form: (args_type, Field(..., description=meaning))},
+    )
+    model.form = property(lambda self: form)
+    model.args = property(lambda self: getattr(self, form))
+    if check is None:
+        return model
+    return create_model(
+        f"{form.capitalize()}Form",
+        __base__=model,
+        __validators__={"check": model_validator(mode="after")(check)},
+    )
+
+
+def _form_tag(forms: tuple[str, ...], list_tag: str | None):
+    def tag(value):
+        if isinstance(value, list) and list_tag is not None:
+            return list_tag
+        if isinstance(value, Mapping) and len(value) == 1 and next(iter(value)) in forms:
+            return next(iter(value))
+        return None
+
+    return tag
+
+
+@_named("grid")
+def _axis_type(name: str):
+    """A ``[grid]`` entry: a list of values, or ``{ linspace | geomspace = [a, b, n] }``."""
+    values = Annotated[list[_value_type(name)], Field(min_length=1, title="list")]
+    if not _is_number_parameter(name):
+        return values
+    members = [Annotated[values, Tag("list")]]
+    for form in _GRID_FORMS:
+        meaning = f"[start, stop, count]: {form} values, count in [1, {MAX_RUNS}]"
+        members.append(Annotated[_form_model(form, _TRIPLE, meaning, _check_count), Tag(form)])
+    return Annotated[Union[tuple(members)], Discriminator(_form_tag(_GRID_FORMS, "list"))]  # noqa: UP007
+
+
+@_named("random")
+def _distribution_type(name: str):
+    """A ``[random]`` entry: ``{ uniform | loguniform | normal = [a, b] }`` or ``{ choice = [...] }``."""
+    options = Annotated[list[_value_type(name)], Field(min_length=1)]
+    members = [
+        Annotated[
+            _form_model("choice", options, "values drawn with equal odds", None, name),
+            Tag("choice"),
+        ]
+    ]
+    forms = ("choice",)
+    if _is_number_parameter(name):
+        meanings = {
+            "uniform": "[low, high]",
+            "loguniform": "[low, high], low > 0",
+            "normal": "[mean, std]",
+        }
+        for form, meaning in meanings.items():
+            model = _form_model(form, _PAIR, meaning, _check_range)
+            members.append(Annotated[model, Tag(form)])
+        forms = _RANDOM_FORMS
+    return Annotated[Union[tuple(members)], Discriminator(_form_tag(forms, None))]  # noqa: UP007
+
+
+def _is_table(value) -> str | None:
+    if isinstance(value, Mapping) and not set(value) & {*_GRID_FORMS, *_RANDOM_FORMS}:
+        return "table"
+    return "value"
+
+
+def _names_model(
+    prefix: str, leaf, section: str, extra: dict | None = None, given: frozenset | None = None
+) -> type[BaseModel]:
+    """The table of parameter names under ``prefix`` (``""``: all), nested tables included.
+
+    ``given``: only the names among these dotted key paths (:func:`_key_paths`); ``None``: all.
+    """
+    fields: dict[str, Any] = dict(extra or {})
+    start = f"{prefix}." if prefix else ""
+
+    def wanted(name: str) -> bool:
+        return name.startswith(start) and (given is None or name in given)
+
+    names = [n for n in (*PARAMETERS, *VECTORS) if wanted(n)]
+    base_only = [n for n, p in SCHEMA.items() if not p.sweepable and wanted(n)]
+    keys: dict[str, Any] = {}
+    for name in dict.fromkeys(names):
+        keys[name[len(start) :]] = leaf(name)
+    for name in base_only:
+        keys.setdefault(name[len(start) :], _BASE_ONLY)
+    for rest in list(keys):
+        head = rest.split(".", 1)[0]
+        if "." in rest and head not in fields:
+            node = _names_model(f"{start}{head}", leaf, section, given=given)
+            whole = keys.get(head)
+            if whole is None or whole is _BASE_ONLY:
+                fields[head] = node
+            else:
+                fields[head] = Annotated[
+                    Union[  # noqa: UP007
+                        Annotated[whole, Tag("value"), Field(title="value")],
+                        Annotated[node, Tag("table")],
+                    ],
+                    Discriminator(_is_table),
+                ]
+    for rest, kind in keys.items():
+        fields.setdefault(rest, kind)
+    definitions = {  # the meaning is in the type's $defs entry (:func:`_named`)
+        f"f{k}": (kind | None, Field(None, alias=key))
+        for k, (key, kind) in enumerate(fields.items())
+    }
+    title = f"{section}.{prefix}" if prefix else section
+    model_name = "".join(p.capitalize() for p in f"{section}_{prefix}".replace(".", "_").split("_"))
+    return create_model(
+        model_name,
+        __config__=ConfigDict(**_SPEC_CONFIG, title="table" if prefix else title),
+        **definitions,
+    )
+
+
+#: Most key paths a spec may have for a model of only its own names (more: the whole model).
+_MAX_GIVEN = 1000
+
+
+def _key_paths(table: Any, prefix: str = "", out: set | None = None) -> set[str] | None:
+    """The dotted paths of every key in nested tables (``None``: too many, or a key not text)."""
+    out = set() if out is None else out
+    if isinstance(table, Mapping):
+        for name, value in table.items():
+            if not isinstance(name, str) or len(out) >= _MAX_GIVEN:
+                return None
+            out.add(f"{prefix}{name}")
+            if _key_paths(value, f"{prefix}{name}.", out) is None:
+                return None
+    return out
+
+
+@lru_cache(maxsize=64)
+def sweep_file_model(
+    given: frozenset | None = None,
+    grid_given: frozenset | None = None,
+    random_given: frozenset | None = None,
+) -> type[BaseModel]:
+    """The pydantic model of a sweep spec, generated from the scenario file's schema.
+
+    Fixed parameters, ``[grid]`` entries and ``[random]`` entries are the scenario's keys under
+    their dotted names (or written as nested tables), with the scenario's types and ranges; a grid
+    entry is a list or a ``linspace``/``geomspace`` table, a random entry a distribution table.
+
+    Args:
+        given, grid_given, random_given: Only the names among these key paths
+            (:func:`_key_paths`) of the top level, ``[grid]`` and ``[random]`` (``None``: every
+            name, as ``aiauv schema sweep`` prints it). A spec is checked by the model of its own
+            names (a few fields, quick to build) and, if it fails, by the whole model, whose
+            schema the message is written from.
+    """
+    grid = _names_model("", _axis_type, "grid", given=grid_given)
+    random = _names_model(
+        "",
+        _distribution_type,
+        "random",
+        {
+            "samples": Annotated[int, Field(ge=1, le=MAX_RUNS, description="number of draws")],
+            "seed": Annotated[int, Field(ge=0, le=2**63 - 1, description="seed of the draws")],
+        },
+        given=random_given,
+    )
+    base = Annotated[str, Field(min_length=1, max_length=4096)]
+    return _names_model(
+        "",
+        _value_type,
+        "sweep spec",
+        {
+            "base": Annotated[base, Field(description="scenario file the spec starts from")],
+            "grid": Annotated[grid, Field(description="cartesian product of values")],
+            "random": Annotated[random, Field(description="Monte Carlo sample")],
+        },
+        given=given,
+    )
+
+
+def _check_spec(table: Any) -> None:
+    """Check a spec against the model of its own names (a few fields, quick to build); an
+    unknown key is worded from the whole model's schema (the keys it knows)."""
+    model = None
+    if isinstance(table, Mapping):
+        paths = [_key_paths(table), _key_paths(table.get("grid")), _key_paths(table.get("random"))]
+        if all(p is not None for p in paths):
+            own = sweep_file_model(*(frozenset(p) for p in paths))
+            try:
+                own.model_validate(table)
+                return
+            except ValidationError as error:
+                if all(p["type"] != "extra_forbidden" for p in error.errors()):
+                    model = own  # the same problems as the whole model's
+    validate(model or sweep_file_model(), table, SweepSpecError, "sweep spec")
 
 
 def file_sha256(path: str | Path) -> str:
@@ -352,7 +566,7 @@ def scenario_parameters(scenario: Scenario) -> dict[str, Any]:
     for name in _GAIN_NAMES:
         value = getattr(gains, name)
         if name == "k_e":
-            pair = (value, value) if _is_number(value) else tuple(value)[-2:]
+            pair = (value, value) if _is_number(value) else tuple(value)
             out["controller.k_e.y"], out["controller.k_e.z"] = (float(x) for x in pair)
         elif isinstance(value, (str, bool)):  # feedforward, current_compensation, switches
             out[f"controller.{name}"] = value
@@ -457,7 +671,7 @@ def apply_parameters(base: Mapping[str, Any] | None, values: Mapping[str, Any]) 
         if given is None:
             others = {k: v for k, v in controller.items() if k not in ("type", "k_e")}
             given = PathFollowingGains.for_case(table.get("case", "uniform"), **others).k_e
-        pair = [given, given] if _is_number(given) else list(given)[-2:]
+        pair = [given, given] if _is_number(given) else list(given)
         for component, value in k_e.items():
             pair[("y", "z").index(component)] = value
         controller["k_e"] = pair
@@ -483,10 +697,7 @@ def resolve_parameters(
     """
     canonical: dict[str, Any] = {}
     for name, value in values.items():
-        if name in VECTORS:
-            canonical.update(_check_value(name, value, name))
-        else:
-            canonical[CANONICAL.get(name, name)] = value
+        canonical.update(_as_components(name, value))
     unknown = [name for name in canonical if name not in _SCALARS]
     if unknown:
         raise ValueError(f"unknown parameter '{unknown[0]}'")
@@ -588,7 +799,7 @@ class SweepSpec:
         for _ in range(self.samples):
             sample: dict = {}
             for distribution in self.random:
-                sample.update(_check_value(distribution.name, distribution.draw(rng), "random"))
+                sample.update(_as_components(distribution.name, distribution.draw(rng)))
             draws.append(sample)
         if not draws:
             draws = [None]
@@ -619,10 +830,10 @@ class SweepSpec:
             try:
                 resolved = resolve_parameters(given, hashes[vehicle], self.base)
             except ValueError as exc:
-                shown = ", ".join(
-                    f"{display[k]}={_shown(v)}" for k, v in given.items() if k in display
+                swept = ", ".join(
+                    f"{display[k]}={shown(v)}" for k, v in given.items() if k in display
                 )
-                where = f"run {len(points) + 1} ({shown})" if shown else "fixed parameters"
+                where = f"run {len(points) + 1} ({swept})" if swept else "fixed parameters"
                 raise SweepSpecError(f"{where}: {' '.join(str(exc).split())}") from None
             key = run_id(resolved)
             if key in seen:
@@ -663,7 +874,6 @@ def _split(table: Mapping, section: str) -> dict:
     """Check the names of a table and refuse two names of the same quantity."""
     owners: dict[str, str] = {}
     for name in table:
-        _check_name(name, section)
         for component in _components(name):
             if component in owners:
                 raise SweepSpecError(
@@ -677,7 +887,7 @@ def _split(table: Mapping, section: str) -> dict:
 def _load_base(base, base_dir: Path) -> tuple[dict, Path, Path | None]:
     """The base scenario's tables (checked, without ``vehicle``), its file and its vehicle."""
     if not isinstance(base, str) or not base:
-        raise SweepSpecError(f"base: expected a scenario file name, got {_shown(base)}")
+        raise SweepSpecError(f"base: expected a scenario file name, got {shown(base)}")
     path = Path(base).expanduser()
     path = path if path.is_absolute() else base_dir / path
     try:
@@ -707,37 +917,26 @@ def sweep_spec_from_dict(table: Mapping, base_dir: str | Path = ".") -> SweepSpe
     Raises:
         SweepSpecError: One line naming the entry.
     """
+    _check_spec(table)
     table = dict(table)
     base_dir = Path(base_dir)
     base, base_file, base_vehicle = None, None, None
     if "base" in table:
         base, base_file, base_vehicle = _load_base(table.pop("base"), base_dir)
     grid_table = table.pop("grid", {})
-    random_table = table.pop("random", {})
-    for name, section in ((grid_table, "grid"), (random_table, "random")):
-        if not isinstance(name, dict):
-            raise SweepSpecError(f"[{section}] must be a table, got {_shown(name)}")
+    random_table = dict(table.pop("random", {}))
     fixed_names = _split(_flatten(table), "fixed parameters")
     fixed: dict = {}
     for name, value in fixed_names.items():
-        fixed.update(_check_value(name, value, name))
+        fixed.update(_as_components(name, value))
     grid_entries = _split(_flatten(grid_table), "[grid]")
-    random_table = dict(random_table)
     samples = random_table.pop("samples", None)
     seed = random_table.pop("seed", 0)
     random_entries = _split(_flatten(random_table), "[random]")
     if random_entries and samples is None:
         raise SweepSpecError("[random]: 'samples' (number of draws) is missing")
-    if samples is not None and not (
-        isinstance(samples, int) and not isinstance(samples, bool) and samples >= 1
-    ):
-        raise SweepSpecError(
-            f"[random]: samples must be a whole number >= 1, got {_shown(samples)}"
-        )
     if samples is not None and not random_entries:
         raise SweepSpecError("[random]: 'samples' given without any random parameter")
-    if not (isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0):
-        raise SweepSpecError(f"[random]: seed must be a whole number >= 0, got {_shown(seed)}")
     owners: dict[str, tuple[str, str]] = {}
     for section, names in (
         ("fixed parameters", fixed_names),
@@ -753,11 +952,12 @@ def sweep_spec_from_dict(table: Mapping, base_dir: str | Path = ".") -> SweepSpe
                         f"{section}: '{name}' is also set in {other_section}{also}"
                     )
                 owners[component] = (section, name)
-    grid = {name: _grid_values(name, entry, f"grid.{name}") for name, entry in grid_entries.items()}
-    random = tuple(
-        _distribution(name, random_entries[name], f"random.{name}")
-        for name in sorted(random_entries)
-    )
+    # count the runs before any grid is made (a linspace count of 1e9 allocates nothing)
+    count = math.prod(_grid_length(entry) for entry in grid_entries.values()) * max(samples or 1, 1)
+    if count > MAX_RUNS:
+        raise SweepSpecError(f"the spec expands to {count} runs, more than {MAX_RUNS}")
+    grid = {name: _grid_values(name, entry) for name, entry in grid_entries.items()}
+    random = tuple(_distribution(name, random_entries[name]) for name in sorted(random_entries))
     return SweepSpec(
         fixed=fixed,
         grid=grid,

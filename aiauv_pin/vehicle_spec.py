@@ -16,11 +16,22 @@ import math
 import re
 import sys
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
 from aiauv_pin.errors import AiauvError
+from aiauv_pin.schema_validation import NAME_PATTERN, validate
+from aiauv_pin.vehicle_spec_schema import (
+    DEFAULT_FLUID_DENSITY,
+    DEFAULT_GRAVITY,
+    DEFAULT_JOINT_EFFORT,
+    DEFAULT_JOINT_LIMIT_DEG,
+    DEFAULT_JOINT_VELOCITY,
+    DIRECTIONS,
+    JOINT_AXES,
+    VehicleSpecFile,
+)
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -32,60 +43,10 @@ class SpecError(AiauvError, ValueError):
     """Malformed vehicle spec; the message is one line naming the field (and module)."""
 
 
-JOINT_AXES: dict[str, tuple[float, float, float]] = {
-    "x": (1.0, 0.0, 0.0),
-    "y": (0.0, 1.0, 0.0),
-    "z": (0.0, 0.0, 1.0),
-}
-"""Unit joint axis in the parent link frame for each ``joint`` letter."""
-
-_DIRECTIONS: dict[str, tuple[float, float, float]] = {
-    **JOINT_AXES,
-    "-x": (-1.0, 0.0, 0.0),
-    "-y": (0.0, -1.0, 0.0),
-    "-z": (0.0, 0.0, -1.0),
-}
-
 END_EFFECTOR_LINK = "end_effector"
 END_EFFECTOR_JOINT = "end_effector_joint"
 _RESERVED_NAMES = frozenset({END_EFFECTOR_LINK, END_EFFECTOR_JOINT, "universe", "root_joint"})
-_NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
-
-DEFAULT_FLUID_DENSITY = 1000.0  # [kg/m^3]
-DEFAULT_GRAVITY = 9.81  # [m/s^2]
-DEFAULT_JOINT_LIMIT_DEG = 65.0  # [deg]
-DEFAULT_JOINT_EFFORT = 1000.0  # [N m]
-DEFAULT_JOINT_VELOCITY = 10.0  # [rad/s]
-DEFAULT_MAX_THRUST = 50.0  # [N]
-
-_TOP_KEYS = frozenset(
-    {
-        "name",
-        "radius",
-        "fluid_density",
-        "gravity",
-        "joint_limit_deg",
-        "joint_effort",
-        "joint_velocity",
-        "max_thrust",
-        "module",
-    }
-)
-_MODULE_KEYS = frozenset(
-    {
-        "name",
-        "length",
-        "mass",
-        "density",
-        "radius",
-        "cg_offset",
-        "cb_offset",
-        "volume",
-        "joint",
-        "thruster",
-    }
-)
-_THRUSTER_KEYS = frozenset({"name", "x", "y", "z", "direction", "max_thrust"})
+_NAME_PATTERN = re.compile(NAME_PATTERN)
 
 
 def joint_name(index: int) -> str:
@@ -340,147 +301,15 @@ class VehicleSpec:
 
 
 # --------------------------------------------------------------------------------------------------
-# Parsing of the TOML table
-
-
-def _number(table: Mapping[str, Any], key: str, where: str, default: Any = ...) -> Any:
-    if key not in table:
-        if default is ...:
-            raise SpecError(f"{where}missing field '{key}'")
-        return default
-    value = table[key]
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise SpecError(f"{where}field '{key}' must be a number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value):
-        raise SpecError(f"{where}field '{key}' must be finite, got {value!r}")
-    return value
-
-
-def _vector(table: Mapping[str, Any], key: str, where: str) -> tuple[float, float, float]:
-    value = table.get(key, [0.0, 0.0, 0.0])
-    if (
-        not isinstance(value, list)
-        or len(value) != 3
-        or any(isinstance(v, bool) or not isinstance(v, int | float) for v in value)
-    ):
-        raise SpecError(f"{where}field '{key}' must be a list of 3 numbers, got {value!r}")
-    return _finite_vector(value, f"{where}field '{key}'")
-
-
-def _check_keys(table: Any, allowed: frozenset[str], where: str, what: str) -> None:
-    if not isinstance(table, Mapping):
-        raise SpecError(f"{where}{what} must be a table, got {table!r}")
-    unknown = sorted(set(table) - allowed)
-    if unknown:
-        raise SpecError(
-            f"{where}unknown field '{unknown[0]}' (allowed: {', '.join(sorted(allowed))})"
-        )
-
-
-def _label(table: Any, index: int) -> str:
-    """``'name'`` of a module or thruster table with a valid name, else ``#index`` (1-based)."""
-    name = table.get("name") if isinstance(table, Mapping) else None
-    if isinstance(name, str) and _NAME_PATTERN.fullmatch(name):
-        return f"'{name}'"
-    return f"#{index + 1}"
-
-
-def _thruster_from_dict(
-    table: Any, module_where: str, index: int, default_max_thrust: float
-) -> ThrusterSpec:
-    where = f"{module_where}thruster {_label(table, index)}: "
-    _check_keys(table, _THRUSTER_KEYS, where, "thruster")
-    if "name" not in table:
-        raise SpecError(f"{where}missing field 'name'")
-    name = _check_name(table["name"], f"{where}field 'name'")
-    position = (
-        _number(table, "x", where),
-        _number(table, "y", where, 0.0),
-        _number(table, "z", where, 0.0),
-    )
-    if "direction" not in table:
-        raise SpecError(f"{where}missing field 'direction'")
-    raw = table["direction"]
-    if isinstance(raw, str):
-        if raw not in _DIRECTIONS:
-            raise SpecError(
-                f"{where}field 'direction' must be one of {', '.join(_DIRECTIONS)} "
-                f"or [dx, dy, dz], got {raw!r}"
-            )
-        direction = _DIRECTIONS[raw]
-    else:
-        direction = _vector(table, "direction", where)
-    max_thrust = _number(table, "max_thrust", where, default_max_thrust)
-    if max_thrust <= 0.0:
-        raise SpecError(f"{where}field 'max_thrust' must be positive, got {max_thrust!r}")
-    try:
-        return ThrusterSpec(name, position, direction, max_thrust)
-    except SpecError as error:
-        raise SpecError(f"{where}{_strip_prefix(error, name)}") from None
-
-
-def _strip_prefix(error: SpecError, name: str) -> str:
-    message = str(error)
-    prefix = f"thruster '{name}': "
-    return message[len(prefix) :] if message.startswith(prefix) else message
-
-
-def _module_from_dict(
-    table: Any, index: int, default_radius: float | None, default_max_thrust: float
-) -> ModuleSpec:
-    where = f"module {_label(table, index)}: "
-    _check_keys(table, _MODULE_KEYS, where, "module")
-    if "name" not in table:
-        raise SpecError(f"{where}missing field 'name'")
-    name = _check_name(table["name"], f"{where}field 'name'")
-    length = _number(table, "length", where)
-    if length <= 0.0:
-        raise SpecError(f"{where}field 'length' must be positive, got {length!r}")
-    radius = _number(table, "radius", where, default_radius)
-    if radius is None:
-        raise SpecError(f"{where}missing field 'radius' (and no top-level radius)")
-    if radius <= 0.0:
-        raise SpecError(f"{where}field 'radius' must be positive, got {radius!r}")
-    has_mass, has_density = "mass" in table, "density" in table
-    if has_mass == has_density:
-        raise SpecError(f"{where}give exactly one of 'mass' [kg] or 'density' [kg/m^3]")
-    if has_mass:
-        mass = _number(table, "mass", where)
-        if mass <= 0.0:
-            raise SpecError(f"{where}field 'mass' must be positive, got {mass!r}")
-    else:
-        density = _number(table, "density", where)
-        if density <= 0.0:
-            raise SpecError(f"{where}field 'density' must be positive, got {density!r}")
-        mass = density * math.pi * radius * radius * length  # mass of a solid cylinder
-    volume = _number(table, "volume", where, None)
-    if volume is not None and volume <= 0.0:
-        raise SpecError(f"{where}field 'volume' must be positive, got {volume!r}")
-    joint = table.get("joint")
-    if joint is not None and joint not in JOINT_AXES:
-        raise SpecError(f"{where}field 'joint' must be one of 'x', 'y', 'z', got {joint!r}")
-    raw_thrusters = table.get("thruster", [])
-    if not isinstance(raw_thrusters, list):
-        raise SpecError(f"{where}field 'thruster' must be an array of tables ([[module.thruster]])")
-    thrusters = tuple(
-        _thruster_from_dict(t, where, k, default_max_thrust) for k, t in enumerate(raw_thrusters)
-    )
-    return ModuleSpec(
-        name=name,
-        length=length,
-        mass=mass,
-        radius=radius,
-        cg_offset=_vector(table, "cg_offset", where),
-        volume=volume,
-        cb_offset=_vector(table, "cb_offset", where),
-        joint=joint,
-        thrusters=thrusters,
-    )
+# Reading the TOML table (checked by the schema, aiauv_pin.vehicle_spec_schema.VehicleSpecFile)
 
 
 def spec_from_dict(table: Mapping[str, Any]) -> VehicleSpec:
     """Validate a parsed spec table (the TOML document as a dict) into a :class:`VehicleSpec`.
+
+    The table is checked by the schema (:class:`aiauv_pin.vehicle_spec_schema.VehicleSpecFile`: types,
+    unknown keys, plausible ranges); the data classes check what depends on several keys (names
+    used twice, the head's joint, a thruster or a CG/CB outside its module).
 
     Args:
         table: The spec, in the format described in this module's docstring.
@@ -489,38 +318,51 @@ def spec_from_dict(table: Mapping[str, Any]) -> VehicleSpec:
         The vehicle spec.
 
     Raises:
-        SpecError: On any unknown key, missing field, wrong type, non-positive or non-finite
-            quantity, bad axis or direction, duplicate name, fewer than two modules, a thruster
-            outside its module, or a CG/CB outside its module; the message is one line.
+        SpecError: On any unknown key, missing field, wrong type, non-positive, non-finite or
+            implausible quantity, bad axis or direction, duplicate name, fewer than two modules, a
+            thruster outside its module, or a CG/CB outside its module; the message is one line
+            naming the key path (``module 'link2'.mass``).
     """
-    _check_keys(table, _TOP_KEYS, "", "spec")
-    if "name" not in table:
-        raise SpecError("missing field 'name'")
-    name = _check_name(table["name"], "field 'name'")
-    default_radius = _number(table, "radius", "", None)
-    if default_radius is not None and default_radius <= 0.0:
-        raise SpecError(f"field 'radius' must be positive, got {default_radius!r}")
-    default_max_thrust = _number(table, "max_thrust", "", DEFAULT_MAX_THRUST)
-    if default_max_thrust <= 0.0:
-        raise SpecError(f"field 'max_thrust' must be positive, got {default_max_thrust!r}")
-    raw_modules = table.get("module")
-    if raw_modules is None:
-        raise SpecError("missing field 'module' (give at least 2 [[module]] tables)")
-    if not isinstance(raw_modules, list):
-        raise SpecError("field 'module' must be an array of tables ([[module]])")
-    modules = tuple(
-        _module_from_dict(m, i, default_radius, default_max_thrust)
-        for i, m in enumerate(raw_modules)
-    )
-    return VehicleSpec(
-        name=name,
-        modules=modules,
-        fluid_density=_number(table, "fluid_density", "", DEFAULT_FLUID_DENSITY),
-        gravity=_number(table, "gravity", "", DEFAULT_GRAVITY),
-        joint_limit_deg=_number(table, "joint_limit_deg", "", DEFAULT_JOINT_LIMIT_DEG),
-        joint_effort=_number(table, "joint_effort", "", DEFAULT_JOINT_EFFORT),
-        joint_velocity=_number(table, "joint_velocity", "", DEFAULT_JOINT_VELOCITY),
-    )
+    checked = validate(VehicleSpecFile, table, SpecError, "vehicle spec")
+    modules = []
+    for index, module in enumerate(checked.module):
+        where = f"module '{module.name}'"
+        radius = module.radius if module.radius is not None else checked.radius
+        if radius is None:
+            raise SpecError(f"{where}: missing field 'radius' (and no top-level radius)")
+        if (module.mass is None) == (module.density is None):
+            raise SpecError(f"{where}: give exactly one of 'mass' [kg] or 'density' [kg/m^3]")
+        mass = module.mass
+        if mass is None:
+            mass = module.density * math.pi * radius * radius * module.length  # solid cylinder
+        thrusters = []
+        for thruster in module.thruster:
+            direction = thruster.direction
+            if isinstance(direction, str):
+                direction = DIRECTIONS[direction]
+            limit = thruster.max_thrust if thruster.max_thrust is not None else checked.max_thrust
+            position = (thruster.x, thruster.y, thruster.z)
+            try:
+                thrusters.append(ThrusterSpec(thruster.name, position, tuple(direction), limit))
+            except SpecError as error:
+                raise SpecError(f"{where}: {error}") from None
+        if index < len(checked.module) - 1 and module.joint is None:
+            raise SpecError(f"{where}: missing field 'joint' (axis 'x', 'y' or 'z')")
+        modules.append(
+            ModuleSpec(
+                name=module.name,
+                length=module.length,
+                mass=mass,
+                radius=radius,
+                cg_offset=tuple(module.cg_offset),
+                volume=module.volume,
+                cb_offset=tuple(module.cb_offset),
+                joint=module.joint,
+                thrusters=tuple(thrusters),
+            )
+        )
+    same = {f.name: getattr(checked, f.name) for f in fields(VehicleSpec) if f.name != "modules"}
+    return VehicleSpec(modules=tuple(modules), **same)  # the other fields keep their file names
 
 
 def spec_from_toml(text: str) -> VehicleSpec:

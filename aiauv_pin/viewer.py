@@ -59,6 +59,12 @@ LOS = f"{ROOT}/los"
 FRAME_INFO = ("thrust", "x_ref", "p")
 PATH = f"{ROOT}/path"
 CAMERA_OBJECT = "/Cameras/default/rotated/<object>"
+#: Vertical field of view of meshcat's camera [deg] (``PerspectiveCamera(75, ...)`` in its bundle).
+CAMERA_FOV = 75.0
+#: Distance beyond which meshcat's camera draws nothing [m] (its ``far`` plane), unless raised.
+CAMERA_FAR = 100.0
+#: Direction from the looked-at point to the camera, world frame: behind, to the side, above.
+CAMERA_DIRECTION = (-0.25, -1.0, 0.45)
 
 _THRUST_COLOR = (0.85, 0.1, 0.1, 1.0)
 _LOS_COLOR = (0.1, 0.75, 0.2, 1.0)
@@ -768,11 +774,14 @@ class VehicleScene:
         commands.append(set_object(GRID, line_object(self._grid_points(), _GRID_COLOR)))
         commands.append(set_property("/Grid", "visible", False))
         commands.append(set_property("/Axes", "visible", False))
-        # camera: behind, to the side and above the centroid; offset in the rotated (y-up) frame
-        direction = np.array([-0.25, -1.0, 0.45])
+        # camera: behind, to the side and above the page's origin (the centroid when following);
+        # offset in the rotated (y-up) frame
+        direction = np.array(CAMERA_DIRECTION)
         offset_world = self.camera_distance * direction / np.linalg.norm(direction)
         offset_rotated = [offset_world[0], offset_world[2], -offset_world[1]]
         commands.append(set_property(CAMERA_OBJECT, "position", [float(x) for x in offset_rotated]))
+        if 3.0 * self.camera_distance > CAMERA_FAR:  # a far camera still sees beyond what it frames
+            commands.append(set_property(CAMERA_OBJECT, "far", 3.0 * self.camera_distance))
         return commands
 
     def _path_points(self) -> np.ndarray:

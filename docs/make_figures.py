@@ -29,7 +29,7 @@ def main() -> None:
         target = HERE / case
         target.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryDirectory() as folder:
-            for drawn in write_figures(result, Path(folder), vehicle_name=f"paper_{case}"):
+            for drawn in write_figures(result, Path(folder), vehicle_name=case):  # the folder
                 with Image.open(drawn) as image:
                     half = image.resize(
                         (image.width // 2, image.height // 2), Image.Resampling.LANCZOS

@@ -13,36 +13,56 @@ scalars and NumPy arrays, and decorated with :func:`compiled`:
 The on-disk cache is keyed on content. numba's own cache keys each compiled function on its own
 source file only, so a compiled loop that inlines a law from another file would keep serving stale
 machine code after that file changed. :class:`ProjectCacheLocator` replaces the source stamp of
-every function defined in this project's packages by one hash of all their ``.py`` files (read
+every function defined in this project's packages by one hash of all their compiled sources (read
 once per process; :data:`COMPILED_SOURCES`), so an edit to any file with compiled code recompiles
 everything that may inline it, and no manual cache flush is ever needed. Compiled functions of the
 project must therefore live in those files (a test checks this).
 
-The same locators unpack the compiled kernels shipped with the package into numba's cache before
+The cache is never written inside the installation or the checkout (issue 28: numba's in-tree
+``__pycache__`` folders, left behind in ``site-packages`` by an uninstall, shadowed a later
+editable install as namespace packages). :class:`ProjectCacheLocator` is the only locator of the
+project's functions; it keeps them in :func:`cache_folder`, a per-user folder
+(``platformdirs.user_cache_dir("aiauv-pin")``, or ``$NUMBA_CACHE_DIR/aiauv-pin`` when that is set)
+with one subfolder per package version, Python, CPU target and sources, so that two versions or
+environments never serve each other stale code or overwrite each other's entries. Inside it, each
+source file's functions are kept at that file's path relative to the registered packages
+(:data:`PROJECT_PACKAGES`), e.g. ``aiauv_pin/fast`` for ``aiauv_pin/fast/loop.py``, the same
+names the shipped archives use.
+
+The same locator unpacks the compiled kernels shipped with the package into that folder before
 numba looks there (:mod:`hydro.prebuilt`), so a new installation needs no compilation for them.
 """
 
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import os
+import sys
+import warnings
 from collections.abc import Callable
 from functools import lru_cache
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import TypeVar
 
 from . import prebuilt
 
 F = TypeVar("F", bound=Callable)
 
-#: The packages whose compiled functions share one content-keyed cache stamp.
+#: The project's top-level packages (import names): the roots that cache paths, archive entries and
+#: the source hash are relative to. The one place that names them.
 PROJECT_PACKAGES = ("hydro", "control", "aiauv_pin")
 
-#: Where the project's compiled code lives (folders or files, relative to the project root): the
-#: stamp hashes exactly these sources, so editing e.g. the CLI recompiles nothing.
+#: Where the project's compiled code lives (packages, subpackages or files, as paths from the
+#: roots of :data:`PROJECT_PACKAGES`): the stamp hashes exactly these sources, so editing e.g. the
+#: CLI recompiles nothing.
 COMPILED_SOURCES = ("hydro", "control", "aiauv_pin/fast", "aiauv_pin/disturbances.py")
 
-_ROOT = Path(__file__).resolve().parent.parent
+#: The distribution whose version keys the cache folder.
+DISTRIBUTION = "aiauv-pin"
+
+#: The application name of the per-user cache folder (platformdirs).
+CACHE_APP_NAME = "aiauv-pin"
 
 #: True when numba compiles for the portable x86-64-v3 level, so that the kernels shipped in
 #: ``hydro/prebuilt`` can serve this process (see :mod:`hydro.prebuilt`); set before numba loads.
@@ -61,35 +81,134 @@ except ImportError:  # numba missing: laws run interpreted
 NUMBA_AVAILABLE = numba is not None and os.environ.get("NUMBA_DISABLE_JIT", "0") in ("", "0")
 
 
-def _project_files() -> list[Path]:
-    files: list[Path] = []
+class CacheFolderWarning(UserWarning):
+    """The per-user cache folder cannot be written: compiled code is not kept on disk."""
+
+
+@lru_cache(maxsize=1)
+def package_roots() -> dict[str, Path]:
+    """Import name -> folder of each package of :data:`PROJECT_PACKAGES` that can be imported
+    (found as ``import`` would find it, without importing it)."""
+    roots = {}
+    for name in PROJECT_PACKAGES:
+        module = sys.modules.get(name)
+        spec = module.__spec__ if module is not None else importlib.util.find_spec(name)
+        if spec is not None and spec.origin and spec.origin.endswith("__init__.py"):
+            roots[name] = Path(spec.origin).resolve().parent
+    return roots
+
+
+def project_path(py_file: str | os.PathLike) -> PurePosixPath | None:
+    """``py_file``'s path from the roots of :data:`PROJECT_PACKAGES` (e.g.
+    ``aiauv_pin/fast/loop.py``), or ``None`` if it is not in the project."""
+    path = Path(py_file).resolve()
+    for name, root in package_roots().items():
+        if path.is_relative_to(root):
+            return PurePosixPath(name, *path.relative_to(root).parts)
+    return None
+
+
+def _project_sources() -> list[tuple[PurePosixPath, Path]]:
+    """Every ``.py`` file of :data:`COMPILED_SOURCES`: (project path, file), in a fixed order."""
+    roots = package_roots()
+    files: list[tuple[PurePosixPath, Path]] = []
     for source in COMPILED_SOURCES:
-        path = _ROOT / source
-        if path.is_dir():
-            files.extend(sorted(path.rglob("*.py")))
-        elif path.is_file():
-            files.append(path)
+        package, _, inside = source.partition("/")
+        if package not in roots:
+            continue
+        path = roots[package] / inside if inside else roots[package]
+        found = sorted(path.rglob("*.py")) if path.is_dir() else [path] if path.is_file() else []
+        files.extend((project_path(file), file) for file in found)
     return files
+
+
+def _project_files() -> list[Path]:
+    """The files :func:`source_hash` hashes."""
+    return [file for _, file in _project_sources()]
 
 
 @lru_cache(maxsize=1)
 def source_hash() -> str:
-    """SHA-256 over the content of every ``.py`` file of :data:`COMPILED_SOURCES` (hex digest)."""
+    """SHA-256 over the project path and content of every ``.py`` file of
+    :data:`COMPILED_SOURCES` (hex digest); the same for an installed copy and its checkout."""
     digest = hashlib.sha256()
-    for path in _project_files():
-        digest.update(str(path.relative_to(_ROOT)).encode())
+    for name, path in _project_sources():
+        digest.update(str(name).encode())
         digest.update(b"\0")
         digest.update(path.read_bytes())
         digest.update(b"\0")
     return digest.hexdigest()
 
 
-def _in_project(py_file: str) -> bool:
+def package_version() -> str:
+    """The installed version of :data:`DISTRIBUTION` (``"unversioned"`` if it is not installed)."""
+    from importlib import metadata
+
     try:
-        relative = Path(py_file).resolve().relative_to(_ROOT)
-    except ValueError:
+        return metadata.version(DISTRIBUTION)
+    except metadata.PackageNotFoundError:
+        return "unversioned"
+
+
+def cpu_target_name() -> str:
+    """The CPU numba compiles for: ``NUMBA_CPU_NAME`` (with a digest of ``NUMBA_CPU_FEATURES`` when
+    they are set), or ``host-<the host CPU's name>``."""
+    name = os.environ.get("NUMBA_CPU_NAME")
+    features = os.environ.get("NUMBA_CPU_FEATURES", "")
+    if not name:
+        try:
+            import llvmlite.binding as llvm
+
+            name = f"host-{llvm.get_host_cpu_name()}"
+        except Exception:  # no llvmlite: nothing is compiled anyway
+            name = "host"
+    if features:
+        name += "-" + hashlib.sha256(features.encode()).hexdigest()[:8]
+    return name
+
+
+def cache_base() -> Path:
+    """Where this project keeps compiled code for every version: ``$NUMBA_CACHE_DIR/aiauv-pin``
+    when ``NUMBA_CACHE_DIR`` is set, else the per-user cache folder of the platform."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return Path(os.environ["NUMBA_CACHE_DIR"]) / CACHE_APP_NAME
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir(CACHE_APP_NAME, appauthor=False))
+
+
+def cache_key() -> str:
+    """The subfolder of :func:`cache_base` for this process: package version, Python tag, CPU
+    target and the first 12 hex digits of :func:`source_hash`, e.g.
+    ``0.1.0-py311-x86-64-v3-0123456789ab``."""
+    parts = (package_version(), prebuilt.python_tag(), cpu_target_name(), source_hash()[:12])
+    return "-".join(part.replace(os.sep, "_") for part in parts)
+
+
+def cache_folder() -> Path:
+    """The folder holding this process's compiled code of the project (see the module docstring)."""
+    return cache_base() / cache_key()
+
+
+@lru_cache(maxsize=1)
+def disk_cache_usable() -> bool:
+    """Whether :func:`cache_folder` can be created and written; warns once if not (the project's
+    functions are then compiled in memory in every process)."""
+    folder = cache_folder()
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / f".probe-{os.getpid()}"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as error:
+        warnings.warn(
+            f"aiauv: cannot write the compiled-code cache {folder} ({error}); compiled code is "
+            "not kept (set NUMBA_CACHE_DIR to a writable folder)",
+            CacheFolderWarning,
+            stacklevel=3,
+        )
         return False
-    return relative.parts[:1] in tuple((p,) for p in PROJECT_PACKAGES)
+    return True
 
 
 def _numba_name(name: str):
@@ -99,41 +218,37 @@ def _numba_name(name: str):
 
 if _caching is not None:
 
-    class _ProjectStampMixin:
-        """Source stamp = hash of the whole project's sources (see the module docstring)."""
+    class ProjectCacheLocator(_numba_name("CacheLocator")):
+        """numba's cache of a project function: in :func:`cache_folder`, at the function's source
+        folder's project path, stamped with :func:`source_hash` (see the module docstring)."""
+
+        def __init__(self, py_func, folder: PurePosixPath):
+            self._lineno = py_func.__code__.co_firstlineno
+            self._cache_path = str(cache_folder().joinpath(*folder.parts))
+
+        def get_cache_path(self):
+            return self._cache_path
 
         def get_source_stamp(self):
             return source_hash()
 
+        def get_disambiguator(self):
+            return str(self._lineno)
+
         @classmethod
         def from_function(cls, py_func, py_file):
-            if not _in_project(py_file):
-                return None
-            locator = super().from_function(py_func, py_file)
-            if locator is not None:  # the shipped kernels of this folder, unpacked once
-                prebuilt.seed(locator.get_cache_path(), py_file, _ROOT, source_hash())
+            path = project_path(py_file)
+            if path is None:
+                return None  # not the project's: numba's own locators
+            folder = path.parent
+            locator = cls(py_func, folder)
+            locator.ensure_cache_path()  # an error here is an error: never numba's in-tree cache
+            prebuilt.seed(locator.get_cache_path(), folder.as_posix(), source_hash())
             return locator
 
-    class ProjectCacheLocator(_ProjectStampMixin, _numba_name("InTreeCacheLocator")):
-        """Cache next to the sources (``__pycache__``), keyed on the project's content."""
-
-    class ProjectUserWideCacheLocator(_ProjectStampMixin, _numba_name("UserWideCacheLocator")):
-        """Cache in the user's cache folder when the source tree is read-only."""
-
-    class ProjectUserProvidedCacheLocator(
-        _ProjectStampMixin, _numba_name("UserProvidedCacheLocator")
-    ):
-        """Cache in ``NUMBA_CACHE_DIR`` when it is set (numba's own rule)."""
-
     _locators = _numba_name("CacheImpl")._locator_classes
-    # NUMBA_CACHE_DIR first, then in-tree, then user-wide, as numba orders its own locators
-    for _locator in (
-        ProjectUserWideCacheLocator,
-        ProjectCacheLocator,
-        ProjectUserProvidedCacheLocator,
-    ):
-        if _locator not in _locators:
-            _locators.insert(0, _locator)
+    if ProjectCacheLocator not in _locators:
+        _locators.insert(0, ProjectCacheLocator)
 
 
 def compiled(function: F | None = None, *, fastmath: bool = False, borrows_only: bool = False) -> F:
@@ -156,7 +271,7 @@ def compiled(function: F | None = None, *, fastmath: bool = False, borrows_only:
     def wrap(fn: F) -> F:
         if not NUMBA_AVAILABLE:
             return fn
-        options = dict(cache=True, nogil=True, error_model="numpy")
+        options = dict(cache=disk_cache_usable(), nogil=True, error_model="numpy")
         if fastmath:
             options["fastmath"] = {"reassoc", "contract", "arcp", "nsz"}
         if borrows_only:

@@ -5,10 +5,13 @@ on-disk cache (:mod:`hydro.jit`). Without help, every new installation would com
 minute before its first result (issue 15). The package therefore ships that cache:
 ``python -m aiauv_pin.prebuilt`` runs the common workloads (the paper scenario by both
 integrators, both vehicle cases, a batch rollout) in a fresh cache and packs what numba wrote into
-``hydro/prebuilt/<python tag>.zip``, one archive per CPython version, with a manifest. When a
-compiled function of the project is defined, :func:`seed` copies that function's source folder's
-entries from the archive into the folder numba chose for it, unless a current entry is already
-there. numba then loads them as if it had compiled them itself.
+``hydro/prebuilt/<python tag>.zip``, one archive per CPython version, with a manifest. Its entries
+are named by source folder (``aiauv_pin/fast/loop.run_chunk-<line>.py311.nbi``: the folder's
+path from the project's packages, :func:`hydro.jit.project_path`). When a compiled function of the
+project is defined, :func:`seed` copies that function's source folder's entries from the archive
+(read from the package data, never written) into the same folder of the per-user cache
+(:func:`hydro.jit.cache_folder`), unless a current entry is already there. numba then loads them
+as if it had compiled them itself.
 
 What makes a shipped entry valid is numba's own rule. numba uses an entry only when its version,
 the source stamp (here the content hash :func:`hydro.jit.source_hash`), the function's bytecode
@@ -30,6 +33,10 @@ Environment switches:
 
 * ``AIAUV_NATIVE_CPU=1``: compile for the host's exact CPU (the shipped kernels then never match);
 * ``AIAUV_PREBUILT_KERNELS=0``: do not unpack the shipped kernels (compile everything).
+
+Which numba serves: the project accepts a range of numba versions (``pyproject.toml``); the shipped
+kernels are used only when the manifest's numba is the installed one (numba rejects cache entries
+of another version anyway); otherwise the kernels are compiled once into the per-user cache.
 """
 
 from __future__ import annotations
@@ -37,7 +44,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-import pickle
 import sys
 import tempfile
 import warnings
@@ -131,28 +137,6 @@ def choose_portable_target() -> bool:
     return True
 
 
-def read_index(index: Path) -> tuple[object, dict] | None:
-    """A numba cache index: ``(source stamp, overloads)``, or ``None`` if unreadable.
-
-    numba's index format: its version (pickled), then the pickled ``(source stamp, overloads)``;
-    each overload's key is ``(signature, the code generator's magic tuple (triple, CPU name,
-    features), bytecode hashes)`` and its value the name of the data file.
-    """
-    try:
-        with index.open("rb") as stream:
-            pickle.load(stream)
-            stamp, overloads = pickle.loads(stream.read())
-    except Exception:  # missing, truncated or foreign: not current
-        return None
-    return stamp, overloads
-
-
-def index_stamp(index: Path):
-    """The source stamp a numba cache index was written for, or ``None`` if unreadable."""
-    read = read_index(index)
-    return None if read is None else read[0]
-
-
 @dataclasses.dataclass(frozen=True)
 class Manifest:
     """What an archive was built for (written by ``python -m aiauv_pin.prebuilt``).
@@ -197,10 +181,10 @@ class Manifest:
         import llvmlite.binding as llvm
         import numba
 
+        if self.numba != numba.__version__:  # first: the one a user can act on (pyproject's range)
+            return f"built with numba {self.numba}, running {numba.__version__}"
         if self.source_hash != source_hash:
             return "built from other sources"
-        if self.numba != numba.__version__:
-            return f"built with numba {self.numba}, running {numba.__version__}"
         if self.python_tag != python_tag():
             return f"built for {self.python_tag}, running {python_tag()}"
         if self.triple != llvm.get_process_triple():
@@ -273,24 +257,27 @@ def _write_atomically(path: Path, data: bytes) -> None:
         raise
 
 
-def seed_folder(archive: Archive, folder: str, cache_path: Path, source_hash: str) -> int:
+def seed_folder(archive: Archive, folder: str, cache_path: Path) -> int:
     """Copy ``folder``'s entries of ``archive`` into ``cache_path``; return how many indexes.
 
-    An index already there and written for ``source_hash`` is left alone with its data files (it
-    may hold the user's own compilations). Each index is written after its data files, each file
-    to a temporary name first, so that an interrupted copy leaves no index naming a missing file.
+    Only indexes missing from ``cache_path`` are copied, with their data files: an index already
+    there is current (the cache folder is keyed by the sources' hash, :func:`hydro.jit.cache_key`)
+    and may hold the user's own compilations. It is not opened to check: its signatures name classes
+    of modules still being imported when seeding runs, and an index that failed to load was once
+    taken as stale and replaced, so that every run compiled again what it had saved (issue 28).
+    Each index is written after its data files, each file to a temporary name first, so that an
+    interrupted copy leaves no index naming a missing file.
 
     Args:
         archive: The shipped archive.
-        folder: A source folder relative to the project root, e.g. ``"aiauv_pin/fast"``.
-        cache_path: The folder numba's locator chose for that source folder's functions.
-        source_hash: The running sources' stamp.
+        folder: A source folder's project path, e.g. ``"aiauv_pin/fast"``.
+        cache_path: The cache folder of that source folder's functions.
     """
     files = archive.files.get(folder, {})
     missing = [
         (name, info)
         for name, info in sorted(files.items())
-        if name.endswith(".nbi") and index_stamp(cache_path / name) != source_hash
+        if name.endswith(".nbi") and not (cache_path / name).exists()
     ]
     if not missing:
         return 0
@@ -304,17 +291,19 @@ def seed_folder(archive: Archive, folder: str, cache_path: Path, source_hash: st
     return len(missing)
 
 
-def seed(cache_path: str, source_file: str, root: Path, source_hash: str) -> None:
-    """Unpack the shipped entries of ``source_file``'s folder into ``cache_path`` (once each).
+def seed(cache_path: str, folder: str, source_hash: str) -> None:
+    """Unpack the shipped entries of the source folder ``folder`` into ``cache_path`` (once each).
 
-    Called by :mod:`hydro.jit`'s cache locators when a compiled function is defined. The first
-    error is reported as :class:`PrebuiltCacheWarning` and ends the unpacking for this process;
-    numba then compiles what it does not find.
+    Called by :class:`hydro.jit.ProjectCacheLocator` when a compiled function is defined; the
+    archive is only read, never written. The first error is reported as
+    :class:`PrebuiltCacheWarning` and ends the unpacking for this process; numba then compiles what
+    it does not find.
+
+    Args:
+        cache_path: The cache folder of ``folder``'s functions (in the per-user cache).
+        folder: A source folder's project path, e.g. ``"aiauv_pin/fast"``.
+        source_hash: The running sources' stamp.
     """
-    try:
-        folder = Path(source_file).resolve().parent.relative_to(root).as_posix()
-    except ValueError:
-        return
     key = (cache_path, folder)
     seeded: set = _state["seeded"]  # type: ignore[assignment]
     if key in seeded or _state["failed"]:
@@ -324,7 +313,7 @@ def seed(cache_path: str, source_file: str, root: Path, source_hash: str) -> Non
     if archive is None:
         return
     try:
-        seed_folder(archive, folder, Path(cache_path), source_hash)
+        seed_folder(archive, folder, Path(cache_path))
     except (OSError, RuntimeError, zipfile.BadZipFile, KeyError) as error:
         _state["status"] = f"seeding failed ({error})"
         _state["failed"] = True

@@ -346,47 +346,107 @@ def _density(index: int, value: float):
 
 THRUSTER = ("module", 2, "thruster", 0)
 BAD_SPECS = {
-    "unknown top key": (_set(("colour",), "red"), "unknown field 'colour'"),
-    "unknown module key": (_set(("module", 3, "lenght"), 1.0), "module 'link4': unknown field"),
-    "unknown thruster key": (_set((*THRUSTER, "thrust"), 1.0), "thruster 'link3_z': unknown"),
-    "missing name": (_delete(("name",)), "missing field 'name'"),
-    "missing module name": (_delete(("module", 4, "name")), "module #5: missing field 'name'"),
-    "missing length": (_delete(("module", 0, "length")), "module 'link1': missing field 'length'"),
+    "unknown top key": (_set(("colour",), "red"), "colour: unknown key"),
+    "unknown module key": (
+        _set(("module", 3, "lenght"), 1.0),
+        "module 'link4'.lenght: unknown key",
+    ),
+    "unknown thruster key": (
+        _set((*THRUSTER, "thrust"), 1.0),
+        "module 'link3'.thruster 'link3_z'.thrust: unknown key",
+    ),
+    "missing name": (_delete(("name",)), "name: missing"),
+    "missing module name": (_delete(("module", 4, "name")), "module[4].name: missing"),
+    "missing length": (_delete(("module", 0, "length")), "module 'link1'.length: missing"),
     "missing mass": (_delete(("module", 0, "mass")), "module 'link1': give exactly one of 'mass'"),
     "mass and density": (_set(("module", 0, "density"), 900.0), "exactly one of 'mass'"),
-    "zero length": (_set(("module", 1, "length"), 0.0), "module 'link2': field 'length'"),
-    "negative mass": (_set(("module", 1, "mass"), -6.0), "module 'link2': field 'mass'"),
-    "negative density": (_density(1, -1.0), "module 'link2': field 'density' must be positive"),
-    "nan density": (_density(1, math.nan), "module 'link2': field 'density' must be finite"),
-    "zero radius": (_set(("radius",), 0.0), "field 'radius' must be positive"),
-    "module radius": (_set(("module", 2, "radius"), -0.1), "module 'link3': field 'radius'"),
-    "nan length": (_set(("module", 2, "length"), math.nan), "module 'link3': field 'length'"),
-    "inf mass": (_set(("module", 2, "mass"), math.inf), "module 'link3': field 'mass'"),
-    "string mass": (_set(("module", 2, "mass"), "heavy"), "field 'mass' must be a number"),
-    "bool mass": (_set(("module", 2, "mass"), True), "field 'mass' must be a number"),
-    "nan cg": (_set(("module", 2, "cg_offset"), [0, 0, math.nan]), "field 'cg_offset'"),
-    "short cg": (_set(("module", 2, "cg_offset"), [0, 0]), "field 'cg_offset'"),
+    "zero length": (
+        _set(("module", 1, "length"), 0.0),
+        "module 'link2'.length: expected a number in (0, 100], got 0.0",
+    ),
+    "negative mass": (_set(("module", 1, "mass"), -6.0), "module 'link2'.mass: expected a number"),
+    "negative density": (
+        _density(1, -1.0),
+        "module 'link2'.density: expected a number in (0, 1e5], got -1.0",
+    ),
+    "nan density": (
+        _density(1, math.nan),
+        "module 'link2'.density: expected a number in (0, 1e5], got nan",
+    ),
+    "zero radius": (_set(("radius",), 0.0), "radius: expected a number in (0, 10], got 0.0"),
+    "module radius": (
+        _set(("module", 2, "radius"), -0.1),
+        "module 'link3'.radius: expected a number in (0, 10]",
+    ),
+    "nan length": (
+        _set(("module", 2, "length"), math.nan),
+        "module 'link3'.length: expected a number",
+    ),
+    "inf mass": (
+        _set(("module", 2, "mass"), math.inf),
+        "module 'link3'.mass: expected a number in (0, 1e7], got inf",
+    ),
+    "string mass": (
+        _set(("module", 2, "mass"), "heavy"),
+        "module 'link3'.mass: expected a number in (0, 1e7], got 'heavy'",
+    ),
+    "bool mass": (
+        _set(("module", 2, "mass"), True),
+        "module 'link3'.mass: expected a number in (0, 1e7] (a bool is not a number)",
+    ),
+    "nan cg": (
+        _set(("module", 2, "cg_offset"), [0, 0, math.nan]),
+        "module 'link3'.cg_offset[2]: expected a number",
+    ),
+    "short cg": (
+        _set(("module", 2, "cg_offset"), [0, 0]),
+        "module 'link3'.cg_offset: expected a list of 3 numbers",
+    ),
     "cg outside": (_set(("module", 2, "cg_offset"), [0, 0, -0.2]), "cg_offset"),
-    "zero volume": (_set(("module", 2, "volume"), 0.0), "module 'link3': field 'volume'"),
-    "bad axis": (_set(("module", 0, "joint"), "w"), "module 'link1': field 'joint'"),
+    "zero volume": (
+        _set(("module", 2, "volume"), 0.0),
+        "module 'link3'.volume: expected a number in (0, 1e4], got 0.0",
+    ),
+    "bad axis": (
+        _set(("module", 0, "joint"), "w"),
+        "module 'link1'.joint: expected one of x, y, z, got 'w'",
+    ),
     "head joint": (_set(("module", 8, "joint"), "z"), "module 'link9': the head module"),
     "missing joint": (_delete(("module", 3, "joint")), "module 'link4': missing field 'joint'"),
     "duplicate module": (_set(("module", 3, "name"), "link1"), "module name 'link1' used twice"),
     "reserved name": (_set(("module", 3, "name"), "joint2"), "module name 'joint2' is reserved"),
-    "bad name": (_set(("module", 3, "name"), "link 4"), "field 'name' must be a name"),
-    "one module": (lambda t: t.update(module=t["module"][:1]), "at least 2 modules, got 1"),
-    "no modules": (_delete(("module",)), "missing field 'module'"),
-    "module not table": (_set(("module",), 3), "field 'module' must be an array"),
+    "bad name": (
+        _set(("module", 3, "name"), "link 4"),
+        "module[3].name: expected a name of letters",
+    ),
+    "one module": (
+        lambda t: t.update(module=t["module"][:1]),
+        "module: expected a list of 2 to 127 tables, got 1 entry",
+    ),
+    "no modules": (_delete(("module",)), "module: missing"),
+    "module not table": (_set(("module",), 3), "module: expected a list of 2 to 127 tables, got 3"),
     "thruster outside": (_set((*THRUSTER, "x"), 0.6), "thruster 'link3_z' x = 0.6"),
     "thruster behind": (_set((*THRUSTER, "x"), -0.01), "thruster 'link3_z' x = -0.01"),
-    "thruster no x": (_delete((*THRUSTER, "x")), "thruster 'link3_z': missing field 'x'"),
-    "thruster direction": (_set((*THRUSTER, "direction"), "up"), "field 'direction'"),
+    "thruster no x": (_delete((*THRUSTER, "x")), "module 'link3'.thruster 'link3_z'.x: missing"),
+    "thruster direction": (
+        _set((*THRUSTER, "direction"), "up"),
+        "module 'link3'.thruster 'link3_z'.direction: expected one of x, y, z",
+    ),
     "zero direction": (_set((*THRUSTER, "direction"), [0, 0, 0]), "direction must be nonzero"),
-    "thrust limit": (_set((*THRUSTER, "max_thrust"), 0.0), "thruster 'link3_z': field 'max_thrust"),
+    "thrust limit": (
+        _set((*THRUSTER, "max_thrust"), 0.0),
+        "module 'link3'.thruster 'link3_z'.max_thrust: expected a number",
+    ),
     "duplicate thruster": (_set((*THRUSTER, "name"), "link7_y"), "thruster name 'link7_y' used"),
-    "joint limit": (_set(("joint_limit_deg",), 200.0), "joint_limit_deg must be in (0, 180]"),
-    "fluid density": (_set(("fluid_density",), -1.0), "fluid_density must be positive"),
-    "gravity": (_set(("gravity",), math.nan), "field 'gravity' must be finite"),
+    "joint limit": (
+        _set(("joint_limit_deg",), 200.0),
+        "joint_limit_deg: expected a number in (0, 180], got 200.0",
+    ),
+    "fluid density": (
+        _set(("fluid_density",), -1.0),
+        "fluid_density: expected a number in (0, 1e5], got -1.0",
+    ),
+    "gravity": (_set(("gravity",), math.nan), "gravity: expected a number in [0, 100], got nan"),
 }
 
 

@@ -119,35 +119,20 @@ def test_figure_formats_agree():
     assert cli.FIGURE_FORMATS == outputs.FIGURE_FORMATS
 
 
-def test_compile_notice_only_without_a_cache(tmp_path, monkeypatch, capsys):
-    pytest.importorskip("numba")
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    assert compilation.announce_compilation() is True
+def test_compile_notice_when_numba_compiles_and_only_then(capsys):
+    numba = pytest.importorskip("numba")
+    add_one = numba.njit(lambda x: x + 1)  # not cached: compiled in this process
+    with compilation.CompilationWatch() as watch:
+        assert add_one(1) == 2
+        assert add_one(2) == 3  # the same signature: compiled once
+    assert len(watch.compiled) == 1 and watch.compiled_now
     assert capsys.readouterr().err.strip() == compilation.COMPILE_NOTICE
-    import pickle
-
-    from hydro.jit import source_hash
-
-    nested = tmp_path / "aiauv_pin" / "fast"
-    nested.mkdir(parents=True)
-    index = nested / "loop.run_chunk-20.py311.nbi"
-    # numba's index format: its version, then the pickled (source stamp, overloads)
-    index.write_bytes(pickle.dumps("0.0") + pickle.dumps(("stale sources", {})))
-    assert compilation.announce_compilation() is True  # an index of other sources is no cache
-    capsys.readouterr()
-    index.write_bytes(pickle.dumps("0.0") + pickle.dumps((source_hash(), {})))
-    assert compilation.announce_compilation() is True  # current, but no code in it
-    capsys.readouterr()
-    from numba.core.registry import cpu_target
-
-    target = cpu_target.target_context.codegen().magic_tuple()
-    other_cpu = (target[0], "some-other-cpu", "+feature")
-    for key_target, compiles in ((other_cpu, True), (target, False)):
-        # numba's key: (signature, code generator's magic tuple, bytecode hashes)
-        overloads = {(("float64",), key_target, ("a", "b")): "loop.run_chunk-20.py311.1.nbc"}
-        index.write_bytes(pickle.dumps("0.0") + pickle.dumps((source_hash(), overloads)))
-        assert compilation.announce_compilation() is compiles, key_target
-        assert (capsys.readouterr().err.strip() == compilation.COMPILE_NOTICE) is compiles
+    with compilation.CompilationWatch() as watch:
+        assert add_one(3) == 4
+    assert not watch.compiled_now
+    assert capsys.readouterr().err == ""
+    add_one(1.5)  # outside a watch: not seen by an exited one
+    assert not watch.compiled_now
 
 
 def test_simulate_records_setup_time_apart_from_the_run(tmp_path, capsys):

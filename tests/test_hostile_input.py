@@ -288,7 +288,8 @@ def test_diverging_run_names_time_and_cause_and_keeps_the_partial_results(tmp_pa
     assert times == [0.0, 0.5]
     assert all(math.isfinite(float(x)) for row in rows[1:] for x in row.split(","))
     assert summary["simulated_time"] == 0.5
-    assert not list(out.glob(".*"))  # no temporary files left behind (atomic writes)
+    # no temporary files left behind (atomic writes); the manifest lists what the run wrote
+    assert [p.name for p in out.glob(".*")] == [".aiauv-run.json"]
 
 
 def test_command_line_entry_point_reports_one_line(tmp_path):

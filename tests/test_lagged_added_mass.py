@@ -141,8 +141,8 @@ def test_scenario_files_select_the_lagged_scheme_and_sweeps_keep_it(tmp_path):
     assert "added_mass" not in scenario_parameters(Scenario())  # exact runs keep their keys
     for line, message in (
         ('added_mass = "implicit"', "added_mass: expected one of exact, lagged"),
-        ("lagged_filter = 1.5", "lagged_filter: must be <= 1"),
-        ("lagged_filter = 0", "lagged_filter: must be > 0"),
+        ("lagged_filter = 1.5", r"lagged_filter: expected a number in \(0, 1\], got 1.5"),
+        ("lagged_filter = 0", r"lagged_filter: expected a number in \(0, 1\], got 0"),
     ):
         path.write_text(line + "\n")
         with pytest.raises(ScenarioFileError, match=message):

@@ -160,8 +160,64 @@ def test_los_arrow_points_along_x_ref_at_the_head(page, run, vehicle):
         np.testing.assert_allclose(arrow_axis, run.info["x_ref"][sample], atol=5e-4)
 
 
-def test_world_follows_the_vehicle_and_path_covers_the_run(page, run, vehicle):
-    commands = playback.read_commands(page)
+def _link_points(commands) -> np.ndarray:
+    """World positions of every link in every frame of a playback's animation (F, L, 3)."""
+    clips = _animation(commands)
+    links = [
+        path
+        for path in clips
+        if path.startswith(viewer.LINKS + "/") and "/" not in path[len(viewer.LINKS) + 1 :]
+    ]
+    return np.stack([_track(clips[path], "position")[1].reshape(-1, 3) for path in links], axis=1)
+
+
+def _camera_distance(commands) -> float:
+    (camera,) = [
+        c for c in commands if c["path"] == viewer.CAMERA_OBJECT and c.get("property") == "position"
+    ]
+    return float(np.linalg.norm(camera["value"]))
+
+
+def in_view(points: np.ndarray, distance: float, aspect: float = 4.0 / 3.0) -> np.ndarray:
+    """Whether each point (relative to the looked-at point) is inside the view of meshcat's camera
+    at ``distance`` along :data:`viewer.CAMERA_DIRECTION` (75 deg vertically, ``aspect``)."""
+    back = np.array(viewer.CAMERA_DIRECTION) / np.linalg.norm(viewer.CAMERA_DIRECTION)
+    relative = np.asarray(points, dtype=float).reshape(-1, 3) - distance * back
+    depth = -(relative @ back)  # in front of the camera
+    horizontal = np.array([back[1], -back[0], 0.0]) / np.hypot(back[0], back[1])
+    vertical = np.cross(horizontal, -back)
+    half = math.tan(math.radians(viewer.CAMERA_FOV) / 2)
+    return (
+        (depth > 0)
+        & (np.abs(relative @ vertical) <= half * depth)
+        & (np.abs(relative @ horizontal) <= aspect * half * depth)
+    )
+
+
+def test_a_short_motion_is_framed_whole_from_a_fixed_camera(vehicle):
+    """2 s at 0.5 m/s, no path: the box of the links' motion is centred on the page's origin,
+    where the camera looks, and every link is in view all the way; nothing moves the world."""
+    short = synthetic_trajectory(vehicle, 2.0)
+    commands = playback.playback_commands(vehicle, short, urdf=URDF)
+    assert viewer.ROOT not in _animation(commands)  # no following
+    (shift,) = [c for c in commands if c["type"] == "set_transform" and c["path"] == viewer.ROOT]
+    centre = -np.array(shift["matrix"]).reshape(4, 4).T[:3, 3]  # column-major
+    points = _link_points(commands).reshape(-1, 3)
+    np.testing.assert_allclose(centre, 0.5 * (points.min(0) + points.max(0)), atol=0.5)
+    distance = _camera_distance(commands)
+    assert in_view(points - centre, distance).all()
+    assert not in_view(points - centre, 0.7 * distance).all()  # and no farther than needed
+    # no path given: none drawn, none in the legend
+    assert not [c for c in commands if c["type"] == "set_object" and c["path"] == viewer.PATH]
+    assert viewer.LEGEND["path"] not in playback.legend_entries(commands)
+
+
+def test_a_longer_motion_is_followed_and_the_path_covers_it(vehicle, run):
+    """12 s at 0.5 m/s (6 m, twice the vehicle's length) along the x-axis: the world follows the
+    vehicle (it stays at the page's origin) and the camera fits it and the path beside it."""
+    ends = [run.q[:, 0].min() - 5.0, run.q[:, 0].max() + 5.0]
+    axis = np.column_stack((ends, np.zeros(2), np.zeros(2)))
+    commands = playback.playback_commands(vehicle, run, urdf=URDF, path_points=axis)
     clips = _animation(commands)
     times, offset = _track(clips[viewer.ROOT], "position")
     offset = offset.reshape(-1, 3)
@@ -170,6 +226,10 @@ def test_world_follows_the_vehicle_and_path_covers_the_run(page, run, vehicle):
         sample = int(np.argmin(np.abs(run.t - times[key])))
         centre = scene.frame(run.q[sample]).centroid
         np.testing.assert_allclose(offset[key], -centre, atol=2e-4)  # vehicle at the page origin
+    distance = _camera_distance(commands)
+    links = _link_points(commands)
+    assert in_view(links + offset[:, None, :], distance).all()  # the vehicle, all the way
+    assert distance < 5.0  # a few metres: the 3.5 m vehicle fills the view
     (path,) = [c for c in commands if c["type"] == "set_object" and c["path"] == viewer.PATH]
     points = np.array(path["object"]["geometries"][0]["data"]["attributes"]["position"]["array"])
     points = points.reshape(-1, 3)
@@ -179,6 +239,41 @@ def test_world_follows_the_vehicle_and_path_covers_the_run(page, run, vehicle):
     segments = on_axis.reshape(-1, 2, 3)[:, :, 0]
     segments = segments[np.argsort(segments[:, 0])]
     np.testing.assert_allclose(segments[1:, 0], segments[:-1, 1])
+
+
+def test_camera_framing_fits_the_motion_or_follows_it():
+    """:func:`playback.camera_framing` on made-up motions: a 0.8 m arm held still (framed from
+    under a metre), the same arm carried 0.5 m (framed whole, farther) and 2 m (followed), and a
+    3.5 m vehicle swimming 150 m 2.8 m off its path (followed, a few metres away)."""
+    arm = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.4], [0.4, 0.0, 0.4], [0.8, 0.0, 0.4]])
+    still = np.tile(arm, (10, 1, 1))
+    framing = playback.camera_framing(still, still.mean(axis=1), vehicle_size=1.0)
+    assert not framing.follow
+    np.testing.assert_allclose(framing.centre, [0.4, 0.0, 0.2])
+    # the arm grown by a tenth of its size (0.1 m) is in view, just
+    corners = np.array([[x, y, z] for x in (-0.1, 0.9) for y in (-0.1, 0.1) for z in (-0.1, 0.5)])
+    assert in_view(corners - framing.centre, framing.distance).all()
+    assert not in_view(corners - framing.centre, 0.85 * framing.distance).all()
+    assert framing.distance < 1.0  # a metre-sized arm fills the view
+    along_x = np.array([1.0, 0.0, 0.0])
+    carried = still + np.linspace(0.0, 0.5, 10)[:, None, None] * along_x
+    farther = playback.camera_framing(carried, carried.mean(axis=1), vehicle_size=1.0)
+    assert not farther.follow and framing.distance < farther.distance < 1.5
+    assert in_view(carried.reshape(-1, 3) - farther.centre, farther.distance).all()
+    away = still + np.linspace(0.0, 2.0, 10)[:, None, None] * along_x
+    followed = playback.camera_framing(away, away.mean(axis=1), vehicle_size=1.0)
+    assert followed.follow and followed.distance < 1.0
+    assert in_view(away - away.mean(axis=1, keepdims=True), followed.distance).all()
+    # a long swim: following, the camera fits the vehicle and its distance from the path
+    body = np.column_stack((np.linspace(-3.5, 0.0, 10), np.zeros(10), np.zeros(10)))
+    shift = np.linspace(0.0, 150.0, 300)[:, None, None] * along_x
+    swim = body[None] + shift + np.array([0.0, 2.0, 2.0])
+    path = np.array([[-10.0, 0.0, 0.0], [160.0, 0.0, 0.0]])
+    swimming = playback.camera_framing(swim, swim.mean(axis=1), 3.5, path_points=path)
+    assert swimming.follow
+    offset = 2.0 * math.sqrt(2.0)  # the centroid's distance from the path
+    assert swimming.distance == pytest.approx(1.1 * offset / math.sin(math.radians(37.5)))
+    assert swimming.distance < 6.0
 
 
 def test_300_s_run_stays_under_20_mb(vehicle, tmp_path):

@@ -2,8 +2,8 @@
 
 The file's text (comments included) is the issue's; the flags ``--current VX VY VZ``,
 ``--duration``, ``--dt``, ``--method`` and ``--controller none|paper`` override it; a short run
-writes the path-following figures into ``summary.json`` and the end-effector position into
-``timeseries.csv``.
+writes what fits it into ``summary.json`` (path errors only when a path is followed) and the
+end-effector position into ``timeseries.csv``.
 """
 
 from __future__ import annotations
@@ -112,9 +112,11 @@ def test_vehicle_is_taken_relative_to_the_file(tmp_path):
 @pytest.mark.parametrize(
     "line, message",
     [
-        ("duration = -1.0", "duration: must be > 0"),
+        ("duration = -1.0", "duration: expected a number in (0, 1e5], got -1.0"),
         ("method = 4", "method: expected"),
         ("speed = 1.0", "speed: unknown key"),
+        ("dt = true", "dt: expected a number in [1e-6, 10] (a bool is not a number), got True"),
+        ("duration = '300'", "duration: expected a number in (0, 1e5], got '300'"),
     ],
 )
 def test_bad_issue_file_names_the_key(tmp_path, capfd, line, message):
@@ -125,17 +127,33 @@ def test_bad_issue_file_names_the_key(tmp_path, capfd, line, message):
     assert err.startswith("aiauv: error:") and message in err and "\n" not in err
 
 
-def test_short_run_writes_the_path_figures(tmp_path, capsys):
+def test_short_runs_write_what_fits_them(tmp_path, capsys):
+    """Passive in a current: the motion, no path errors; the paper's controller: the path errors
+    on the paper's x-axis (``p_y``, ``p_z``); both: the end-effector position with its unit."""
+    from aiauv_pin.outputs import MOTION_FIGURES, read_timeseries
+
     path = tmp_path / "issue.toml"
     path.write_text(ISSUE_TOML)
-    out = tmp_path / "run"
-    argv = ["simulate", str(path), "--duration", "0.5", "--dt", "0.05", "--method", "euler"]
-    argv += ["--current", "0", "0.2", "0", "--controller", "none", "--no-html", "--quiet"]
-    assert main([*argv, "--out", str(out)]) == 0
-    summary = json.loads((out / "summary.json").read_text())
-    assert summary["final"]["cross_track_error"] > 2.0  # passive: still ~2.8 m off the x-axis
+    argv = ["simulate", str(path), "--duration", "0.5", "--no-html", "--quiet"]
+    passive = tmp_path / "passive"
+    current = ["--current", "0", "0.2", "0", "--dt", "0.05", "--method", "euler"]
+    assert main([*argv, *current, "--controller", "none", "--out", str(passive)]) == 0
+    summary = json.loads((passive / "summary.json").read_text())
+    assert "cross_track_error" not in summary["final"] and "p_y" not in summary["final"]
+    assert summary["settling_time"] == {} and summary["path"] is None
+    assert summary["final"]["base_distance"] > 0.0  # carried by the current
+    assert sorted(p.name for p in (passive / "figures").iterdir()) == sorted(MOTION_FIGURES)
+    assert "final base position" in capsys.readouterr().out
+    following = tmp_path / "paper"
+    assert main([*argv, "--out", str(following)]) == 0
+    summary = json.loads((following / "summary.json").read_text())
+    assert summary["final"]["cross_track_error"] > 2.0  # still ~2.8 m off the x-axis
     assert "cross_track_5cm" in summary["settling_time"]  # null: never within 5 cm
     assert "p_y" in summary["final"] and "p_z" in summary["final"]  # the paper's x-axis
-    header = (out / "timeseries.csv").read_text().splitlines()[0].split(",")
-    assert {"p_x", "p_y", "p_z"} <= set(header)
-    capsys.readouterr()
+    assert summary["cross_track_axes"] == ["p_y", "p_z"]
+    assert "final p_y = " in capsys.readouterr().out
+    for out in (passive, following):
+        units = read_timeseries(out / "timeseries.csv").units
+        assert {name: units[name] for name in ("p_x", "p_y", "p_z")} == dict.fromkeys(
+            ("p_x", "p_y", "p_z"), "m"
+        )

@@ -110,21 +110,32 @@ def test_run_id_depends_on_the_resolved_run_only(tmp_path):
 @pytest.mark.parametrize(
     ("text", "expected"),
     [
-        ("[grid]\nk_x = [1.0]", "unknown parameter 'k_x'"),
-        ("[grid]\nk_p = []", "grid.k_p: empty list"),
+        ("[grid]\nk_x = [1.0]", "grid.k_x: unknown key"),
+        ("[grid]\nk_p = []", "grid.k_p: expected a non-empty list of numbers"),
         ("[random]\nsamples = 3\nk_p = { uniform = [2.0, 1.0] }", "empty range"),
-        ('dt = "fast"', "dt: expected a finite number"),
+        ('dt = "fast"', "dt: expected a number in [1e-6, 10], got 'fast'"),
         ('[grid]\nmethod = ["rk4", "rk5"]', "grid.method[1]: expected one of rk4, euler"),
-        ("[grid]\nk_p = { linspace = [1.0, 2.0, 0] }", "count must be a whole number >= 1"),
+        ("[grid]\nk_p = { linspace = [1.0, 2.0, 0] }", "grid.k_p: count must be a whole number >= 1"),
         ("[random]\nk_p = { normal = [1.0, 0.1] }", "'samples' (number of draws) is missing"),
         ("k_p = 1.0\n[grid]\nk_p = [1.0, 2.0]", "'k_p' is also set in fixed parameters"),
         ("current = [0.1, 0.2]", "current: expected a list of 3 numbers"),
+        ("[grid]\nk_p = [1.0, -1.0]", "grid.k_p[1]: expected a number in (0, 1000], got -1.0"),
+        ("[grid]\nk_p = [true]", "grid.k_p[0]: expected a number in (0, 1000] (a bool is not"),
+        ('k_d = "19"', "k_d: expected a number in (0, 1e4], got '19'"),
         (
-            "[grid]\nk_p = [1.0, -1.0]",
-            "run 2 (k_p=-1.0): controller: gain k_p must be finite and > 0",
+            "[random]\nsamples = 2\nk_p = { normal = [0.0, 1.0] }",
+            "run 2 (k_p=-0.1321048632913019): controller.k_p: expected a number in (0, 1000]",
         ),
+        ("[grid]\nk_p = { linspace = [1.0, 2.0, 1e9] }", "grid.k_p: count must be a whole"),
+        ("[grid]\nk_p = { linspace = [1.0, 2.0, 1000000000] }", "<= 100000, got 1e9"),
+        (
+            "[grid]\nk_p = { linspace = [1.0, 2.0, 1000] }\nk_d = { linspace = [1.0, 2.0, 1000] }",
+            "the spec expands to 1000000 runs, more than 100000",
+        ),
+        ("k_e = [0.1, 0.2, 0.3]", "k_e: expected a number in (0, 100] or a list of 2 numbers"),
         ('vehicle = "missing.urdf"', "cannot read"),
-        ("duration = 1e6\ndt = 0.01", "exceeds"),
+        ("duration = 1e6\ndt = 0.01", "duration: expected a number in (0, 1e5], got"),
+        ("duration = 1e5\ndt = 0.01", "exceeds"),
         ("[grid\nk_p = 1", "invalid TOML"),
     ],
 )
@@ -143,7 +154,7 @@ def test_cli_reports_a_bad_spec_as_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert status == 1
     assert err.count("\n") == 1
-    assert err.startswith(f"aiauv: error: {spec}: [grid]: unknown parameter 'alpah'")
+    assert err.startswith(f"aiauv: error: {spec}: grid.alpah: unknown key")
     assert not (tmp_path / "out").exists()
 
 

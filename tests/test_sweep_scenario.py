@@ -221,7 +221,7 @@ def test_run_ids_follow_the_resolved_base_scenario(tmp_path):
 @pytest.mark.parametrize(
     ("spec", "base", "expected"),
     [
-        ('[grid]\n"start.positon.y" = [1.0]', None, "[grid]: unknown parameter 'start.positon.y'"),
+        ('[grid]\n"start.positon.y" = [1.0]', None, "grid.start.positon.y: unknown key"),
         ('k_p = 1.0\n"controller.k_p" = 2.0', None, "both 'k_p' and 'controller.k_p' are given"),
         (
             'k_p = 1.0\n[grid]\n"controller.k_p" = [1.0, 2.0]',
@@ -234,8 +234,8 @@ def test_run_ids_follow_the_resolved_base_scenario(tmp_path):
             "both 'current.y' and 'current.velocity' are given",
         ),
         ('[grid]\nk_e = [0.1]\n"controller.k_e.z" = [0.2]', None, "both 'k_e' and"),
-        ('[path]\ntype = "helix"', None, "'path.type' is set in the base scenario file"),
-        ("base = 3", None, "base: expected a scenario file name"),
+        ('[path]\ntype = "helix"', None, "path.type: set in the base scenario file"),
+        ("base = 3", None, "base: expected a non-empty string, got 3"),
         ('base = "missing.toml"', None, "base: scenario file"),
         ('base = "base.toml"', "[path\n", "base base.toml: not valid TOML"),
         ('base = "base.toml"', "durattion = 3.0", "base base.toml: durattion: unknown key"),

@@ -8,14 +8,12 @@ a progress bar and ``on_log`` callbacks still run between them.
 
 With the midpoint method (:class:`~aiauv_pin.fast.kernels.MidpointMethod`) the controller is
 sampled inside every step, at the stage ``t + dt/2`` (:func:`sample_inside_step`; the step is then
-completed by :func:`complete_step`), and once more at the end of the run (for the last row's
-diagnostics). Its output is held over the step it is centred on, so the sampling costs second-order
-error instead of the first-order lag that holding it from the start of each step costs (issue 15's
-accuracy per cost). A row at ``t`` holds, as for the other methods, the output applied from ``t``
-to ``t + dt``, with the diagnostics of its sample at ``t + dt/2``. There is no sample at ``t = 0``:
-the first stage runs with no input (``tau = 0``, an error of order ``dt^2``). A sample there would
-be held by a controller's integrators as if it applied over ``[0, dt/2]``, and the paper's surge
-integral would keep that offset for the whole run (5 mm along the path at 0.02 s, measured).
+completed by :func:`complete_step`). Its output is held over the step it is centred on, so the
+sampling costs second-order error instead of the first-order lag that holding it from the start of
+each step costs (issue 15's accuracy per cost). A row at ``t`` holds, as for the other methods, the
+output applied from ``t`` to ``t + dt``, with the diagnostics of its sample at ``t + dt/2``. When
+the loop samples, logs and stops is :func:`aiauv_pin.fast.schedule.step_actions`, shared with the
+interpreted loop.
 """
 
 from __future__ import annotations
@@ -33,6 +31,7 @@ from .kernels import (
     midpoint_final_into,
     midpoint_stage_into,
 )
+from .schedule import step_actions
 
 
 def samples_inside_step(method) -> bool:
@@ -116,13 +115,14 @@ def run_chunk(
         if k == k_stop and k != n_total:
             return log_index, k - k_start
         t = k * dt
-        if k % steps_per_control == 0 and (not inside or k == n_total):
+        act = step_actions(k, n_total, steps_per_control, log_every, inside)
+        if act.sample:
             run_controller(controller, t, q, v, model, W, parameters, state, tau, info)
-        elif inside:  # the output applied over this step, sampled at its middle
+        elif act.sample_at_stage:  # the output applied over this step, sampled at its middle
             sample_inside_step(
                 method, controller, parameters, state, model, env, servo, t, q, v, tau, info, dt, W
             )
-        if k % log_every == 0 or k == n_total:
+        if act.log:
             row = log[log_index]
             row[0] = t
             for i in range(nq):
@@ -134,7 +134,7 @@ def run_chunk(
             for i in range(width):
                 row[base + i] = info[i]
             log_index += 1
-        if k == n_total:
+        if act.last:
             return log_index, k - k_start
         complete_step(method, model, env, servo, t, q, v, tau, dt, W)
         if not is_finite_state(W.q_next, W.v_next):

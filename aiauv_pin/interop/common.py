@@ -13,6 +13,7 @@ import pinocchio as pin
 from hydro.spec import HydroError
 from hydro.urdf_block import parse_robot_text, parse_scalar, parse_vector
 
+from ..input_limits import read_text
 from ..loading import load_vehicle
 from ..urdf_validation import UrdfStructure, validate_urdf
 from ..vehicle import Vehicle
@@ -97,7 +98,7 @@ def load_export_source(path: str | os.PathLike) -> ExportSource:
     """
     path = Path(path)
     vehicle = load_vehicle(path, backend="pinocchio")
-    root = parse_robot_text(path.read_text(encoding="utf-8").removeprefix("\ufeff"), str(path))
+    root = parse_robot_text(read_text(path, "URDF"), str(path))
     structure = validate_urdf(root)
     try:
         shapes = {link.get("name"): _shapes(link) for link in root.findall("link")}

@@ -62,6 +62,8 @@ from hydro.urdf_writer import format_number, format_numbers, fossen_link_element
 from hydro.urdf_xml import parse_bool
 
 from ..atomic import write_text as atomic_write_text
+from ..errors import InputLimitError, VehicleLoadError
+from ..input_limits import read_text
 from .common import ExportSource, load_export_source, rpy_of, rpy_to_matrix
 from .errors import InteropError
 
@@ -362,16 +364,14 @@ class GzModel:
 
 
 def _parse_sdf(path: Path) -> Element:
-    if not path.exists():
-        raise InteropError(f"{path}: no such file")
-    if path.is_dir():
-        raise InteropError(f"{path}: is a directory, not an SDF file")
-    if path.stat().st_size > MAX_SDF_BYTES:
-        raise InteropError(f"{path}: larger than {MAX_SDF_BYTES} bytes, not an SDF model")
+    # regular files only (a FIFO would block, /dev/zero never end), at most MAX_SDF_BYTES, read
+    # with the cap enforced while reading
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InteropError(f"cannot read SDF file {path}: {_one_line(exc)}") from None
+        text = read_text(path, "SDF model", MAX_SDF_BYTES)
+    except InputLimitError:
+        raise
+    except VehicleLoadError as exc:  # missing, a directory, unreadable, not UTF-8
+        raise InteropError(str(exc)) from None
     try:
         root = SafeElementTree.fromstring(text.removeprefix("\ufeff"), forbid_dtd=True)
     except defusedxml.DefusedXmlException:
@@ -394,6 +394,7 @@ def read_gz_model(path: str | os.PathLike, model: str | None = None) -> GzModel:
         InteropError: Unreadable or malformed SDF, a term with no form in our block, added mass
             given both as ``<fluid_added_mass>`` and as plugin parameters, or a non-physical value
             (one line).
+        InputLimitError: Not a regular file (FIFO, device), or larger than :data:`MAX_SDF_BYTES`.
     """
     path = Path(path)
     root = _parse_sdf(path)
@@ -570,7 +571,7 @@ def import_gz(
             raise InteropError(f"SDF link '{link.link}' is not a link of {source.path}")
     pose_checked = _check_poses(gz, source.placements, source.structure.root)
 
-    root = parse_robot_text(source.path.read_text(encoding="utf-8").removeprefix("\ufeff"))
+    root = parse_robot_text(read_text(source.path, "URDF"))
     block = root.find("hydrodynamics")
     if block is None:
         block = SubElement(root, "hydrodynamics")

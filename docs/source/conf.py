@@ -53,18 +53,30 @@ def _write_sweep_parameters(app) -> None:
         target.write_text(text)
 
 
+def _write_generated(app, name: str, text: str) -> None:
+    """Write ``_generated/<name>`` when its text changed (tables generated from the code)."""
+    folder = Path(app.srcdir) / "_generated"
+    folder.mkdir(exist_ok=True)
+    target = folder / name
+    if not target.exists() or target.read_text() != text:
+        target.write_text(text)
+
+
 def _write_scenario_keys(app) -> None:
     """The table of scenario-file keys, generated from the schema so that it cannot drift."""
     from aiauv_pin.scenario_schema import markdown_table
 
-    folder = Path(app.srcdir) / "_generated"
-    folder.mkdir(exist_ok=True)
-    target = folder / "scenario_keys.md"
-    text = markdown_table()
-    if not target.exists() or target.read_text() != text:
-        target.write_text(text)
+    _write_generated(app, "scenario_keys.md", markdown_table())
+
+
+def _write_vehicle_keys(app) -> None:
+    """The table of vehicle-spec keys with units and ranges, generated from the schema."""
+    from aiauv_pin.vehicle_spec_schema import markdown_keys
+
+    _write_generated(app, "vehicle_keys.md", markdown_keys())
 
 
 def setup(app) -> None:
     app.connect("builder-inited", _write_sweep_parameters)
     app.connect("builder-inited", _write_scenario_keys)
+    app.connect("builder-inited", _write_vehicle_keys)
