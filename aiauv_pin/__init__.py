@@ -11,18 +11,18 @@ The main entry points::
 
 from typing import TYPE_CHECKING
 
-from .errors import AiauvError, SimulationDiverged, VehicleLoadError
-from .integrators import midpoint_step, rk4_step, semi_implicit_euler_step
-from .loading import BUNDLED_CASES, bundled_urdf, load_vehicle
-from .rollout import Rollout, rollout
-from .simulation import Trajectory, simulate
-from .vehicle import Vehicle
+from aiauv_pin.dynamics.integrators import midpoint_step, rk4_step, semi_implicit_euler_step
+from aiauv_pin.errors import AiauvError, SimulationDiverged, VehicleLoadError
+from aiauv_pin.model.loading import BUNDLED_CASES, bundled_urdf, load_vehicle
+from aiauv_pin.model.vehicle import Vehicle
+from aiauv_pin.simulation.fixed_step import Trajectory, simulate
+from aiauv_pin.simulation.rollout import Rollout, rollout
 
 if TYPE_CHECKING:
-    from .linear_model import linearize, straight_line_trim
+    from aiauv_pin.dynamics.linear_model import linearize, straight_line_trim
 
 #: Names imported on first use (PEP 562): modules a simulation never needs.
-_LAZY = {"linearize": "linear_model", "straight_line_trim": "linear_model"}
+_LAZY = {"linearize": "dynamics.linear_model", "straight_line_trim": "dynamics.linear_model"}
 
 
 def __getattr__(name: str):

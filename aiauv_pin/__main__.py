@@ -1,6 +1,6 @@
 """``python -m aiauv_pin``: the ``aiauv`` command line."""
 
-from .cli import console_main
+from aiauv_pin.app.cli import console_main
 
 if __name__ == "__main__":
     console_main()

@@ -30,12 +30,13 @@ class ArgumentError(AiauvError, ValueError):
 
 
 class InputLimitError(VehicleLoadError):
-    """An input file beyond the documented limits of :mod:`aiauv_pin.input_limits`."""
+    """An input file beyond the documented limits of :mod:`aiauv_pin.description.input_limits`."""
 
 
 class UnsafeNameError(VehicleLoadError):
-    """A link, joint, thruster or robot name outside the safe set of :mod:`aiauv_pin.safe_names`."""
+    """A link, joint, thruster or robot name outside the safe set of
+    :mod:`aiauv_pin.description.safe_names`."""
 
 
 class PhysicalParameterError(VehicleLoadError):
-    """A non-physical or implausible vehicle parameter (:mod:`aiauv_pin.validation`)."""
+    """A non-physical or implausible vehicle parameter (:mod:`aiauv_pin.model.validation`)."""

@@ -27,14 +27,15 @@ from pathlib import Path
 import numpy as np
 
 import aiauv_pin
-from aiauv_pin.atomic import write_text
-from aiauv_pin.loading import bundled_urdf
-from aiauv_pin.paper_controller import VehiclePathFollowing
-from aiauv_pin.scenario import Scenario, initial_state, run_scenario, settling_time
-from aiauv_pin.scenario_file import load_scenario
-from aiauv_pin.simulation import JointServo, simulate
-from control.path_following import PathFollowingGains
-from control.surge import SurgePIController
+from aiauv_control.path_following import PathFollowingGains
+from aiauv_control.surge import SurgePIController
+from aiauv_pin._internal.atomic import write_text
+from aiauv_pin.controllers.paper_controller import VehiclePathFollowing
+from aiauv_pin.dynamics.joint_servo import JointServo
+from aiauv_pin.model.loading import bundled_urdf
+from aiauv_pin.scenario.definition import Scenario, initial_state, run_scenario, settling_time
+from aiauv_pin.scenario.toml_file import load_scenario
+from aiauv_pin.simulation.fixed_step import simulate
 
 HERE = Path(__file__).resolve().parent
 EXAMPLES = HERE.parent / "examples"

@@ -1,11 +1,12 @@
 """The scenario's default integrator and step: error against a converged reference, every setting.
 
 Issue 15's rule: the default is the cheapest (method, step) whose end-effector path stays within
-2 mm (:data:`aiauv_pin.bench_run.ACCURACY_TARGET`) of a converged reference (RK4 at 0.5 ms) over
+2 mm (:data:`aiauv_pin.tools.run_benchmarks.ACCURACY_TARGET`) of a converged reference (RK4 at 0.5 ms) over
 the whole 300 s run; ours adds that the paper's attitude loop must keep a gain margin of 2
-(:data:`aiauv_pin.bench_run.MARGIN_TARGET`: it still converges with ``k_p, k_d`` doubled). This
+(:data:`aiauv_pin.tools.run_benchmarks.MARGIN_TARGET`: it still converges with ``k_p, k_d`` doubled). This
 script measures the error (and, with the controller, the margin) of the candidates
-(:func:`aiauv_pin.bench_run.accuracy_per_cost`) on both bundled vehicles with the paper's controller
+(:func:`aiauv_pin.tools.run_benchmarks.accuracy_per_cost`) on both bundled vehicles with the
+paper's controller
 in still water, and checks the default also stays well-behaved (finite, close to the reference) with
 the paper's controller in a current and in a passive drift in that current. It writes
 ``benchmarks/default_step.json`` (rewritten after every configuration, so a kill loses only the one
@@ -24,7 +25,7 @@ import json
 import os
 from pathlib import Path
 
-from aiauv_pin import bench_run
+from aiauv_pin.tools import run_benchmarks as bench_run
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "default_step.json"

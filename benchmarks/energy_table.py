@@ -19,9 +19,9 @@ from pathlib import Path
 import numpy as np
 
 import aiauv_pin
-from aiauv_pin.loading import bundled_urdf
-from aiauv_pin.scenario import Scenario, run_scenario, summary
-from control.paths import HelixPath
+from aiauv_control.paths import HelixPath
+from aiauv_pin.model.loading import bundled_urdf
+from aiauv_pin.scenario.definition import Scenario, run_scenario, summary
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "energy_table.json"

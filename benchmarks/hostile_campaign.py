@@ -15,7 +15,7 @@ it ends in
 * an **accepted bad input**: a command that succeeded on an input known to be bad (a bad flag), or
   on a vehicle this script finds non-physical by its own reading of the file (negative or
   indefinite damping, a negative mass, an inertia breaking the triangle inequality, non-finite
-  numbers, magnitudes beyond the documented thresholds of :mod:`aiauv_pin.validation`, unsafe
+  numbers, magnitudes beyond the documented thresholds of :mod:`aiauv_pin.model.validation`, unsafe
   names); an API call returning for a bad argument, or a non-finite result;
 * **data lost** (a killed ``simulate`` leaving a folder that claims completeness it lacks or mixes
   runs; a sweep that, resumed, does not give exactly the table of an uninterrupted sweep) or a
@@ -338,7 +338,7 @@ def make_files(folder: Path, rng: random.Random, scale: float) -> list[dict]:
 
 
 def aiauv(*args: str) -> list[str]:
-    return [sys.executable, "-c", "from aiauv_pin.cli import console_main; console_main()", *args]
+    return [sys.executable, "-c", "from aiauv_pin.app.cli import console_main; console_main()", *args]
 
 
 def classify(returncode: int | None, out: str, err: str) -> str:
@@ -411,7 +411,7 @@ def _numbers(text: str | None) -> list[float]:
 def non_physical_reasons(path: Path) -> list[str]:
     """Why the URDF at ``path`` is not a physical vehicle, by this script's own reading of the XML.
 
-    Uses the thresholds documented in :mod:`aiauv_pin.validation` (the numbers, not its code).
+    Uses the thresholds documented in :mod:`aiauv_pin.model.validation` (the numbers, not its code).
     """
     reasons: list[str] = []
     try:
@@ -425,8 +425,8 @@ def non_physical_reasons(path: Path) -> list[str]:
 
 
 def _non_physical_reasons(root: ET.Element, reasons: list[str]) -> list[str]:
-    from aiauv_pin import validation as limits
-    from aiauv_pin.safe_names import NAME_PATTERN
+    from aiauv_pin.description.safe_names import NAME_PATTERN
+    from aiauv_pin.model import validation as limits
 
     hydro_elements = {e for block in root.findall("hydrodynamics") for e in block.iter()}
     masses = []
@@ -537,8 +537,8 @@ def _non_physical_reasons(root: ET.Element, reasons: list[str]) -> list[str]:
 def loaded_vehicle_reasons(path: Path) -> list[str]:
     """Invariants of the vehicle as loaded (Pinocchio's model, the parsed hydrodynamics)."""
     import aiauv_pin
+    from aiauv_pin.description.safe_names import NAME_PATTERN
     from aiauv_pin.errors import AiauvError
-    from aiauv_pin.safe_names import NAME_PATTERN
 
     try:
         vehicle = aiauv_pin.load_vehicle(path, backend="pinocchio")
@@ -858,7 +858,7 @@ for method, (names, call) in CALLS.items():
             cases.append((f"{method}({what}={label})", expect, lambda call=call, args=args: call(*args)))
 
 def sim(**kw):
-    from aiauv_pin.simulation import simulate
+    from aiauv_pin.simulation.fixed_step import simulate
     args = dict(vehicle=vehicle, q0=q0, v0=np.zeros(nv), duration=0.05, dt=0.01)
     args.update(kw)
     return simulate(**args).q[-1]
@@ -885,7 +885,7 @@ for label, expect, kw in [
 ]:
     cases.append((f"simulate({label})", expect, lambda kw=kw: sim(**kw)))
 
-from aiauv_pin.loading import bundled_urdf
+from aiauv_pin.model.loading import bundled_urdf
 text = bundled_urdf("uniform").read_text()
 for label, expect, fn in [
     ("URDF text as path", "bad", lambda: aiauv_pin.load_vehicle(text)),
@@ -1042,7 +1042,7 @@ def _api_outcome(record: dict) -> str:
 
 def _folder_problems(out: Path, html: bool, duration: float) -> list[str]:
     """What a result folder claims and lacks (empty: a complete run of ``duration``)."""
-    from aiauv_pin.outputs import FIGURES
+    from aiauv_pin.results.outputs import FIGURES
 
     problems = []
     try:
@@ -1420,7 +1420,7 @@ def run_sweep_section(
     # a vehicle planted in the cache under the genuine vehicle's hash is not used
     import hashlib
 
-    from aiauv_pin.loading import bundled_urdf
+    from aiauv_pin.model.loading import bundled_urdf
 
     tmp = Path(env["TMPDIR"])
     folder = tmp / f"aiauv-sweep-vehicles-{os.getuid()}"

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import sys
 
-from aiauv_pin import bench  # noqa: F401  (registers the ``bench`` subcommand)
-from aiauv_pin.cli import main
+from aiauv_pin.app.cli import main
+from aiauv_pin.tools import bench_command as bench  # noqa: F401  (registers the ``bench`` subcommand)
 
 if __name__ == "__main__":
     sys.exit(main(["bench", *sys.argv[1:]]))

@@ -1,6 +1,7 @@
-"""Sweep throughput: runs per minute of :func:`aiauv_pin.sweep.run_sweep` with 1, 2, ... workers.
+"""Sweep throughput: runs per minute of :func:`aiauv_pin.scenario.sweep_runner.run_sweep` with 1,
+2, ... workers.
 
-For each worker count, the local cluster of :func:`aiauv_pin.sweep.dask_client` (one worker
+For each worker count, the local cluster of :func:`aiauv_pin.scenario.sweep_runner.dask_client` (one worker
 process running that many runs at once on its threads) is started and warmed up (the worker loads
 the vehicle and runs one short simulation, so imports and compiled kernels are not counted; the
 other threads still load their own copy of the vehicle in their first run); then the same sweep of
@@ -24,11 +25,11 @@ from pathlib import Path
 
 import numpy as np
 
-from aiauv_pin.atomic import write_text
-from aiauv_pin.loading import bundled_urdf
-from aiauv_pin.scenario_defaults import DEFAULT_DT, DEFAULT_METHOD
-from aiauv_pin.sweep import dask_client, execute_run, run_sweep
-from aiauv_pin.sweep_spec import file_sha256, sweep_spec_from_dict
+from aiauv_pin._internal.atomic import write_text
+from aiauv_pin.model.loading import bundled_urdf
+from aiauv_pin.scenario.defaults import DEFAULT_DT, DEFAULT_METHOD
+from aiauv_pin.scenario.sweep_runner import dask_client, execute_run, run_sweep
+from aiauv_pin.scenario.sweep_spec import file_sha256, sweep_spec_from_dict
 
 
 def _warm_up(duration: float) -> None:

@@ -2,16 +2,19 @@
 
 It is the paper's path following (Section 3 of Wrzos-Kaminska, Pettersen and Gravdahl, IFAC CAMS
 2019) put together the way a user would: a plain ``numba.njit`` function (no on-disk cache, so the
-compiled loop runs it in its uncached copy, :func:`aiauv_pin.fast.loop.loop_for`) that measures the
-end-effector with the public kernels (:func:`aiauv_pin.fast.kernels.kinematics`,
-:func:`~aiauv_pin.fast.kernels.frame_of_body_into`, :func:`~aiauv_pin.fast.kernels.restoring_into`),
-calls the public law :func:`control.laws.path_following_command` (eqs. 21-25) and acts with
-:func:`~aiauv_pin.fast.kernels.thrust_into` (eq. 20). Its parameters and state are the built-in
-controller's records (:meth:`aiauv_pin.paper_controller.VehiclePathFollowing.compiled`), so both
+compiled loop runs it in its uncached copy, :func:`aiauv_pin.simulation.compiled_loop.loop_for`)
+that measures the
+end-effector with the public kernels (:func:`aiauv_pin.kernels.articulated_body.kinematics`,
+:func:`~aiauv_pin.kernels.articulated_body.frame_of_body_into`,
+:func:`~aiauv_pin.kernels.articulated_body.restoring_into`),
+calls the public law :func:`aiauv_control.laws.paper_laws.path_following_command` (eqs. 21-25) and acts with
+:func:`~aiauv_pin.kernels.articulated_body.thrust_into` (eq. 20). Its parameters and state are the built-in
+controller's records (:meth:`aiauv_pin.controllers.paper_controller.VehiclePathFollowing.compiled`), so both
 run the same scenario with the same gains; it logs fewer diagnostics (end-effector position, surge
 speed, cross-track errors, path parameter).
 
-``aiauv bench`` times it against the built-in :func:`aiauv_pin.fast.controllers.paper_path_following`
+``aiauv bench`` times it against the built-in
+:func:`aiauv_pin.controllers.paper_compiled.paper_path_following`
 on the 300 s paper scenario (issue 12: a user's compiled controller within 1.5x of the built-in's
 speed); tests/test_bench.py checks that both give the same trajectory.
 """
@@ -20,9 +23,14 @@ from __future__ import annotations
 
 import numba
 
-from aiauv_pin.controllers import CompiledController
-from aiauv_pin.fast.kernels import frame_of_body_into, kinematics, restoring_into, thrust_into
-from control.laws import path_following_command
+from aiauv_control.laws.paper_laws import path_following_command
+from aiauv_pin.controllers.compiled_controller import CompiledController
+from aiauv_pin.kernels.articulated_body import (
+    frame_of_body_into,
+    kinematics,
+    restoring_into,
+    thrust_into,
+)
 
 #: The diagnostics :func:`user_path_following` logs, in the order of its info row.
 USER_INFO_SHAPES = {"p": (3,), "u": (), "cross_track": (2,), "path_s": ()}
@@ -32,8 +40,8 @@ USER_INFO_SHAPES = {"p": (3,), "u": (), "cross_track": (2,), "path_s": ()}
 def user_path_following(t, q, v, model, workspace, parameters, state, tau, info):
     """Paper path following from the public laws (see the module docstring).
 
-    ``parameters`` is :class:`aiauv_pin.fast.controllers.PaperParameters`, ``state``
-    :class:`~aiauv_pin.fast.controllers.PaperState`.
+    ``parameters`` is :class:`aiauv_pin.controllers.paper_compiled.PaperParameters`, ``state``
+    :class:`~aiauv_pin.controllers.paper_compiled.PaperState`.
     """
     kinematics(model.bodies, q, v, workspace)
     m = state.measurement  # buffers (FrameMeasurement): nothing is allocated per sample

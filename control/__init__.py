@@ -2,33 +2,33 @@
 
 Modules, after Wrzos-Kaminska et al. (2019):
 
-* :mod:`control.reduced_attitude` - reduced-attitude tracking with two torques (Section 2),
+* :mod:`aiauv_control.reduced_attitude` - reduced-attitude tracking with two torques (Section 2),
   with the paper's feedforward (``"paper"``) or the corrected one (``"exact"``, default);
-* :mod:`control.guidance` - 3-D vector LOS guidance and exact derivatives of ``x_ref`` (eq. 21);
-* :mod:`control.joint_references` - base angles (eq. 23) and joint references (eq. 22);
-* :mod:`control.joint_control` - joint PD with hydrostatic compensation (eq. 24);
-* :mod:`control.surge` - surge PI on the longitudinal thrusters with anti-windup (eq. 25);
-* :mod:`control.path_following` - gains, measurement/command records and the composed controller.
+* :mod:`aiauv_control.guidance` - 3-D vector LOS guidance and exact derivatives of ``x_ref`` (eq. 21);
+* :mod:`aiauv_control.joint_references` - base angles (eq. 23) and joint references (eq. 22);
+* :mod:`aiauv_control.joint_control` - joint PD with hydrostatic compensation (eq. 24);
+* :mod:`aiauv_control.surge` - surge PI on the longitudinal thrusters with anti-windup (eq. 25);
+* :mod:`aiauv_control.path_following` - gains, measurement/command records and the composed controller.
 
 Nothing here imports Pinocchio or the simulator.
 """
 
-from control.guidance import cross_track_gains, los_direction, los_reference
-from control.joint_control import joint_torques
-from control.joint_references import (
+from aiauv_control.guidance import cross_track_gains, los_direction, los_reference
+from aiauv_control.joint_control import joint_torques
+from aiauv_control.joint_references import (
     base_angles,
     check_joint_axes,
     joint_references,
     pointing_law,
 )
-from control.path_following import (
+from aiauv_control.path_following import (
     CASES,
     PathFollowingCommand,
     PathFollowingController,
     PathFollowingGains,
     PathFollowingMeasurement,
 )
-from control.reduced_attitude import (
+from aiauv_control.reduced_attitude import (
     ANTIPODAL_TOLERANCE,
     FEEDFORWARD_OPTIONS,
     ReducedAttitudeLaw,
@@ -45,7 +45,7 @@ from control.reduced_attitude import (
     reference_angular_acceleration,
     reference_angular_velocity,
 )
-from control.surge import SurgePIController
+from aiauv_control.surge import SurgePIController
 
 __all__ = [
     "ANTIPODAL_TOLERANCE",

@@ -2,10 +2,10 @@
 
 The desired direction of travel is ``mu = u_d T - k_y e_1 N1 - k_z e_2 N2`` with the path frame
 ``(T, N1, N2)`` at the point closest to the end-effector and the cross-track errors ``e_i``
-(:mod:`control.paths`); on the world x-axis (the default path) this is eq. (21),
+(:mod:`aiauv_control.paths`); on the world x-axis (the default path) this is eq. (21),
 ``mu = u_d e1 - K (0, p_y, p_z)`` with ``K = diag(k_y, k_z)`` (a scalar ``k_e`` gives
 ``k_y = k_z = k_e``). The reference pointing direction is ``x_ref = mu / |mu|``. The law itself is
-:func:`control.laws.los_guidance`; this module checks inputs and returns arrays.
+:func:`aiauv_control.laws.paper_laws.los_guidance`; this module checks inputs and returns arrays.
 
 Since ``u_d > 0``, ``|mu| >= u_d`` and ``x_ref`` is smooth. Its derivatives follow from
 ``x_ref = mu / r`` with ``r = |mu|`` and ``P = I - x_ref x_ref^T``:
@@ -15,7 +15,7 @@ Since ``u_d > 0``, ``|mu| >= u_d`` and ``x_ref`` is smooth. Its derivatives foll
 
 with ``mu_dot = -K (0, p_y_dot, p_z_dot)`` and ``mu_ddot = -K (0, p_y_ddot, p_z_ddot)`` on a
 straight path; on a curved path the derivatives of the path frame enter as well
-(:func:`control.laws.los_guidance`).
+(:func:`aiauv_control.laws.paper_laws.los_guidance`).
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from control import laws
-from control.paths import LinePath, Path
+from aiauv_control.laws import paper_laws as laws
+from aiauv_control.paths import LinePath, Path
 
 CrossTrackGain = float | Sequence[float]
 
@@ -125,7 +125,7 @@ def los_reference(
     p_ddot = _vector3(acceleration_in_world, "acceleration_in_world")
     path = X_AXIS if path is None else path
     point = path.function(p, path.params)
-    x, x_dot, x_ddot = laws.los_guidance(  # eq. (21): control.laws.los_guidance
+    x, x_dot, x_ddot = laws.los_guidance(  # eq. (21): aiauv_control.laws.paper_laws.los_guidance
         point, p, p_dot, p_ddot, _speed(u_d), gains[1], gains[2]
     )
     return np.array(x), np.array(x_dot), np.array(x_ddot)

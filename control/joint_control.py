@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from control import laws
+from aiauv_control.laws import paper_laws as laws
 
 
 def _array(value, n: int | None, name: str) -> np.ndarray:
@@ -58,6 +58,6 @@ def joint_torques(
     for name, gain in (("k_qp", k_qp), ("k_qd", k_qd)):
         if not (np.isfinite(gain) and gain >= 0.0):
             raise ValueError(f"{name} must be finite and >= 0, got {gain}")
-    return np.array(  # eq. (24): control.laws.joint_pd_torque
+    return np.array(  # eq. (24): aiauv_control.laws.paper_laws.joint_pd_torque
         [laws.joint_pd_torque(q[j], q_dot[j], q_ref[j], g_q[j], k_qp, k_qd) for j in range(n)]
     )

@@ -7,7 +7,7 @@ of axis labels of the actuated joints in model order, tail to head, e.g. ``("z",
 * Base angles ``q0 = (q_y0, q_z0)`` (eq. 23) are the reduced-attitude law of Section 2 evaluated on
   the end-effector frame ``e`` with unit inertia and no known moments: eq. (23) is eq. (9) with
   ``J = I`` and ``m = 0``. With ``feedforward="exact"`` (the default) the finding-2 correction of
-  :mod:`control.reduced_attitude` is therefore ``mu H^T R_tilde (y x omega_ref^e)`` (no ``J``); with
+  :mod:`aiauv_control.reduced_attitude` is therefore ``mu H^T R_tilde (y x omega_ref^e)`` (no ``J``); with
   ``"paper"`` it is eq. (23) as printed. The joints act on the pointing direction only indirectly,
   so neither choice guarantees tracking here (paper, Sec. 3.4); the exact one keeps the structure
   that gives ``V_dot = -k_D |omega_tilde|^2`` in the rigid-body case.
@@ -21,8 +21,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from control import laws
-from control.reduced_attitude import Feedforward, ReducedAttitudeLaw
+from aiauv_control.laws import paper_laws as laws
+from aiauv_control.reduced_attitude import Feedforward, ReducedAttitudeLaw
 
 AXIS_LABELS = ("y", "z")
 """Joint axis labels; their order is also the order of the base angles ``q0 = (q_y0, q_z0)``."""
@@ -101,7 +101,7 @@ def joint_references(
     if not (np.isfinite(q_max) and q_max > 0.0):
         raise ValueError(f"q_max must be positive and finite, got {q_max}")
     axis_index, scale = joint_reference_pattern(joint_axes, alpha)
-    return np.array(  # eq. (22): control.laws.joint_reference
+    return np.array(  # eq. (22): aiauv_control.laws.paper_laws.joint_reference
         [laws.joint_reference(q0[a], k, q_max) for a, k in zip(axis_index, scale, strict=True)]
     )
 

@@ -2,13 +2,13 @@
 
 :class:`PathFollowingController` composes
 
-1. LOS guidance (eq. 21, :mod:`control.guidance`): reference pointing direction ``x_ref`` from the
+1. LOS guidance (eq. 21, :mod:`aiauv_control.guidance`): reference pointing direction ``x_ref`` from the
    end-effector position and its derivatives;
-2. base angles (eq. 23, :mod:`control.joint_references`): the reduced-attitude law applied to the
+2. base angles (eq. 23, :mod:`aiauv_control.joint_references`): the reduced-attitude law applied to the
    end-effector frame;
 3. joint references (eq. 22) and joint PD with hydrostatic compensation (eq. 24,
-   :mod:`control.joint_control`);
-4. surge PI on the longitudinal thrusters (eq. 25, :mod:`control.surge`); all other thrusters stay
+   :mod:`aiauv_control.joint_control`);
+4. surge PI on the longitudinal thrusters (eq. 25, :mod:`aiauv_control.surge`); all other thrusters stay
    0.
 
 It knows nothing about how the vehicle is simulated: every measured quantity comes in a
@@ -29,12 +29,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from control import laws
-from control.guidance import X_AXIS, cross_track_gains
-from control.joint_references import check_joint_axes, joint_reference_pattern
-from control.paths import Path
-from control.reduced_attitude import check_feedforward, check_rotation
-from control.surge import SurgePIController
+from aiauv_control.guidance import X_AXIS, cross_track_gains
+from aiauv_control.joint_references import check_joint_axes, joint_reference_pattern
+from aiauv_control.laws import paper_laws as laws
+from aiauv_control.paths import Path
+from aiauv_control.reduced_attitude import check_feedforward, check_rotation
+from aiauv_control.surge import SurgePIController
 
 #: Options of :attr:`PathFollowingGains.current_compensation`.
 CURRENT_COMPENSATION_OPTIONS = ("none", "integral_los")
@@ -85,7 +85,7 @@ class PathFollowingGains:
         feedforward: ``"exact"`` (default) or ``"paper"`` feedforward in eq. (23).
         turn_feedforward: Beyond the paper: feed the reference turn rate (on a curved path, the
             path's curvature times the speed) forward through the identified turn dynamics
-            (:func:`control.laws.path_following_command`). Off by default (the paper's law).
+            (:func:`aiauv_control.laws.paper_laws.path_following_command`). Off by default (the paper's law).
         turn_curvature_gain: Steady end-effector path curvature per radian of base angle
             [1/(m rad)]; the turn model's gain is ``G = turn_curvature_gain * u_d`` [1/s].
         turn_time_constant: Time constant ``T`` of the turn model [s] (0: steady model only).
@@ -217,7 +217,7 @@ class PathFollowingMeasurement:
         joint_positions: ``q`` (n,) [rad], model order.
         joint_velocities: ``q_dot`` (n,) [rad/s].
         joint_hydrostatic_forces: ``g_q`` (n,) [N m], left-hand-side convention of eq. (19)
-            (see :mod:`control.joint_control`).
+            (see :mod:`aiauv_control.joint_control`).
         surge_velocity: ``u`` [m/s], x-component of the end-effector velocity in its own frame.
         restoring_moment_in_ee: Restoring moment of the whole vehicle about the end-effector, its
             axes, left-hand side of eq. (19) (3,) [N m]; needed only for the hydrostatic
@@ -291,7 +291,7 @@ class PathFollowingCommand:
 
 
 class PathFollowingController:
-    """Path following by curving the body (paper, Section 3), on any path of :mod:`control.paths`.
+    """Path following by curving the body (paper, Section 3), on any path of :mod:`aiauv_control.paths`.
 
     Args:
         joint_axes: Axis label (``"y"``/``"z"``) of each actuated joint, model order, tail to head;
@@ -339,7 +339,7 @@ class PathFollowingController:
         self.max_thrust = limits.copy()
         self.path = X_AXIS if path is None else path
         if not isinstance(self.path, Path):
-            raise ValueError(f"path: expected a control.paths.Path, got {type(self.path).__name__}")
+            raise ValueError(f"path: expected a aiauv_control.paths.Path, got {type(self.path).__name__}")
         self._surge = SurgePIController(
             self.gains.k_1p,
             self.gains.k_1i,
@@ -352,7 +352,8 @@ class PathFollowingController:
 
     @property
     def gain_record(self) -> laws.PaperGains:
-        """The gains as the :class:`control.laws.PaperGains` record the compiled law takes."""
+        """The gains as the :class:`aiauv_control.laws.paper_laws.PaperGains` record the compiled
+        law takes."""
         g = self.gains
         k_y, k_z = cross_track_gains(g.k_e)[1:]
         return laws.PaperGains(
@@ -445,7 +446,7 @@ class PathFollowingController:
                 )
         out = laws.new_command_buffers(self.n_joints, self.n_thrusters)
         R_e = check_rotation(measurement.rotation_to_world, "rotation_to_world")
-        laws.path_following_command(  # eqs. (21)-(25): control.laws.path_following_command
+        laws.path_following_command(  # eqs. (21)-(25): aiauv_control.laws.paper_laws.path_following_command
             self.gain_record,
             self.path.user_function,
             self.path.kind_code,

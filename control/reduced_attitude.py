@@ -49,8 +49,8 @@ from typing import Literal, NamedTuple
 
 import numpy as np
 
-from control import laws
-from hydro.spatial import cross, skew  # noqa: F401  (skew: part of this module's API)
+from aiauv_control.laws import paper_laws as laws
+from aiauv_hydro.numerics.spatial import cross, skew  # noqa: F401  (skew: part of this module's API)
 
 Feedforward = Literal["exact", "paper"]
 FEEDFORWARD_OPTIONS: tuple[str, ...] = ("exact", "paper")
@@ -155,7 +155,7 @@ def check_block_diagonal_inertia(J) -> np.ndarray:
 # geometry of the error
 # --------------------------------------------------------------------------------------------------
 def _one_plus_cos(y: np.ndarray) -> float:
-    """``1 + e1 . y`` for unit ``y`` (:func:`control.laws.one_plus_cos`)."""
+    """``1 + e1 . y`` for unit ``y`` (:func:`aiauv_control.laws.paper_laws.one_plus_cos`)."""
     return float(laws.one_plus_cos(y[0], y[1], y[2]))
 
 
@@ -358,7 +358,7 @@ class ReducedAttitudeLaw:
         x_ref_ddot = _vector(x_ref_ddot, 3, "x_ref_ddot")
 
         m = np.zeros(3) if m is None else _vector(m, 3, "m")
-        command = laws.reduced_attitude_law(  # eq. (9), findings 1 and 2: control.laws
+        command = laws.reduced_attitude_law(  # eq. (9), findings 1 and 2: aiauv_control.laws.paper_laws
             R,
             omega,
             x_ref,

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from control import laws
+from aiauv_control.laws import paper_laws as laws
 
 
 def _finite(value, name: str) -> float:
@@ -78,6 +78,6 @@ class SurgePIController:
         u = _finite(surge_velocity, "surge_velocity")
         if self.state.has_previous[0] and t < self.state.time[0]:
             raise ValueError(f"time went backwards: t = {t} < previous {self.state.time[0]}")
-        return float(  # eq. (25): control.laws.surge_pi
+        return float(  # eq. (25): aiauv_control.laws.paper_laws.surge_pi
             laws.surge_pi(self.state, t, u, self.k_p, self.k_i, self.u_d, self.max_thrust)
         )

@@ -2,7 +2,7 @@
 
 Runs the paper's scenario on both bundled vehicles at the scenario's defaults (what ``aiauv
 simulate --case CASE`` runs), draws the figures as the command does
-(:func:`aiauv_pin.outputs.write_figures`, 200 dpi) and stores each PNG at half that resolution
+(:func:`aiauv_pin.results.outputs.write_figures`, 200 dpi) and stores each PNG at half that resolution
 (Lanczos), at the highest zlib level: small files for the README, which shows them side by side.
 
     .venv/bin/python docs/make_figures.py
@@ -16,8 +16,8 @@ from pathlib import Path
 from PIL import Image
 
 import aiauv_pin
-from aiauv_pin.outputs import write_figures
-from aiauv_pin.scenario import Scenario, run_scenario
+from aiauv_pin.results.outputs import write_figures
+from aiauv_pin.scenario.definition import Scenario, run_scenario
 
 HERE = Path(__file__).resolve().parent / "figures"
 

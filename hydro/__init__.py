@@ -1,12 +1,13 @@
 """Per-link hydrodynamics for underwater multibody vehicles (plain numpy).
 
-Parameter records (:mod:`hydro.spec`), the slender-cylinder model (:mod:`hydro.slender_cylinder`),
-batched crossflow drag (:mod:`hydro.crossflow`), the URDF ``<hydrodynamics>`` reader
-(:mod:`hydro.urdf_block`) and the UUV Simulator block reader (:mod:`hydro.uuv_simulator`).
+Parameter records (:mod:`aiauv_hydro.spec`), the slender-cylinder model
+(:mod:`aiauv_hydro.estimate.slender_cylinder`),
+batched crossflow drag (:mod:`aiauv_hydro.laws.crossflow`), the URDF ``<hydrodynamics>`` reader
+(:mod:`aiauv_hydro.urdf.block_reader`) and the UUV Simulator block reader
+(:mod:`aiauv_hydro.urdf.uuv_simulator`).
 """
 
-from hydro.crossflow import DEFAULT_NODES, crossflow_wrench, gauss_legendre_unit
-from hydro.slender_cylinder import (
+from aiauv_hydro.estimate.slender_cylinder import (
     DEFAULT_COEFFICIENTS,
     SlenderCylinderCoefficients,
     added_mass_matrix,
@@ -14,10 +15,16 @@ from hydro.slender_cylinder import (
     quadratic_damping_matrix,
     slender_cylinder_link,
 )
-from hydro.spatial import motion_transform, skew
-from hydro.spec import CrossflowDrag, HydroError, HydroSpec, LinkHydrodynamics, Thruster
-from hydro.urdf_block import CylinderGeometry, cylinder_frame, link_cylinders, read_hydrodynamics
-from hydro.uuv_simulator import FRD_TO_FLU, convert_fossen_matrices, read_uuv_simulator
+from aiauv_hydro.laws.crossflow import DEFAULT_NODES, crossflow_wrench, gauss_legendre_unit
+from aiauv_hydro.numerics.spatial import motion_transform, skew
+from aiauv_hydro.spec import CrossflowDrag, HydroError, HydroSpec, LinkHydrodynamics, Thruster
+from aiauv_hydro.urdf.block_reader import (
+    CylinderGeometry,
+    cylinder_frame,
+    link_cylinders,
+    read_hydrodynamics,
+)
+from aiauv_hydro.urdf.uuv_simulator import FRD_TO_FLU, convert_fossen_matrices, read_uuv_simulator
 
 __all__ = [
     "DEFAULT_COEFFICIENTS",

@@ -2,9 +2,11 @@
 
 A current is a function ``current(t, x, y, z, parameters) -> (V_x, V_y, V_z)`` giving the water
 velocity [m/s] in world axes at time ``t`` [s] and world point ``(x, y, z)`` [m], compiled with
-:func:`hydro.jit.compiled` (a user's own current is any numba function with this signature), plus its
+:func:`aiauv_hydro.numerics.jit.compiled` (a user's own current is any numba function with this
+signature), plus its
 parameter array. The simulator samples it at every integrator stage at each body's probe point
-(:attr:`hydro.laws.FluidModel.current_probe`), and the fluid laws act on each link's velocity
+(:attr:`aiauv_hydro.laws.fluid_terms.FluidModel.current_probe`), and the fluid laws act on each
+link's velocity
 relative to that water (Fossen 2021, eq. (10.4)).
 
 Built in (:class:`Current` builds them and checks their parameters):
@@ -15,7 +17,8 @@ Built in (:class:`Current` builds them and checks their parameters):
 * :func:`shear_current` - steady, varying linearly with depth, ``V(z) = V_0 + G (z - z_0)`` (a
   boundary-layer or wind-driven profile near a reference depth).
 
-A varying current is applied quasi-steadily (see :mod:`aiauv_pin.fast.kernels`): the forces use the
+A varying current is applied quasi-steadily (see :mod:`aiauv_pin.kernels.articulated_body`): the
+forces use the
 relative velocity, and the fluid's own acceleration is neglected.
 """
 
@@ -27,8 +30,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hydro.jit import compiled, user_or_builtin
-from hydro.spec import HydroError
+from aiauv_hydro.numerics.jit import compiled, user_or_builtin
+from aiauv_hydro.spec import HydroError
 
 
 @compiled
@@ -74,7 +77,8 @@ def builtin_current(kind, t, x, y, z, parameters):
 
 
 #: ``current_velocity(user, kind, t, x, y, z, parameters) -> (V_x, V_y, V_z)``: a user's function
-#: (``user``) or the built-in ``kind`` (``user = None``); see :func:`hydro.jit.user_or_builtin`.
+#: (``user``) or the built-in ``kind`` (``user = None``); see
+#: :func:`aiauv_hydro.numerics.jit.user_or_builtin`.
 current_velocity = user_or_builtin(builtin_current)
 
 
@@ -202,7 +206,7 @@ def current_from_mapping(table: Mapping, where: str = "current") -> Current:
     """A :class:`Current` from a scenario file's table, e.g. ``{"velocity": [0, 0.2, 0]}``.
 
     ``type`` is ``"constant"`` (default), ``"tidal"`` or ``"shear"``; unknown keys, wrong types and
-    non-physical values get a one-line :class:`hydro.spec.HydroError` naming the key.
+    non-physical values get a one-line :class:`aiauv_hydro.spec.HydroError` naming the key.
     """
     if not isinstance(table, Mapping):
         raise HydroError(f"{where}: expected a table, got {type(table).__name__}")

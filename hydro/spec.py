@@ -95,7 +95,8 @@ class LinkHydrodynamics:
             (element-wise absolute value and product).
         crossflow: Optional strip-theory crossflow drag, added to the quadratic damping.
         forward_speed_damping: Surge-proportional linear damping ``D_F`` (6x6); wrench
-            ``-u_r D_F nu_r`` (:func:`hydro.laws.forward_speed_damping_wrench`); zero if omitted.
+            ``-u_r D_F nu_r`` (:func:`aiauv_hydro.laws.fluid_terms.forward_speed_damping_wrench`);
+            zero if omitted.
     """
 
     link: str

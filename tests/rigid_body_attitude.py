@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from control.reduced_attitude import H
+from aiauv_control.reduced_attitude import H
 
 
 def quaternion_to_rotation(q: np.ndarray) -> np.ndarray:

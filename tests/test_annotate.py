@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 import aiauv_pin
-from aiauv_pin.annotation import annotate_file
-from aiauv_pin.cli import main
-from aiauv_pin.robots import example_robot_urdf
-from hydro.annotate import annotate_robot
-from hydro.ellipsoid import ellipsoid_added_mass, primitive_ellipsoid
-from hydro.urdf_block import read_hydrodynamics
+from aiauv_hydro.estimate.ellipsoid import ellipsoid_added_mass
+from aiauv_hydro.urdf.annotate import annotate_robot, primitive_ellipsoid
+from aiauv_hydro.urdf.block_reader import read_hydrodynamics
+from aiauv_pin.app.annotate_command import annotate_file
+from aiauv_pin.app.cli import main
+from aiauv_pin.description.robots import example_robot_urdf
 
 RHO = 1025.0
 G = 9.81
@@ -130,7 +130,7 @@ def test_mesh_box_gives_the_same_ellipsoid_as_the_primitive_box(tmp_path):
     )
     assert link.volume == pytest.approx(expected.volume, rel=1e-7)
     np.testing.assert_allclose(link.center_of_buoyancy, expected.center, atol=1e-8)
-    from hydro.ellipsoid import ellipsoid_hydrodynamics
+    from aiauv_hydro.estimate.ellipsoid import ellipsoid_hydrodynamics
 
     np.testing.assert_allclose(
         link.added_mass, ellipsoid_hydrodynamics(expected, RHO).added_mass, rtol=1e-6, atol=1e-9

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from aiauv_pin import load_vehicle
-from aiauv_pin.builder import build_urdf
-from aiauv_pin.scenario import PaperScenario, run_paper_scenario
-from aiauv_pin.vehicle_spec import spec_from_dict
+from aiauv_pin.builders.urdf_builder import build_urdf
+from aiauv_pin.builders.vehicle_spec import spec_from_dict
+from aiauv_pin.scenario.definition import PaperScenario, run_paper_scenario
 
 U_D = 0.5  # [m/s] the paper's desired surge speed
 
@@ -46,7 +46,7 @@ def module_spec(n_modules: int) -> dict:
             3,
             20.0,
             marks=pytest.mark.filterwarnings(
-                "ignore::aiauv_pin.step_stability.EveryStepOscillation"
+                "ignore::aiauv_pin.simulation.step_stability.EveryStepOscillation"
             ),
         ),
         (5, 30.0),

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import pytest
 
-from aiauv_pin import bench, loading
-from aiauv_pin.cli import main
-from aiauv_pin.fast.loop import loop_for, run_chunk
-from aiauv_pin.scenario import Scenario
+from aiauv_pin.app.cli import main
+from aiauv_pin.model import loading
+from aiauv_pin.scenario.definition import Scenario
+from aiauv_pin.simulation.compiled_loop import loop_for, run_chunk
+from aiauv_pin.tools import bench_command as bench
 
 
 def test_user_controller_runs_the_built_in_law_in_the_uncached_loop():
@@ -83,7 +84,7 @@ def test_native_mujoco_loop_calls_mj_forward():
     pytest.importorskip("numba")
     import numpy as np
 
-    from aiauv_pin import bench_native
+    from aiauv_pin.tools import native_benchmarks as bench_native
 
     model = bench.mujoco_model("uniform", "Euler")
     data, reference = mujoco.MjData(model), mujoco.MjData(model)
@@ -100,9 +101,9 @@ def test_native_mujoco_loop_calls_mj_forward():
 def test_scaling_chain_has_the_requested_links_on_both_sides(tmp_path):
     """The scaling figure compares like with like: n links and the same nv in both models."""
     pytest.importorskip("mujoco")
-    from aiauv_pin import bench_native
-    from aiauv_pin.builder import build_urdf
-    from aiauv_pin.vehicle_spec import spec_from_dict
+    from aiauv_pin.builders.urdf_builder import build_urdf
+    from aiauv_pin.builders.vehicle_spec import spec_from_dict
+    from aiauv_pin.tools import native_benchmarks as bench_native
 
     urdf = tmp_path / "chain.urdf"
     urdf.write_text(build_urdf(spec_from_dict(bench_native.chain_spec(5))))
@@ -116,7 +117,7 @@ def test_pinocchio_path_runs_blas_on_one_thread_for_large_models():
     during the call and only from SINGLE_THREAD_BLAS_FROM_NV on."""
     from threadpoolctl import threadpool_info
 
-    from aiauv_pin.vehicle import SINGLE_THREAD_BLAS_FROM_NV, single_threaded_blas
+    from aiauv_pin.model.vehicle import SINGLE_THREAD_BLAS_FROM_NV, single_threaded_blas
 
     before = [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
     with single_threaded_blas(SINGLE_THREAD_BLAS_FROM_NV):
@@ -134,7 +135,7 @@ def test_derivative_section_measures_ratios_and_prints_them():
     the ratios to one evaluation and the targets, and the table prints them."""
     pytest.importorskip("numba")
     import aiauv_pin
-    from aiauv_pin.bench_derivatives import TARGETS, derivative_timings, format_rows
+    from aiauv_pin.tools.derivative_benchmarks import TARGETS, derivative_timings, format_rows
 
     results = derivative_timings(aiauv_pin.load_vehicle(), quick=True, rounds=1)
     assert results["targets"] == TARGETS

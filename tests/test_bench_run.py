@@ -1,4 +1,4 @@
-"""The whole-run parts of ``aiauv bench`` (:mod:`aiauv_pin.bench_run`): table and command line.
+"""The whole-run parts of ``aiauv bench`` (:mod:`aiauv_pin.tools.run_benchmarks`): table and command line.
 
 The measurements themselves are long (300 s runs) and live in ``benchmarks/results.json``; here
 their formatting and the accuracy comparison on a few seconds of the scenario.
@@ -10,9 +10,9 @@ import json
 
 import pytest
 
-from aiauv_pin import bench_run
-from aiauv_pin.cli import main
-from aiauv_pin.scenario import Scenario
+from aiauv_pin.app.cli import main
+from aiauv_pin.scenario.definition import Scenario
+from aiauv_pin.tools import run_benchmarks as bench_run
 
 
 def _spread(value: float) -> dict:
@@ -143,7 +143,7 @@ def test_gain_margin_keeps_euler_and_drops_the_midpoint_method():
     # the paper's attitude gains scaled up: semi-implicit Euler at the default step still
     # converges at twice them, the midpoint method at 0.02 s (within 2 mm, and cheaper) oscillates
     # at every sample from 1.25 times them (its stage halves the sampled loop's stable range,
-    # aiauv_pin.step_stability); so the cheapest within 2 mm is not the default, the cheapest
+    # aiauv_pin.simulation.step_stability); so the cheapest within 2 mm is not the default, the cheapest
     # with a margin of 2 is
     result = bench_run.accuracy_per_cost(
         duration=20.0,

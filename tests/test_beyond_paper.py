@@ -13,11 +13,11 @@ import pinocchio as pin
 import pytest
 
 import aiauv_pin
-from aiauv_pin.scenario import Scenario, run_scenario
-from aiauv_pin.scenario_file import ScenarioFileError, scenario_from_mapping
-from control import laws
-from control.path_following import PathFollowingController, PathFollowingGains
-from control.paths import HelixPath, LinePath
+from aiauv_control.laws import paper_laws as laws
+from aiauv_control.path_following import PathFollowingController, PathFollowingGains
+from aiauv_control.paths import HelixPath, LinePath
+from aiauv_pin.scenario.definition import Scenario, run_scenario
+from aiauv_pin.scenario.toml_file import ScenarioFileError, scenario_from_mapping
 
 EXTENSIONS = ("turn_feedforward", "integral_los", "hydrostatic_compensation")
 
@@ -63,7 +63,7 @@ def test_options_off_by_default_are_the_papers_law():
     ],
 )
 def test_bad_values_get_one_line(controller, message):
-    # the schema (aiauv_pin.file_schemas) names the key path: controller.<gain>
+    # the schema (aiauv_pin.scenario.file_schemas) names the key path: controller.<gain>
     with pytest.raises(ScenarioFileError) as error:
         scenario_from_mapping({"controller": controller})
     text = str(error.value)

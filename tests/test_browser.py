@@ -16,7 +16,7 @@ from PIL import Image
 from test_playback import URDF, synthetic_trajectory
 
 import aiauv_pin
-from aiauv_pin import playback, viewer
+from aiauv_pin.results import playback, viewer
 
 pytestmark = pytest.mark.browser
 

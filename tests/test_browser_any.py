@@ -13,9 +13,9 @@ import pytest
 from test_browser import screenshot
 
 import aiauv_pin
-from aiauv_pin import playback, viewer
-from aiauv_pin.annotation import annotate_file
-from aiauv_pin.robots import example_robot_urdf
+from aiauv_pin.app.annotate_command import annotate_file
+from aiauv_pin.description.robots import example_robot_urdf
+from aiauv_pin.results import playback, viewer
 
 pytestmark = pytest.mark.browser
 

@@ -14,7 +14,7 @@ import pinocchio as pin
 import pytest
 import yourdfpy
 
-from aiauv_pin.builder import (
+from aiauv_pin.builders.urdf_builder import (
     PAPER_CASES,
     build_urdf,
     bundled_spec_path,
@@ -23,7 +23,7 @@ from aiauv_pin.builder import (
     paper_spec,
     write_urdf,
 )
-from aiauv_pin.vehicle_spec import (
+from aiauv_pin.builders.vehicle_spec import (
     ModuleSpec,
     SpecError,
     VehicleSpec,

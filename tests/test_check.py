@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from aiauv_pin import bundled_urdf
-from aiauv_pin.check import check_vehicle, format_report
-from aiauv_pin.cli import main
+from aiauv_pin.app.cli import main
+from aiauv_pin.checks.vehicle_check import check_vehicle, format_report
 from aiauv_pin.errors import VehicleLoadError
 
 # PAPER_DATA.md, Table 1: link masses [kg] and lengths [m]

@@ -1,8 +1,10 @@
 """The compiled simulation loop and the paper's controller in it, against the Python loop.
 
-The laws themselves are written once (:mod:`control.laws`, tested in tests/test_laws.py); here the
+The laws themselves are written once (:mod:`aiauv_control.laws.paper_laws`, tested in
+tests/test_laws.py); here the
 vehicle side is checked: the compiled controller's measurement and action against the Python
-adapter (:class:`aiauv_pin.paper_controller.VehiclePathFollowing`) on the same state, whole compiled
+adapter (:class:`aiauv_pin.controllers.paper_controller.VehiclePathFollowing`) on the same state,
+whole compiled
 runs against Python-controller runs and against the Pinocchio reference, logging, divergence, and
 the reproduction of the runs recorded before the laws were moved (to 1e-9).
 """
@@ -17,10 +19,13 @@ import pytest
 pytest.importorskip("numba")
 
 import aiauv_pin
+from aiauv_control.path_following import PathFollowingGains
+from aiauv_pin.controllers.paper_controller import (
+    VehiclePathFollowing,
+    compiled_path_following_reason,
+)
 from aiauv_pin.errors import SimulationDiverged
-from aiauv_pin.paper_controller import VehiclePathFollowing, compiled_path_following_reason
-from aiauv_pin.scenario import PaperScenario, run_paper_scenario
-from control.path_following import PathFollowingGains
+from aiauv_pin.scenario.definition import PaperScenario, run_paper_scenario
 
 TIGHT = dict(rtol=1e-12, atol=1e-12)
 REFERENCE = Path(__file__).parent / "data" / "paper_reference_60s.npz"
@@ -216,7 +221,7 @@ def test_custom_controllers_fall_back_to_python(numba_vehicle, paper_vehicle):
 def test_csv_text_is_that_of_numpy_savetxt(rng):
     import io
 
-    from aiauv_pin.outputs import format_table
+    from aiauv_pin.results.outputs import format_table
 
     table = rng.normal(size=(7, 5)) * np.logspace(-12, 12, 5)
     table[0, 0] = 0.0
@@ -228,7 +233,7 @@ def test_csv_text_is_that_of_numpy_savetxt(rng):
 def test_csv_keeps_every_csv_period_and_the_summary_every_step(numba_vehicle, tmp_path):
     import json
 
-    from aiauv_pin.outputs import write_results
+    from aiauv_pin.results.outputs import write_results
 
     scenario = PaperScenario(duration=1.032)  # the default step, 4 ms, and csv_period, 0.04 s
     result = run_paper_scenario(numba_vehicle, scenario)
@@ -241,7 +246,7 @@ def test_csv_keeps_every_csv_period_and_the_summary_every_step(numba_vehicle, tm
 
 
 def test_plot_envelope_keeps_each_buckets_extremes_in_time_order(rng):
-    from aiauv_pin.outputs import envelope
+    from aiauv_pin.results.outputs import envelope
 
     t = np.arange(10_001) * 0.01
     y = np.cumsum(rng.normal(size=t.size)) + 5.0 * (rng.random(t.size) < 0.001)

@@ -1,4 +1,4 @@
-"""The consistency checks of ``aiauv_pin.consistency`` catch inconsistent models (issue 17).
+"""The consistency checks of ``aiauv_pin.checks.consistency`` catch inconsistent models (issue 17).
 
 Each deliberately broken model violates one law; the matching check must fail with a message that
 names the figure and the tolerance, and the checks that do not concern the broken part still pass.
@@ -17,9 +17,9 @@ import pytest
 from conftest import QUADRATIC_INJECTING
 
 import aiauv_pin
-from aiauv_pin import consistency
-from aiauv_pin.cli import main
-from aiauv_pin.vehicle import Vehicle
+from aiauv_pin.app.cli import main
+from aiauv_pin.checks import consistency
+from aiauv_pin.model.vehicle import Vehicle
 
 DATA = Path(__file__).parent / "data"
 

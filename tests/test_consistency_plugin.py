@@ -15,9 +15,9 @@ import pytest
 from conftest import QUADRATIC_INJECTING
 
 import aiauv_pin
-import aiauv_pin.builder  # before pytester's sys.modules snapshot (see above)
-from aiauv_pin import consistency
-from aiauv_pin.cli import main
+import aiauv_pin.builders.urdf_builder  # before pytester's sys.modules snapshot (see above)
+from aiauv_pin.app.cli import main
+from aiauv_pin.checks import consistency
 
 pytest_plugins = ["pytester"]
 
@@ -148,9 +148,9 @@ def test_inconsistent_model_in_a_users_own_test(pytester):
     pytester.makepyfile(
         test_thrusters="""
         import aiauv_pin
-        from aiauv_pin.consistency import check_thrusters
+        from aiauv_pin.checks.consistency import check_thrusters
         from aiauv_pin.testing import assert_check
-        from aiauv_pin.vehicle import Vehicle
+        from aiauv_pin.model.vehicle import Vehicle
 
         class Leverless(Vehicle):
             def thrust_matrix(self, q):

@@ -1,6 +1,6 @@
 """Exact derivatives of the dynamics (issue 16) against central differences and across backends.
 
-* Each fluid law's derivative (hydro.laws) against central differences of the law itself.
+* Each fluid law's derivative (aiauv_hydro.laws.fluid_terms) against central differences of the law itself.
 * ``Vehicle.acceleration_derivatives``: ``da_dq`` (tangent space, ``pinocchio.integrate``),
   ``da_dv``, ``da_dtau``, ``da_dcurrent`` against central differences of ``Vehicle.acceleration`` to
   1e-6 relative, on random states of the paper's two vehicles, a single body with a full Fossen
@@ -16,13 +16,13 @@ import pytest
 from conftest import generated_vehicle_table, random_state, single_body_urdf
 
 import aiauv_pin
-from aiauv_pin.builder import build_urdf
-from aiauv_pin.derivatives import acceleration_derivatives
+from aiauv_hydro.currents import Current
+from aiauv_hydro.laws import fluid_terms as laws
+from aiauv_hydro.laws.crossflow import gauss_legendre_unit
+from aiauv_pin.builders.urdf_builder import build_urdf
+from aiauv_pin.builders.vehicle_spec import spec_from_dict
 from aiauv_pin.errors import ArgumentError
-from aiauv_pin.vehicle_spec import spec_from_dict
-from hydro import laws
-from hydro.crossflow import gauss_legendre_unit
-from hydro.currents import Current
+from aiauv_pin.model.derivatives import acceleration_derivatives
 
 pytest.importorskip("numba")
 
@@ -224,7 +224,7 @@ def test_non_uniform_current_is_a_one_line_error(paper_vehicle):
 def _random_fluid_model(rng, nb: int = 2) -> laws.FluidModel:
     """Two bodies, two links whose frames and cylinder frames are moved off the bodies' (the
     branches a bundled vehicle, whose links are their bodies, does not take)."""
-    from hydro.spatial import motion_transform
+    from aiauv_hydro.numerics.spatial import motion_transform
 
     def rotation():
         q, _ = np.linalg.qr(rng.normal(size=(3, 3)))

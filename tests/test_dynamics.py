@@ -9,8 +9,8 @@ import pytest
 from conftest import random_state
 
 import aiauv_pin
-from aiauv_pin import consistency
-from aiauv_pin.robots import example_robot_urdf
+from aiauv_pin.checks import consistency
+from aiauv_pin.description.robots import example_robot_urdf
 
 # every physics check runs on both backends (the compiled one and the Pinocchio reference)
 pytestmark = pytest.mark.usefixtures("backend")
@@ -18,7 +18,7 @@ pytestmark = pytest.mark.usefixtures("backend")
 EXAMPLE_ROBOTS = ["ur_description/urdf/ur5_robot.urdf", "panda_description/urdf/panda.urdf"]
 
 
-# The laws below are the shipped consistency checks (aiauv_pin.consistency, the same functions that
+# The laws below are the shipped consistency checks (aiauv_pin.checks.consistency, the same functions that
 # `pytest --aiauv-vehicle` and `aiauv check --physics` run on a user's vehicle), applied here to the
 # shipped vehicles; each test keeps (or tightens) the tolerance it had before the checks moved.
 

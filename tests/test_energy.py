@@ -1,11 +1,11 @@
-"""The energy model (aiauv_pin.energy): closed forms and a hand-computed run."""
+"""The energy model (aiauv_pin.simulation.energy): closed forms and a hand-computed run."""
 
 import math
 
 import numpy as np
 import pytest
 
-from aiauv_pin.energy import EnergyParameters, joint_power, run_energy, thruster_power
+from aiauv_pin.simulation.energy import EnergyParameters, joint_power, run_energy, thruster_power
 
 
 def test_thruster_power_closed_form():

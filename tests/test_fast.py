@@ -1,9 +1,9 @@
-"""The compiled backend (aiauv_pin.fast) against the Pinocchio reference (issue 5).
+"""The compiled backend (aiauv_pin.kernels) against the Pinocchio reference (issue 5).
 
 Every check compares the numba kernels with the Pinocchio path of the same vehicle on random
 states, to 1e-9, on several vehicles: the paper's two cases, a single body with a full Fossen
 block, and generated 5- and 13-module vehicles; with and without a current. The integrators are
-checked against ``aiauv_pin.integrators`` and the SE(3) operations against Pinocchio and an
+checked against ``aiauv_pin.dynamics.integrators`` and the SE(3) operations against Pinocchio and an
 independent series.
 """
 
@@ -18,17 +18,17 @@ import pytest
 from conftest import generated_vehicle_table, random_state, single_body_urdf
 
 import aiauv_pin
-from aiauv_pin import consistency
-from aiauv_pin.builder import build_urdf
-from aiauv_pin.integrators import INTEGRATORS
-from aiauv_pin.simulation import JointServo
-from aiauv_pin.vehicle import Vehicle
-from aiauv_pin.vehicle_spec import spec_from_dict
+from aiauv_pin.builders.urdf_builder import build_urdf
+from aiauv_pin.builders.vehicle_spec import spec_from_dict
+from aiauv_pin.checks import consistency
+from aiauv_pin.dynamics.integrators import INTEGRATORS
+from aiauv_pin.dynamics.joint_servo import JointServo
+from aiauv_pin.model.vehicle import Vehicle
 
 pytest.importorskip("numba")
 
-from aiauv_pin.fast import kernels
-from aiauv_pin.fast.records import unsupported_reason
+from aiauv_pin.kernels import articulated_body as kernels
+from aiauv_pin.kernels.records import unsupported_reason
 
 TOL = dict(rtol=1e-9, atol=1e-9)
 CURRENTS = [None, np.array([0.3, -0.2, 0.15])]
@@ -63,7 +63,7 @@ def pair(request, tmp_path_factory):
 
 # ---------------------------------------------------------------- dynamics
 def assert_backends_agree(vehicle: Vehicle) -> None:
-    """The shipped check (aiauv_pin.consistency): accelerations in still water and in a current,
+    """The shipped check (aiauv_pin.checks.consistency): accelerations in still water and in a current,
     g(q), B(q), the last hydrodynamic link's pose and twist at 4 random states, and a 0.2 s run, all
     within allclose(rtol=1e-9, atol=1e-9)."""
     result = consistency.check_backends_agree(vehicle, samples=4, current=CURRENTS[1])
@@ -246,7 +246,7 @@ def test_control_period_must_be_a_multiple_of_dt(paper_vehicle):
 
 # ---------------------------------------------------------------- fallbacks
 def test_falls_back_to_pinocchio_without_numba(monkeypatch, rng):
-    monkeypatch.setitem(sys.modules, "aiauv_pin.fast.model", None)
+    monkeypatch.setitem(sys.modules, "aiauv_pin.kernels.evaluation", None)
     vehicle = aiauv_pin.load_vehicle()
     vehicle.backend = "auto"
     assert vehicle.active_backend == "pinocchio" and vehicle.fast is None
@@ -266,7 +266,7 @@ def test_unsupported_joint_falls_back(rng):
     ball = model.addJoint(root, pin.JointModelSpherical(), pin.SE3.Random(), "ball")
     model.appendBodyToJoint(ball, pin.Inertia.Random(), pin.SE3.Identity())
     assert "unsupported type" in unsupported_reason(model)
-    from hydro.spec import HydroSpec
+    from aiauv_hydro.spec import HydroSpec
 
     vehicle = Vehicle(model, HydroSpec(), backend="auto")
     assert vehicle.active_backend == "pinocchio"

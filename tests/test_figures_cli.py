@@ -15,8 +15,11 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from aiauv_pin import cli, compilation, load_vehicle, outputs
-from aiauv_pin.scenario import PaperScenario, run_paper_scenario
+from aiauv_pin import load_vehicle
+from aiauv_pin.app import cli
+from aiauv_pin.results import outputs
+from aiauv_pin.scenario.definition import PaperScenario, run_paper_scenario
+from aiauv_pin.simulation import compilation
 
 
 @pytest.fixture(scope="module")

@@ -118,8 +118,8 @@ def test_energy_injecting_forward_speed_damping_is_refused(tmp_path):
 
 
 def test_writer_round_trip(tmp_path):
-    from hydro.urdf_block import read_hydrodynamics
-    from hydro.urdf_writer import fossen_link_element
+    from aiauv_hydro.urdf.block_reader import read_hydrodynamics
+    from aiauv_hydro.urdf.block_writer import fossen_link_element
 
     (link,) = read_hydrodynamics(_write(tmp_path, FORWARD)).links
     np.testing.assert_array_equal(link.forward_speed_damping, FORWARD)

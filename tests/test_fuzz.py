@@ -29,9 +29,9 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 import aiauv_pin  # noqa: E402
-from aiauv_pin.cli import main  # noqa: E402
+from aiauv_pin.app.cli import main  # noqa: E402
+from aiauv_pin.description.safe_names import NAME_PATTERN  # noqa: E402
 from aiauv_pin.errors import AiauvError  # noqa: E402
-from aiauv_pin.safe_names import NAME_PATTERN  # noqa: E402
 
 EXAMPLES = int(os.environ.get("AIAUV_FUZZ_EXAMPLES", "40"))
 FUZZ = settings(
@@ -221,7 +221,7 @@ def test_fuzzed_vehicle_specs_build_loadable_urdfs_or_fail_in_one_line(tmp_path_
 @FUZZ
 @given(data=st.data())
 def test_fuzzed_sweep_specs_expand_or_fail_in_one_line(tmp_path_factory, data):
-    from aiauv_pin.sweep_spec import SweepSpecError, load_sweep_spec
+    from aiauv_pin.scenario.sweep_spec import SweepSpecError, load_sweep_spec
 
     text = _mutate(SWEEP_SPEC, data, _TOML_VALUE, data.draw(st.integers(1, 3)))
     text = _structural(text, data)
@@ -235,7 +235,7 @@ def test_fuzzed_sweep_specs_expand_or_fail_in_one_line(tmp_path_factory, data):
         return
     TALLY["sweep spec accepted"] += 1
     for point in points:  # every accepted run is one simulate() accepts
-        from aiauv_pin.arguments import check_timing
+        from aiauv_pin.model.array_checks import check_timing
 
         assert check_timing(point.parameters["duration"], point.parameters["dt"]) >= 1
 

@@ -20,16 +20,14 @@ from pathlib import Path
 
 import pytest
 
-from aiauv_pin.atomic import (
+from aiauv_pin._internal.atomic import (
     OutputPathError,
     atomic_path,
     open_inside,
     real_folder,
     write_text,
 )
-from aiauv_pin.builder import bundled_spec_path, bundled_urdf_path
-from aiauv_pin.cli import main
-from aiauv_pin.result_folder import (
+from aiauv_pin._internal.result_folder import (
     MARKER,
     ResultFolderError,
     check_output_folder,
@@ -38,6 +36,8 @@ from aiauv_pin.result_folder import (
     remove_ours,
     staged_folder,
 )
+from aiauv_pin.app.cli import main
+from aiauv_pin.builders.urdf_builder import bundled_spec_path, bundled_urdf_path
 
 pytestmark = pytest.mark.skipif(
     not hasattr(os, "mkfifo") or sys.platform == "win32", reason="POSIX FIFOs and links"

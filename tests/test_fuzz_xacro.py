@@ -28,11 +28,11 @@ import numpy as np
 import pytest
 
 import aiauv_pin
-from aiauv_pin.cli import main
+from aiauv_pin.app.cli import main
+from aiauv_pin.description.xacro_loading import expand_xacro
+from aiauv_pin.description.xacro_safe_eval import UnsafeXacroExpression
 from aiauv_pin.errors import AiauvError, InputLimitError
 from aiauv_pin.interop.gz import MAX_SDF_BYTES, import_gz, read_gz_model
-from aiauv_pin.xacro_loading import expand_xacro
-from aiauv_pin.xacro_safe_eval import UnsafeXacroExpression
 
 PACKAGES = Path(__file__).parent / "data" / "uuv_packages"
 MINIROV = PACKAGES / "minirov_description" / "robots" / "minirov.urdf.xacro"

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from control.guidance import cross_track_gains, los_direction, los_reference
+from aiauv_control.guidance import cross_track_gains, los_direction, los_reference
 
 U_D = 0.5
 

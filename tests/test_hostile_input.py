@@ -1,6 +1,6 @@
 """Bad and hostile input through the command line: one line naming the problem, non-zero exit.
 
-Every case runs ``aiauv_pin.cli.main`` in-process with ``capfd``, which captures file descriptors 1
+Every case runs ``aiauv_pin.app.cli.main`` in-process with ``capfd``, which captures file descriptors 1
 and 2, so anything a C++ library (urdfdom) prints to the process's standard error is seen too.
 """
 
@@ -13,7 +13,7 @@ import sys
 
 import pytest
 
-from aiauv_pin.cli import main
+from aiauv_pin.app.cli import main
 
 LINK = """
   <link name="{name}">
@@ -297,7 +297,7 @@ def test_command_line_entry_point_reports_one_line(tmp_path):
     path = tmp_path / "bad.urdf"
     path.write_text(vehicle_urdf(child="ghost"), encoding="utf-8")
     process = subprocess.run(
-        [sys.executable, "-m", "aiauv_pin.cli", "check", str(path)],
+        [sys.executable, "-m", "aiauv_pin.app.cli", "check", str(path)],
         capture_output=True,
         text=True,
         timeout=60,
@@ -336,7 +336,7 @@ def test_cli_prints_warnings_for_the_user_but_not_libraries_deprecations(
     # error in one line, while a warning meant for the user (a UserWarning) keeps its own line
     import warnings
 
-    from aiauv_pin import annotation
+    from aiauv_pin.app import annotate_command as annotation
     from aiauv_pin.errors import VehicleLoadError
 
     def failing_annotate(*args, **kwargs):

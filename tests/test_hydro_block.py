@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hydro import (
+from aiauv_hydro import (
     HydroError,
     HydroSpec,
     SlenderCylinderCoefficients,

@@ -10,12 +10,12 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from aiauv_hydro.urdf.block_reader import read_hydrodynamics
 from aiauv_pin import bundled_urdf, load_vehicle
-from aiauv_pin.cli import main
-from aiauv_pin.interop.errors import InteropError
+from aiauv_pin.app.cli import main
 from aiauv_pin.interop.gz import export_sdf, import_gz, read_gz_model
+from aiauv_pin.interop.interop_errors import InteropError
 from aiauv_pin.interop.mjcf import export_mjcf
-from hydro.urdf_block import read_hydrodynamics
 
 DATA = Path(__file__).parent / "data"
 VEHICLES = {

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from aiauv_pin.outputs import FIGURES
+from aiauv_pin.results.outputs import FIGURES
 from aiauv_pin.testing.processes import descendants, wait_gone
 
 SEED = 20261122
@@ -35,7 +35,7 @@ SWEEP_KILLS = int(os.environ.get("AIAUV_SWEEP_KILLS", "1"))
 
 
 def _aiauv(*args: str) -> list[str]:
-    return [sys.executable, "-c", "from aiauv_pin.cli import console_main; console_main()", *args]
+    return [sys.executable, "-c", "from aiauv_pin.app.cli import console_main; console_main()", *args]
 
 
 def _assert_complete_run(out: Path) -> float:
@@ -51,7 +51,7 @@ def _assert_complete_run(out: Path) -> float:
     last_time = float(rows[-1][0])
     assert last_time == pytest.approx(summary["simulated_time"], abs=1e-9)
     # the manifest lists exactly the files of the folder: what a later run may delete
-    from aiauv_pin.result_folder import MARKER, read_manifest
+    from aiauv_pin._internal.result_folder import MARKER, read_manifest
 
     written = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()}
     assert set(read_manifest(out)["files"]) == written - {MARKER}
@@ -110,8 +110,8 @@ _IDENTITY = ("worker", "started_at", "finished_at", "task_time")
 @pytest.mark.skipif(sys.platform != "linux", reason="uses /proc and SIGKILL")
 def test_killed_sweep_resumes_to_exactly_the_full_table(tmp_path):
     pytest.importorskip("distributed")
-    from aiauv_pin.sweep import execute_run, read_records, read_table
-    from aiauv_pin.sweep_spec import load_sweep_spec
+    from aiauv_pin.scenario.sweep_runner import execute_run, read_records, read_table
+    from aiauv_pin.scenario.sweep_spec import load_sweep_spec
 
     spec = tmp_path / "s.toml"
     spec.write_text(SWEEP)
@@ -172,7 +172,7 @@ def test_killed_sweep_resumes_to_exactly_the_full_table(tmp_path):
 @pytest.mark.skipif(sys.platform != "linux", reason="uses /proc and SIGKILL")
 def test_runs_of_a_killed_worker_are_run_again_not_lost(tmp_path):
     pytest.importorskip("distributed")
-    from aiauv_pin.sweep import read_records
+    from aiauv_pin.scenario.sweep_runner import read_records
 
     spec = tmp_path / "s.toml"
     # each run takes ~1.5 s once compiled (30,000 steps), so the worker is killed mid-sweep: with
@@ -238,7 +238,7 @@ def test_meshcat_server_dies_with_a_killed_parent():
     # the server takes the first free ports from 6000/7000 (meshcat's search), no fixed port here
     code = (
         "import time\n"
-        "from aiauv_pin.meshcat_server import start_server\n"
+        "from aiauv_pin.results.meshcat_server import start_server\n"
         "server = start_server()\n"
         "print(server.process.pid, flush=True)\n"
         "time.sleep(120)\n"

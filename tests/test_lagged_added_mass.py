@@ -1,6 +1,7 @@
 """Lagged added mass (UUV Simulator / gz-sim) against its closed form, and against the exact scheme.
 
-The closed form (:func:`aiauv_pin.lagged.growth_factors`): along a mode with added-to-rigid mass
+The closed form (:func:`aiauv_pin.dynamics.lagged_added_mass.growth_factors`): along a mode with
+added-to-rigid mass
 ratio ``mu`` under a state-independent force, the lagged acceleration's deviation from the exact
 one is multiplied by ``lambda = 1 - alpha (1 + mu)`` every step, whatever ``dt``.
 """
@@ -11,10 +12,10 @@ import numpy as np
 import pytest
 
 import aiauv_pin
-from aiauv_pin.controllers import CompiledController
+from aiauv_hydro.laws.fluid_terms import GZ_SIM_FILTER, UUV_SIMULATOR_FILTER
+from aiauv_pin.controllers.compiled_controller import CompiledController
+from aiauv_pin.dynamics.lagged_added_mass import growth_factors, mass_ratios, slender_link_urdf
 from aiauv_pin.errors import AiauvError, SimulationDiverged
-from aiauv_pin.lagged import growth_factors, mass_ratios, slender_link_urdf
-from hydro.laws import GZ_SIM_FILTER, UUV_SIMULATOR_FILTER
 
 
 def _rod(tmp_path, mass_ratio: float, **options) -> aiauv_pin.Vehicle:
@@ -124,9 +125,9 @@ def test_bad_lagged_arguments_get_one_line(tmp_path):
 
 
 def test_scenario_files_select_the_lagged_scheme_and_sweeps_keep_it(tmp_path):
-    from aiauv_pin.scenario import Scenario, run_scenario, summary
-    from aiauv_pin.scenario_file import ScenarioFileError, load_scenario
-    from aiauv_pin.sweep_spec import scenario_from_parameters, scenario_parameters
+    from aiauv_pin.scenario.definition import Scenario, run_scenario, summary
+    from aiauv_pin.scenario.sweep_spec import scenario_from_parameters, scenario_parameters
+    from aiauv_pin.scenario.toml_file import ScenarioFileError, load_scenario
 
     path = tmp_path / "lagged.toml"
     path.write_text('duration = 0.05\ndt = 0.005\nadded_mass = "lagged"\nlagged_filter = 1.0\n')
@@ -155,8 +156,8 @@ def test_scenario_files_select_the_lagged_scheme_and_sweeps_keep_it(tmp_path):
 
 
 def test_lagged_law_compiled_equals_interpreted_and_matches_its_formula(paper_vehicle, rng):
-    from hydro.jit import interpreted
-    from hydro.laws import add_lagged_added_mass_bias, coriolis_wrench
+    from aiauv_hydro.laws.fluid_terms import add_lagged_added_mass_bias, coriolis_wrench
+    from aiauv_hydro.numerics.jit import interpreted
 
     added = paper_vehicle.fluid_model().added_mass
     nb = added.shape[0]

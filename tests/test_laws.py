@@ -1,4 +1,5 @@
-"""Every law of :mod:`control.laws` and :mod:`hydro.laws`: compiled against interpreted execution of
+"""Every law of :mod:`aiauv_control.laws.paper_laws` and :mod:`aiauv_hydro.laws.fluid_terms`:
+compiled against interpreted execution of
 the same function, and the new path-parametrised LOS against finite differences in time.
 
 The laws are written once; these tests check that numba's compilation of each (with fast-math for
@@ -13,11 +14,11 @@ import math
 import numpy as np
 import pytest
 
-from control import laws as control_laws
-from control.paths import HelixPath, LinePath, WaypointPath
-from hydro import laws as hydro_laws
-from hydro.crossflow import gauss_legendre_unit
-from hydro.jit import NUMBA_AVAILABLE, interpreted
+from aiauv_control.laws import paper_laws as control_laws
+from aiauv_control.paths import HelixPath, LinePath, WaypointPath
+from aiauv_hydro.laws import fluid_terms as hydro_laws
+from aiauv_hydro.laws.crossflow import gauss_legendre_unit
+from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, interpreted
 
 pytestmark = pytest.mark.skipif(not NUMBA_AVAILABLE, reason="compiled laws need numba")
 TIGHT = dict(rtol=1e-12, atol=1e-12)

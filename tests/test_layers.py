@@ -1,24 +1,62 @@
-"""The package layout: no import cycles, and ``hydro``/``control`` stay below ``aiauv_pin``.
+"""The package layout: floors that import only downwards, no cycles, a house a newcomer can read.
 
 Read from the sources with :mod:`ast` (nothing is imported), so a deferred import inside a
 function counts too: a cycle that only a lazy import keeps from failing today is still a cycle.
+Module names are the installed ones (``hydro/`` installs as ``aiauv_hydro``, ``control/`` as
+``aiauv_control``).
 """
 
 from __future__ import annotations
 
 import ast
+import collections
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-PACKAGES = ("hydro", "control", "aiauv_pin")
+#: folder -> installed name
+PACKAGES = {"hydro": "aiauv_hydro", "control": "aiauv_control", "aiauv_pin": "aiauv_pin"}
+
+#: The floors of the project, bottom first: a module may import its own floor and those below.
+#: A floor is a package, a module, or a package's top-level modules ("<package>:top").
+FLOORS = [
+    ["aiauv_hydro.numerics"],
+    ["aiauv_hydro:top"],  # spec, currents
+    ["aiauv_hydro.laws", "aiauv_hydro.estimate"],
+    ["aiauv_hydro.urdf"],
+    ["aiauv_hydro"],  # the package's __init__ (its public names)
+    ["aiauv_control.paths"],
+    ["aiauv_control.laws"],
+    ["aiauv_control:top"],
+    ["aiauv_control"],
+    ["aiauv_pin.errors"],
+    ["aiauv_pin._internal"],
+    ["aiauv_pin.description"],
+    ["aiauv_pin.kernels"],
+    ["aiauv_pin.model"],
+    ["aiauv_pin.builders"],
+    ["aiauv_pin.dynamics"],
+    ["aiauv_pin.controllers"],
+    ["aiauv_pin.simulation"],
+    ["aiauv_pin.scenario"],
+    ["aiauv_pin.results"],
+    ["aiauv_pin.checks"],
+    ["aiauv_pin.interop"],
+    ["aiauv_pin.testing"],
+    ["aiauv_pin"],  # the package's __init__: the public entry points
+    ["aiauv_pin.tools"],
+    ["aiauv_pin.app", "aiauv_pin.__main__"],
+]
+
+#: Modules named for their plumbing role alone live in an internal subpackage only.
+PLUMBING_NAMES = {"text", "atomic", "cli_types", "utils", "helpers", "misc", "common", "util"}
 
 
 def _modules() -> dict[str, tuple[Path, bool]]:
-    """Dotted module name -> (file, is a package ``__init__``)."""
+    """Installed dotted module name -> (file, is a package ``__init__``)."""
     modules = {}
-    for package in PACKAGES:
-        for path in sorted((ROOT / package).rglob("*.py")):
-            parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    for folder, name in PACKAGES.items():
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            parts = [name, *path.relative_to(ROOT / folder).with_suffix("").parts]
             is_package = parts[-1] == "__init__"
             modules[".".join(parts[:-1] if is_package else parts)] = (path, is_package)
     return modules
@@ -94,10 +132,29 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return found
 
 
+def floor_of(module: str, packages: set[str]) -> int:
+    """Index in :data:`FLOORS` of the floor ``module`` stands on."""
+    floors = {unit: level for level, units in enumerate(FLOORS) for unit in units}
+    candidates = []
+    for unit, level in floors.items():
+        if unit.endswith(":top"):
+            package = unit[: -len(":top")]
+            if module.rpartition(".")[0] == package and module not in packages:
+                candidates.append((len(package) + 1, level))
+        elif module == unit or module.startswith(unit + "."):
+            candidates.append((len(unit), level))
+    if not candidates:
+        raise AssertionError(f"{module} stands on no floor: add it to FLOORS")
+    return max(candidates)[1]
+
+
 def test_no_import_cycles():
     graph, _ = _import_graph()
     assert len(graph) > 50  # the walk found the packages
-    assert graph["aiauv_pin.fast.thruster_turning"] >= {"control.laws", "hydro.jit"}
+    assert graph["aiauv_pin.controllers.turning_compiled"] >= {
+        "aiauv_control.laws.turning_laws",
+        "aiauv_hydro.numerics.jit",
+    }
     assert _cycles(graph) == []
 
 
@@ -105,20 +162,100 @@ def test_cycle_finder_sees_a_cycle():
     assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
 
 
+def test_every_import_goes_down_the_floors():
+    graph, _ = _import_graph()
+    packages = {name for name, (_, is_package) in _modules().items() if is_package}
+    upward = []
+    for module, targets in graph.items():
+        here = floor_of(module, packages)
+        upward.extend(
+            f"{module} (floor {here}) imports {target} (floor {floor_of(target, packages)})"
+            for target in sorted(targets)
+            if floor_of(target, packages) > here
+        )
+    assert upward == []
+
+
+def test_floor_finder_places_modules():
+    packages = {"aiauv_hydro", "aiauv_hydro.laws", "aiauv_pin", "aiauv_pin.model"}
+    assert floor_of("aiauv_hydro.spec", packages) == 1
+    assert floor_of("aiauv_hydro.laws.damping", packages) == 2
+    assert floor_of("aiauv_hydro", packages) == 4
+    assert floor_of("aiauv_pin.model.vehicle", packages) > floor_of("aiauv_pin.kernels.records", packages)
+
+
 def test_hydro_and_control_never_import_aiauv_pin_or_pinocchio():
     graph, external = _import_graph()
     for name in graph:
-        if name.split(".")[0] in ("hydro", "control"):
+        if name.split(".")[0] in ("aiauv_hydro", "aiauv_control"):
             assert not {t for t in graph[name] if t.startswith("aiauv_pin")}, name
             assert not external[name] & {"pinocchio", "pin"}, name
 
 
+def test_the_numerics_floor_knows_no_package_of_the_project():
+    """The numba machinery is told about compiled sources; it never names a package above it."""
+    graph, _ = _import_graph()
+    for name, targets in graph.items():
+        if name.startswith("aiauv_hydro.numerics"):
+            assert all(t.startswith("aiauv_hydro.numerics") for t in targets), name
+    for path in (ROOT / "hydro" / "numerics").glob("*.py"):
+        text = path.read_text()
+        for other in ("aiauv_pin", "aiauv_control"):
+            assert other not in text, f"{path.name} names {other}"
+
+
+def test_nothing_in_the_library_imports_the_maintainers_tools():
+    graph, _ = _import_graph()
+    users = sorted(
+        name
+        for name, targets in graph.items()
+        if any(t.startswith("aiauv_pin.tools") for t in targets)
+        and not name.startswith("aiauv_pin.tools")
+    )
+    assert users == ["aiauv_pin.app.cli"]  # the thin ``aiauv bench`` entry point
+
+
+def test_at_most_ten_modules_per_package_and_unique_file_names():
+    names = collections.Counter()
+    crowded = []
+    for folder in PACKAGES:
+        for package in [ROOT / folder, *(ROOT / folder).rglob("*")]:
+            if not (package / "__init__.py").is_file():
+                continue
+            modules = [p for p in package.glob("*.py") if p.name not in ("__init__.py", "__main__.py")]
+            if len(modules) > 10:
+                crowded.append(f"{package.relative_to(ROOT)}: {len(modules)}")
+            names.update(p.name for p in modules)
+    assert crowded == []
+    assert sorted(name for name, count in names.items() if count > 1) == []
+
+
+def test_plumbing_names_live_in_an_internal_package():
+    misplaced = [
+        str(path.relative_to(ROOT))
+        for folder in PACKAGES
+        for path in (ROOT / folder).rglob("*.py")
+        if path.stem in PLUMBING_NAMES and not path.parent.name.startswith("_")
+    ]
+    assert misplaced == []
+
+
+def test_every_package_says_what_it_holds():
+    silent = [
+        str(init.relative_to(ROOT))
+        for folder in PACKAGES
+        for init in (ROOT / folder).rglob("__init__.py")
+        if not ast.get_docstring(ast.parse(init.read_text()))
+    ]
+    assert silent == []
+
+
 def test_a_vehicle_load_reads_each_link_once(monkeypatch):
     """One URDF reader: the validation walk reads every link for hydro too (no second walk)."""
+    import aiauv_hydro.urdf.block_reader
+    import aiauv_hydro.urdf.uuv_simulator
     import aiauv_pin
-    import hydro.urdf_block
-    import hydro.uuv_simulator
-    from aiauv_pin import urdf_validation
+    from aiauv_pin.description import urdf_validation
 
     read = []
     original = urdf_validation.read_link
@@ -131,8 +268,8 @@ def test_a_vehicle_load_reads_each_link_once(monkeypatch):
         raise AssertionError("the links were walked a second time")
 
     monkeypatch.setattr(urdf_validation, "read_link", counted)
-    monkeypatch.setattr(hydro.urdf_block, "robot_links", second_walk)
-    monkeypatch.setattr(hydro.uuv_simulator, "robot_links", second_walk)
+    monkeypatch.setattr(aiauv_hydro.urdf.block_reader, "robot_links", second_walk)
+    monkeypatch.setattr(aiauv_hydro.urdf.uuv_simulator, "robot_links", second_walk)
     vehicle = aiauv_pin.load_vehicle(backend="pinocchio")
     assert sorted(read) == sorted(vehicle.urdf_structure.links)  # each link read exactly once
     assert len(vehicle.hydro.links) == 9

@@ -16,7 +16,7 @@ import pytest
 from scipy.linalg import expm
 
 import aiauv_pin
-from aiauv_pin.linear_model import format_modes, linearize, straight_line_trim
+from aiauv_pin.dynamics.linear_model import format_modes, linearize, straight_line_trim
 
 pytest.importorskip("numba")
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from aiauv_pin.cli import main
+from aiauv_pin.app.cli import main
 
 pytest.importorskip("numba")
 

@@ -18,9 +18,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 import aiauv_pin
-from aiauv_pin import cli, outputs, playback
-from aiauv_pin.scenario import Scenario, cross_track_axes, run_scenario, summary
-from control.paths import HelixPath, LinePath, WaypointPath
+from aiauv_control.paths import HelixPath, LinePath, WaypointPath
+from aiauv_pin.app import cli
+from aiauv_pin.results import outputs, playback
+from aiauv_pin.scenario.definition import Scenario, cross_track_axes, run_scenario, summary
 
 #: A unit in brackets at the end of an axis label, e.g. "[m]", "[rad/s]", "[-]".
 UNIT = re.compile(r"\[[^\]]+\]$")
@@ -172,7 +173,7 @@ def test_a_run_is_rebuilt_from_its_csv_alone(paper_run, passive_run, vehicle, tm
     assert {"p", "thrust", "x_ref"} <= set(rebuilt.info)  # what the playback draws
     rows = outputs.csv_rows(paper_run)
     live = paper_run.trajectory
-    sampled = aiauv_pin.simulation.Trajectory(
+    sampled = aiauv_pin.simulation.fixed_step.Trajectory(
         live.t[rows],
         live.q[rows],
         live.v[rows],

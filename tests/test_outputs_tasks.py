@@ -1,4 +1,4 @@
-"""The result files' task runner (:func:`aiauv_pin.outputs._run_tasks`) and its forked process.
+"""The result files' task runner (:func:`aiauv_pin.results.outputs._run_tasks`) and its forked process.
 
 Every task runs exactly once whichever process takes it; a failure in either process is raised
 and leaves no process behind; the forked process starts with an empty math-text cache (its entries
@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from aiauv_pin import outputs
+from aiauv_pin.results import outputs
 
 pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="fork")
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import aiauv_pin
-from aiauv_pin.scenario import PaperScenario, run_paper_scenario, summary
+from aiauv_pin.scenario.definition import PaperScenario, run_paper_scenario, summary
 
 pytestmark = pytest.mark.slow
 

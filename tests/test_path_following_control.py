@@ -12,20 +12,20 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from control.joint_control import joint_torques
-from control.joint_references import base_angles, check_joint_axes, joint_references
-from control.path_following import (
+from aiauv_control.joint_control import joint_torques
+from aiauv_control.joint_references import base_angles, check_joint_axes, joint_references
+from aiauv_control.path_following import (
     PathFollowingCommand,
     PathFollowingController,
     PathFollowingGains,
     PathFollowingMeasurement,
 )
-from control.reduced_attitude import (
+from aiauv_control.reduced_attitude import (
     minimal_rotation,
     minimal_rotation_rate_correction,
     reduced_attitude_torque,
 )
-from control.surge import SurgePIController
+from aiauv_control.surge import SurgePIController
 
 PAPER_AXES = ("z", "y", "z", "y", "z", "y", "z", "y")  # joints 1..8, tail to head (Sec. 4.1)
 SURGE_THRUSTERS = (2, 3)  # the two X thrusters of link 5 in thrust order (Z, Y, X, X, Z, Y, Z)

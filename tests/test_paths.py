@@ -1,4 +1,4 @@
-"""Paths (control.paths): closest point, rotation-minimising frame, curvatures, scenario tables.
+"""Paths (aiauv_control.paths): closest point, rotation-minimising frame, curvatures, scenario tables.
 
 Geometry is checked against its definition: stationarity ``(p - c).T = 0`` and a dense sampling
 for the closest point, central finite differences along ``s`` for the frame equations
@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from control.paths import (
+from aiauv_control.paths import (
     PATH_TYPES,
     HelixPath,
     LinePath,
@@ -24,7 +24,7 @@ from control.paths import (
     from_mapping,
     helix_point,
 )
-from hydro.jit import interpreted
+from aiauv_hydro.numerics.jit import interpreted
 
 RNG = np.random.default_rng(12)
 
@@ -391,9 +391,10 @@ def test_from_mapping_builds_each_type():
 
 @pytest.mark.parametrize("name", PATHS)
 def test_path_errors_of_many_positions_match_one_at_a_time(name, rng):
-    """``control.laws.path_errors_of_positions`` (one compiled call for a logged run) gives exactly
+    """``aiauv_control.laws.paper_laws.path_errors_of_positions`` (one compiled call for a logged
+    run) gives exactly
     what :meth:`Path.closest` and :meth:`Path.cross_track_error` give sample by sample."""
-    from control.laws import path_errors_of_positions
+    from aiauv_control.laws.paper_laws import path_errors_of_positions
 
     path = PATHS[name]
     positions = path.points_at(s_grid(path, 40)) + rng.normal(scale=0.7, size=(40, 3))

@@ -10,8 +10,8 @@ import pinocchio as pin
 import pytest
 
 import aiauv_pin
-from aiauv_pin import playback, viewer
-from aiauv_pin.simulation import Trajectory
+from aiauv_pin.results import playback, viewer
+from aiauv_pin.simulation.fixed_step import Trajectory
 
 URDF = aiauv_pin.bundled_urdf("uniform")
 
@@ -382,9 +382,9 @@ def test_visuals_without_urdf_come_from_the_crossflow_cylinders(vehicle):
 
 def test_live_viewer_draws_the_scenario_path(vehicle):
     """``aiauv simulate --view`` draws the scenario's own path (here a helix), not the x-axis."""
-    from aiauv_pin.outputs import live_path_points
-    from aiauv_pin.scenario import Scenario
-    from control.paths import HelixPath
+    from aiauv_control.paths import HelixPath
+    from aiauv_pin.results.outputs import live_path_points
+    from aiauv_pin.scenario.definition import Scenario
 
     helix = HelixPath(centre=(0.0, 0.0, 0.0), axis=(0.0, 0.0, 1.0), radius=10.0, pitch=10.0)
     scenario = Scenario(path=helix, start_position=(10.0, 0.0, 0.0), duration=60.0)

@@ -10,11 +10,11 @@ import pytest
 from test_playback import in_view
 
 import aiauv_pin
-from aiauv_pin import playback, viewer
-from aiauv_pin.annotation import annotate_file
-from aiauv_pin.robots import example_robot_urdf
-from aiauv_pin.uvms import uvms_urdf
-from hydro.ellipsoid import inertia_equivalent_ellipsoid
+from aiauv_hydro.estimate.ellipsoid import inertia_equivalent_ellipsoid
+from aiauv_pin.app.annotate_command import annotate_file
+from aiauv_pin.builders.uvms import uvms_urdf
+from aiauv_pin.description.robots import example_robot_urdf
+from aiauv_pin.results import playback, viewer
 
 
 def _passive_run(vehicle, duration=1.0, dt=0.01):
@@ -166,7 +166,7 @@ def test_path_points_are_drawn_as_given(ur5, tmp_path):
 
 
 def test_live_server_listens_on_loopback_only():
-    from aiauv_pin.meshcat_server import start_server
+    from aiauv_pin.results.meshcat_server import start_server
 
     server = start_server()
     try:

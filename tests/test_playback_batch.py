@@ -13,7 +13,7 @@ import pytest
 from test_playback import URDF, synthetic_trajectory
 
 import aiauv_pin
-from aiauv_pin import playback, viewer
+from aiauv_pin.results import playback, viewer
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,5 @@
-"""The compiled kernels shipped with the package (hydro.prebuilt, aiauv_pin.prebuilt)."""
+"""The compiled kernels shipped with the package (aiauv_hydro.numerics.kernel_cache,
+aiauv_pin.tools.kernel_archive)."""
 
 from __future__ import annotations
 
@@ -14,9 +15,9 @@ import pytest
 from packaging.requirements import Requirement
 from packaging.version import Version
 
-from aiauv_pin.compilation import COMPILE_NOTICE, default_target_environment
-from hydro import prebuilt
-from hydro.jit import cache_key, source_hash
+from aiauv_hydro.numerics import kernel_cache as prebuilt
+from aiauv_hydro.numerics.jit import cache_key, source_hash
+from aiauv_pin.simulation.compilation import COMPILE_NOTICE, default_target_environment
 
 ROOT = Path(__file__).resolve().parent.parent
 #: The CPython versions archives are shipped for (README, Performance).
@@ -56,14 +57,14 @@ def test_portable_target_decision():
 
 @pytest.mark.parametrize("tag", SHIPPED)
 def test_shipped_archive_is_current(tag):
-    """Fails after any change to a compiled source until ``python -m aiauv_pin.prebuilt`` runs."""
-    path = ROOT / "hydro" / "prebuilt" / f"{tag}.zip"
-    assert path.is_file(), f"{path} missing: build it with python -m aiauv_pin.prebuilt --python"
+    """Fails after any change to a compiled source until ``python -m aiauv_pin.tools.kernel_archive`` runs."""
+    path = ROOT / "aiauv_pin" / "kernels" / "shipped" / f"{tag}.zip"
+    assert path.is_file(), f"{path} missing: build it with python -m aiauv_pin.tools.kernel_archive --python"
     with zipfile.ZipFile(path) as archive:
         manifest = prebuilt.Manifest.from_json(archive.read(prebuilt.MANIFEST).decode())
         names = archive.namelist()
     assert manifest.source_hash == source_hash(), (
-        f"{path.name} was built from other sources: rebuild with python -m aiauv_pin.prebuilt"
+        f"{path.name} was built from other sources: rebuild with python -m aiauv_pin.tools.kernel_archive"
     )
     assert manifest.python_tag == tag
     assert manifest.cpu_name == prebuilt.PORTABLE_CPU_NAME
@@ -178,9 +179,9 @@ def _shipped_kernels_serve_this_process() -> str | None:
         "linux"
     ):
         return "kernels are shipped for x86-64 Linux only"
-    import hydro.jit
+    import aiauv_hydro.numerics.jit
 
-    if not hydro.jit.PORTABLE_TARGET:
+    if not aiauv_hydro.numerics.jit.PORTABLE_TARGET:
         return "numba does not compile for x86-64-v3 here (an older CPU, or the user's setting)"
     if not prebuilt.archive_path().is_file():
         return f"no archive shipped for {prebuilt.python_tag()}"
@@ -232,14 +233,14 @@ def test_a_new_installation_compiles_nothing(tmp_path, arguments):
 def test_the_target_is_chosen_only_while_numba_has_compiled_nothing(before, portable):
     """numba imported first: its settings are re-read; something compiled first: left alone."""
     pytest.importorskip("numba")
-    import hydro.jit
+    import aiauv_hydro.numerics.jit
 
-    if not hydro.jit.PORTABLE_TARGET:
+    if not aiauv_hydro.numerics.jit.PORTABLE_TARGET:
         pytest.skip("numba does not compile for x86-64-v3 here")
     env = default_target_environment()
     code = (
-        f"{before}\nimport hydro.jit\nfrom numba.core import config\n"
-        "print(hydro.jit.PORTABLE_TARGET, config.CPU_NAME)"
+        f"{before}\nimport aiauv_hydro.numerics.jit\nfrom numba.core import config\n"
+        "print(aiauv_hydro.numerics.jit.PORTABLE_TARGET, config.CPU_NAME)"
     )
     done = subprocess.run(
         [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
@@ -278,8 +279,8 @@ OTHER_NUMBA = """
 import sys
 import numba
 numba.__version__ = "0.0+other"  # read by the manifest check and by numba's own cache index
-from aiauv_pin.cli import main
-from hydro import prebuilt
+from aiauv_pin.app.cli import main
+from aiauv_hydro import prebuilt
 code = main(sys.argv[1:])
 print("shipped kernels:", prebuilt.status(), file=sys.stderr)
 sys.exit(code)

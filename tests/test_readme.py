@@ -270,10 +270,10 @@ def test_examples_run_against_this_checkout(tmp_path):
 def test_own_vehicle_example_suits_the_paper_controller(document, tmp_path):
     """The "your own vehicle" spec builds a usable vehicle that the paper's controller accepts."""
     from aiauv_pin import load_vehicle
-    from aiauv_pin.builder import write_urdf
-    from aiauv_pin.check import check_vehicle
-    from aiauv_pin.paper_controller import VehiclePathFollowing, joint_axis_labels
-    from aiauv_pin.vehicle_spec import spec_from_toml
+    from aiauv_pin.builders.urdf_builder import write_urdf
+    from aiauv_pin.builders.vehicle_spec import spec_from_toml
+    from aiauv_pin.checks.vehicle_check import check_vehicle
+    from aiauv_pin.controllers.paper_controller import VehiclePathFollowing, joint_axis_labels
 
     (spec,) = [b for b in blocks(document) if b.kind == "file" and b.file_name == "my_aiauv.toml"]
     path = write_urdf(spec_from_toml(spec.text), tmp_path / "vehicle.urdf")

@@ -18,7 +18,7 @@ from rigid_body_attitude import (
 from scipy.linalg import expm
 from scipy.spatial.transform import Rotation
 
-from control.reduced_attitude import (
+from aiauv_control.reduced_attitude import (
     E1,
     H,
     ReducedAttitudeLaw,

@@ -26,9 +26,8 @@ import numpy as np
 import pytest
 
 import aiauv_pin
-from aiauv_pin import input_limits
-from aiauv_pin.arguments import QUATERNION_TOLERANCE, check_timing
-from aiauv_pin.cli import main
+from aiauv_pin.app.cli import main
+from aiauv_pin.description import input_limits
 from aiauv_pin.errors import (
     AiauvError,
     ArgumentError,
@@ -37,7 +36,8 @@ from aiauv_pin.errors import (
     UnsafeNameError,
     VehicleLoadError,
 )
-from aiauv_pin.simulation import simulate
+from aiauv_pin.model.array_checks import QUATERNION_TOLERANCE, check_timing
+from aiauv_pin.simulation.fixed_step import simulate
 
 PAPER_TEXT = aiauv_pin.bundled_urdf("uniform").read_text(encoding="utf-8")
 
@@ -151,7 +151,7 @@ def test_checked_fast_path_matches_the_separate_checks_bit_for_bit(vehicles, rng
     """``Vehicle.acceleration`` checks plain arrays inside its compiled call (issue 15); the result
     must be exactly the one of the Python checks followed by the unchecked compiled evaluation,
     also when the quaternion is normalised, and for inputs the fast path does not take."""
-    from aiauv_pin.arguments import configuration
+    from aiauv_pin.model.array_checks import configuration
 
     vehicle = vehicles[0]
     if vehicle.fast is None:
@@ -239,7 +239,7 @@ def test_options_a_run_does_not_use_are_checked_too(paper_vehicle, option, expec
 
 
 def test_controller_output_and_servo_sizes_are_checked(paper_vehicle):
-    from aiauv_pin.simulation import JointServo
+    from aiauv_pin.dynamics.joint_servo import JointServo
 
     q, v = paper_vehicle.neutral_configuration(), np.zeros(paper_vehicle.nv)
     with pytest.raises(ArgumentError, match=r"controller must return tau of shape \(14,\)"):
@@ -334,7 +334,7 @@ def test_a_1000_module_vehicle_is_refused_clearly(tmp_path, capfd):
         "long.toml",
     )
     assert main(["build", str(spec), "-o", str(tmp_path / "long.urdf")]) == 1
-    # the schema counts the modules (aiauv_pin.input_limits.MAX_LINKS, with the end effector)
+    # the schema counts the modules (aiauv_pin.description.input_limits.MAX_LINKS, with the end effector)
     assert "module: expected a list of 2 to 127 tables, got 1000 entries" in _one_line_error(capfd)
 
 
@@ -418,7 +418,7 @@ def test_non_physical_vehicles_are_refused_by_every_command(tmp_path, capfd, cas
 
 
 def test_divergence_names_a_suspect_parameter(tmp_path):
-    from aiauv_pin.validation import explain_divergence
+    from aiauv_pin.model.validation import explain_divergence
 
     stiff = _paper_with_fossen_link("1e6 1 1 1 1 1", "1 1 1 1 1 1")
     vehicle = aiauv_pin.load_vehicle(_write(tmp_path, stiff), backend="pinocchio")
@@ -453,7 +453,7 @@ def test_unsafe_names_are_refused_at_load(tmp_path, capfd, old, new):
 
 
 def test_unsafe_name_error_class():
-    from aiauv_pin.safe_names import check_name
+    from aiauv_pin.description.safe_names import check_name
 
     with pytest.raises(UnsafeNameError):
         check_name("a,b", "link")
@@ -464,7 +464,7 @@ def test_unsafe_name_error_class():
 
 
 def test_result_folder_is_replaced_whole_and_foreign_folders_are_refused(tmp_path, capfd):
-    from aiauv_pin.result_folder import staged_folder
+    from aiauv_pin._internal.result_folder import staged_folder
 
     out = tmp_path / "run"
     with staged_folder(out) as staging:
@@ -498,7 +498,7 @@ def test_figure_worker_dies_with_its_parent():
 
     code = (
         "import os, time\n"
-        "from aiauv_pin.outputs import _die_with_parent\n"
+        "from aiauv_pin.results.outputs import _die_with_parent\n"
         "pid = os.fork()\n"
         "if pid == 0:\n"
         "    _die_with_parent(os.getppid())\n"
@@ -531,7 +531,7 @@ def test_figure_worker_dies_with_its_parent():
 
 
 def test_sweep_cache_is_private_and_verified(tmp_path, monkeypatch):
-    from aiauv_pin import sweep
+    from aiauv_pin.scenario import sweep_runner as sweep
 
     monkeypatch.setattr(sweep.tempfile, "gettempdir", lambda: str(tmp_path))
     sweep._VEHICLES.clear()
@@ -552,7 +552,7 @@ def test_sweep_cache_is_private_and_verified(tmp_path, monkeypatch):
 
 
 def test_sweep_lock_and_worker_bound(tmp_path, capfd):
-    from aiauv_pin import sweep
+    from aiauv_pin.scenario import sweep_runner as sweep
 
     out = tmp_path / "out"
     out.mkdir()
@@ -588,7 +588,7 @@ def test_sweep_lock_and_worker_bound(tmp_path, capfd):
 
 
 def test_build_refuses_special_outputs_and_unloadable_urdfs(tmp_path, capfd):
-    from aiauv_pin.builder import bundled_spec_path
+    from aiauv_pin.builders.urdf_builder import bundled_spec_path
 
     spec = bundled_spec_path("uniform")
     fifo = tmp_path / "fifo.urdf"
@@ -609,7 +609,7 @@ def test_build_refuses_special_outputs_and_unloadable_urdfs(tmp_path, capfd):
 def test_paper_controller_names_the_frame_a_vehicle_lacks(tmp_path, capfd):
     """A usable vehicle without an ``end_effector`` frame: the paper's controller says what it
     needs (the campaign found only "unknown link or frame" before)."""
-    from aiauv_pin.paper_controller import VehiclePathFollowing
+    from aiauv_pin.controllers.paper_controller import VehiclePathFollowing
 
     urdf = Path(__file__).parent / "data" / "two_link_hydro.urdf"
     vehicle = aiauv_pin.load_vehicle(urdf)

@@ -14,8 +14,8 @@ import shutil
 import pytest
 
 import aiauv_pin
-from aiauv_pin.cli import build_parser, main, scenario_for_args
-from aiauv_pin.cli_types import EXIT_FAILED
+from aiauv_pin._internal.argument_types import EXIT_FAILED
+from aiauv_pin.app.cli import build_parser, main, scenario_for_args
 
 #: The scenario file of issue 12, word for word.
 ISSUE_TOML = """\
@@ -130,7 +130,7 @@ def test_bad_issue_file_names_the_key(tmp_path, capfd, line, message):
 def test_short_runs_write_what_fits_them(tmp_path, capsys):
     """Passive in a current: the motion, no path errors; the paper's controller: the path errors
     on the paper's x-axis (``p_y``, ``p_z``); both: the end-effector position with its unit."""
-    from aiauv_pin.outputs import MOTION_FIGURES, read_timeseries
+    from aiauv_pin.results.outputs import MOTION_FIGURES, read_timeseries
 
     path = tmp_path / "issue.toml"
     path.write_text(ISSUE_TOML)

@@ -1,4 +1,4 @@
-"""The schemas of scenario files, sweep specs and vehicle specs (aiauv_pin.file_schemas and others).
+"""The schemas of scenario files, sweep specs and vehicle specs (aiauv_pin.scenario.file_schemas and others).
 
 Strict types (a bool or a string is not a number), unknown keys at every level, plausible ranges
 and exact lengths, each refused in one line naming the key path and what is expected; the JSON
@@ -20,18 +20,23 @@ import pytest
 from hypothesis import HealthCheck, given, seed, settings
 from hypothesis import strategies as st
 
-from aiauv_pin import cli
-from aiauv_pin.builder import bundled_spec_path
+from aiauv_control.path_following import PathFollowingGains
+from aiauv_control.paths import PATH_TYPES
+from aiauv_hydro.currents import CURRENT_KEYS
+from aiauv_pin._internal.schema_validation import json_schema
+from aiauv_pin.app import cli
+from aiauv_pin.builders.urdf_builder import bundled_spec_path
+from aiauv_pin.builders.vehicle_spec import SpecError, load_spec, spec_from_dict
+from aiauv_pin.builders.vehicle_spec_schema import VehicleSpecFile
 from aiauv_pin.errors import AiauvError
-from aiauv_pin.file_schemas import CURRENT_TABLES, PATH_TABLES, ControllerTable, ScenarioFile
-from aiauv_pin.scenario_file import ScenarioFileError, load_scenario, scenario_from_mapping
-from aiauv_pin.schema_validation import json_schema
-from aiauv_pin.sweep_spec import SweepSpecError, load_sweep_spec, sweep_spec_from_dict
-from aiauv_pin.vehicle_spec import SpecError, load_spec, spec_from_dict
-from aiauv_pin.vehicle_spec_schema import VehicleSpecFile
-from control.path_following import PathFollowingGains
-from control.paths import PATH_TYPES
-from hydro.currents import CURRENT_KEYS
+from aiauv_pin.scenario.file_schemas import (
+    CURRENT_TABLES,
+    PATH_TABLES,
+    ControllerTable,
+    ScenarioFile,
+)
+from aiauv_pin.scenario.sweep_spec import SweepSpecError, load_sweep_spec, sweep_spec_from_dict
+from aiauv_pin.scenario.toml_file import ScenarioFileError, load_scenario, scenario_from_mapping
 
 try:
     import tomllib

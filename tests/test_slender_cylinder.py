@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from hydro import (
+from aiauv_hydro import (
     HydroError,
     SlenderCylinderCoefficients,
     added_mass_matrix,

@@ -1,4 +1,4 @@
-"""The joint servo's largest stable step (aiauv_pin.step_stability): closed forms, the full
+"""The joint servo's largest stable step (aiauv_pin.simulation.step_stability): closed forms, the full
 linearisation, and the warning of simulate, rollout and the command line; the warning of a sampled
 loop that oscillates at every sample."""
 
@@ -9,8 +9,8 @@ import warnings
 import numpy as np
 import pytest
 
-from aiauv_pin.scenario import Scenario, run_scenario
-from aiauv_pin.step_stability import (
+from aiauv_pin.scenario.definition import Scenario, run_scenario
+from aiauv_pin.simulation.step_stability import (
     STEP_MARGIN,
     EveryStepOscillation,
     StepNearStabilityLimit,
@@ -64,7 +64,7 @@ def test_amplification_is_one_step_of_each_method():
 
     q, qd = x[:3], x[3:]
     # the kernels' step: (M_q + h C + h^2 K) (qd' - qd) = h (-K q - C qd - h K qd), q' = q + h qd'
-    # (control.laws.joint_pd_implicit_terms)
+    # (aiauv_control.laws.paper_laws.joint_pd_implicit_terms)
     joint_mass = np.linalg.inv(inverse_mass)
     lhs = joint_mass + np.diag(h * damping + h * h * stiffness)
     qd_euler = qd + np.linalg.solve(
@@ -84,7 +84,7 @@ def test_amplification_is_one_step_of_each_method():
     assert amplification(inverse_mass, stiffness, damping, "rk4", h) @ x == pytest.approx(rk4)
 
     # the midpoint method: both stages take the servo-implicit acceleration of a step h
-    # (aiauv_pin.integrators.midpoint_step with the dynamics aiauv_pin.simulate gives it)
+    # (aiauv_pin.dynamics.integrators.midpoint_step with the dynamics aiauv_pin.simulate gives it)
     def implicit_acceleration(q, qd):
         return np.linalg.solve(lhs, joint_mass @ acceleration(q, qd) - h * stiffness * qd)
 
@@ -113,9 +113,9 @@ def test_no_servo_has_no_limit():
 
 @pytest.fixture(scope="module")
 def paper():
-    from aiauv_pin import loading
-    from aiauv_pin.paper_controller import VehiclePathFollowing
-    from aiauv_pin.scenario import Scenario, initial_state
+    from aiauv_pin.controllers.paper_controller import VehiclePathFollowing
+    from aiauv_pin.model import loading
+    from aiauv_pin.scenario.definition import Scenario, initial_state
 
     vehicle = loading.load_vehicle(loading.bundled_urdf("uniform"))
     scenario = Scenario(case="uniform")
@@ -127,7 +127,7 @@ def paper():
 
 
 def test_paper_servo_limits_agree_with_the_full_linearisation(paper):
-    from aiauv_pin.linear_model import linearize
+    from aiauv_pin.dynamics.linear_model import linearize
 
     vehicle, law, q0, _ = paper
     servo = law.servo
@@ -142,7 +142,7 @@ def test_paper_servo_limits_agree_with_the_full_linearisation(paper):
 
 
 def test_simulate_warns_near_the_limit_only(paper):
-    from aiauv_pin.simulation import simulate
+    from aiauv_pin.simulation.fixed_step import simulate
 
     vehicle, law, q0, v0 = paper
     with pytest.warns(StepNearStabilityLimit, match=r"dt = 0\.012 s is 8\d% .* RK4"):
@@ -158,7 +158,7 @@ def test_euler_beyond_the_explicit_servo_limit_stays_on_the_reference(paper):
     """The paper's run for 20 s by Euler at 0.02 s (1.9x the explicit servo's 0.0106 s) against
     RK4 at 2 ms: the servo implicit, the path stays within the first-order error (0.49 mm per ms
     of step on the 300 s run, i.e. about 1 cm here), no trace of the servo's -189 1/s mode."""
-    from aiauv_pin.simulation import simulate
+    from aiauv_pin.simulation.fixed_step import simulate
 
     vehicle, law, q0, v0 = paper
     runs = {}
@@ -171,7 +171,7 @@ def test_euler_beyond_the_explicit_servo_limit_stays_on_the_reference(paper):
 
 
 def test_rollout_warns_too(paper):
-    from aiauv_pin.rollout import rollout
+    from aiauv_pin.simulation.rollout import rollout
 
     vehicle, law, q0, v0 = paper
     with pytest.warns(StepNearStabilityLimit, match=f"take dt <= {STEP_MARGIN * 0.01478:.2g}"):
@@ -185,7 +185,7 @@ def test_command_line_warns_once_in_one_line(tmp_path):
     arguments = ["simulate", "--method", "rk4", "--dt", "0.012", "--duration", "0.06"]
     arguments += ["--no-html", "--quiet", "--out", str(tmp_path / "run")]
     done = subprocess.run(
-        [sys.executable, "-m", "aiauv_pin.cli", *arguments],
+        [sys.executable, "-m", "aiauv_pin.app.cli", *arguments],
         capture_output=True,
         text=True,
         timeout=600,

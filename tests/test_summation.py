@@ -1,4 +1,4 @@
-"""The compiled exact sum (aiauv_pin.fast.summation) against math.fsum, bit for bit."""
+"""The compiled exact sum (aiauv_pin.kernels.summation) against math.fsum, bit for bit."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from aiauv_pin.energy import exact_sum
-from aiauv_pin.fast.summation import PARTIALS, exact_partials, exact_sum_compiled
+from aiauv_pin.kernels.summation import PARTIALS, exact_partials, exact_sum_compiled
+from aiauv_pin.simulation.energy import exact_sum
 
 
 def cases():

@@ -14,10 +14,10 @@ from pathlib import Path
 
 import pytest
 
-from aiauv_pin import cli
-from aiauv_pin.loading import bundled_urdf, load_vehicle
-from aiauv_pin.scenario import run_paper_scenario, summary
-from aiauv_pin.sweep import (
+from aiauv_pin.app import cli
+from aiauv_pin.model.loading import bundled_urdf, load_vehicle
+from aiauv_pin.scenario.definition import run_paper_scenario, summary
+from aiauv_pin.scenario.sweep_runner import (
     flatten_summary,
     read_records,
     read_table,
@@ -25,7 +25,7 @@ from aiauv_pin.sweep import (
     runs_folder,
     write_record,
 )
-from aiauv_pin.sweep_spec import (
+from aiauv_pin.scenario.sweep_spec import (
     SweepSpecError,
     scenario_from_parameters,
     sweep_spec_from_toml,
@@ -98,7 +98,7 @@ def test_run_id_depends_on_the_resolved_run_only(tmp_path):
     assert ids('duration = 60.0\nvehicle = "copy.urdf"') != base
     # and it is the same in a fresh interpreter
     code = (
-        "from aiauv_pin.sweep_spec import sweep_spec_from_toml as s;"
+        "from aiauv_pin.scenario.sweep_spec import sweep_spec_from_toml as s;"
         "print(s('duration = 60.0').points()[0].run_id)"
     )
     fresh = subprocess.run(

@@ -8,14 +8,11 @@ from pathlib import Path
 
 import pytest
 
-from aiauv_pin.loading import bundled_urdf, load_vehicle
-from aiauv_pin.scenario import run_scenario, summary
-from aiauv_pin.scenario_file import TABLES as FILE_TABLES
-from aiauv_pin.scenario_file import TOP_LEVEL as FILE_TOP_LEVEL
-from aiauv_pin.scenario_file import load_scenario
-from aiauv_pin.scenario_schema import ALIASES, SCHEMA, scalar_parameters
-from aiauv_pin.sweep import flatten_summary, read_table, run_sweep
-from aiauv_pin.sweep_spec import (
+from aiauv_pin.model.loading import bundled_urdf, load_vehicle
+from aiauv_pin.scenario.definition import run_scenario, summary
+from aiauv_pin.scenario.parameters import ALIASES, SCHEMA, scalar_parameters
+from aiauv_pin.scenario.sweep_runner import flatten_summary, read_table, run_sweep
+from aiauv_pin.scenario.sweep_spec import (
     PARAMETERS,
     SweepSpecError,
     load_sweep_spec,
@@ -23,6 +20,9 @@ from aiauv_pin.sweep_spec import (
     scenario_parameters,
     sweep_spec_from_toml,
 )
+from aiauv_pin.scenario.toml_file import TABLES as FILE_TABLES
+from aiauv_pin.scenario.toml_file import TOP_LEVEL as FILE_TOP_LEVEL
+from aiauv_pin.scenario.toml_file import load_scenario
 
 # a line at 45 deg in the horizontal plane, a lateral current, one gain changed from the paper's
 YAWED_LINE = """

@@ -1,10 +1,10 @@
-"""Numbers as the command line prints them (:mod:`aiauv_pin.text`)."""
+"""Numbers as the command line prints them (:mod:`aiauv_pin._internal.text`)."""
 
 from __future__ import annotations
 
 import pytest
 
-from aiauv_pin.text import signed
+from aiauv_pin._internal.text import signed
 
 
 @pytest.mark.parametrize(

@@ -6,14 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from control.thruster_turning import (
+from aiauv_control.laws.turning_laws import (
     NOT_TUNNEL,
     PITCH_PLANE,
     YAW_PLANE,
     sideslip_compensated,
     tunnel_allocation,
 )
-from hydro.jit import interpreted
+from aiauv_hydro.numerics.jit import interpreted
 
 PLANE = np.array(
     [PITCH_PLANE, YAW_PLANE, NOT_TUNNEL, NOT_TUNNEL, PITCH_PLANE, YAW_PLANE, PITCH_PLANE]
@@ -82,9 +82,9 @@ def test_thruster_turning_approaches_the_path(path):
     """60 s from 2 m (x-axis) or 1.4 m (helix) off: the error shrinks by more than half, the body
     stays straight (joint angles below 2 deg), the tunnel thrusters turn it and energy is logged."""
     import aiauv_pin
-    from aiauv_pin.loading import bundled_urdf
-    from aiauv_pin.scenario import Scenario, run_scenario, summary
-    from control.paths import HelixPath
+    from aiauv_control.paths import HelixPath
+    from aiauv_pin.model.loading import bundled_urdf
+    from aiauv_pin.scenario.definition import Scenario, run_scenario, summary
 
     options = (
         dict(

@@ -21,13 +21,13 @@ import pytest
 from conftest import random_state
 
 import aiauv_pin
-from aiauv_pin.controllers import CompiledController
-from aiauv_pin.disturbances import Disturbance
-from aiauv_pin.scenario import Scenario, run_scenario
-from aiauv_pin.scenario_file import ScenarioFileError, load_scenario, scenario_from_mapping
-from control.paths import LinePath
-from hydro.currents import Current
-from hydro.jit import COMPILED_SOURCES, _project_files, source_hash
+from aiauv_control.paths import LinePath
+from aiauv_hydro.currents import Current
+from aiauv_hydro.numerics.jit import _project_files, compiled_sources, source_hash
+from aiauv_pin.controllers.compiled_controller import CompiledController
+from aiauv_pin.kernels.disturbances import Disturbance
+from aiauv_pin.scenario.definition import Scenario, run_scenario
+from aiauv_pin.scenario.toml_file import ScenarioFileError, load_scenario, scenario_from_mapping
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = sorted((ROOT / "examples").glob("*.toml"))
@@ -135,15 +135,15 @@ def test_line_in_any_horizontal_direction_is_the_x_axis_rotated():
 def test_inclined_line_converges_like_the_x_axis():
     scenario = load_scenario(ROOT / "examples" / "line_diagonal.toml")
     result = run_scenario(aiauv_pin.load_vehicle(), dataclasses.replace(scenario, duration=200.0))
-    summary = aiauv_pin.scenario.summary(result)
+    summary = aiauv_pin.scenario.definition.summary(result)
     assert summary["final"]["cross_track_error"] < 0.01
     assert summary["settling_time"]["cross_track_5cm"] < 150.0  # 112.3 s; the x-axis case 113.1 s
 
 
 # ---------------------------------------------------------------------- currents
 def _custom_vehicle(tmp_path) -> aiauv_pin.Vehicle:
-    from aiauv_pin.builder import build_urdf
-    from aiauv_pin.vehicle_spec import spec_from_dict
+    from aiauv_pin.builders.urdf_builder import build_urdf
+    from aiauv_pin.builders.vehicle_spec import spec_from_dict
 
     table = {
         "name": "custom5",
@@ -280,7 +280,7 @@ def test_free_body_under_a_sinusoidal_wrench_follows_the_closed_form(backend, fo
 # ---------------------------------------------------------------------- user controllers
 def test_user_compiled_controller_runs_in_the_loop_and_equals_python():
     numba = pytest.importorskip("numba")
-    from aiauv_pin.fast.kernels import kinematics, thrust_into
+    from aiauv_pin.kernels.articulated_body import kinematics, thrust_into
 
     @numba.njit
     def straight_and_forward(t, q, v, model, workspace, parameters, state, tau, info):
@@ -317,7 +317,7 @@ def test_every_compiled_function_lives_in_a_hashed_source():
         for path in (ROOT / package).rglob("*.py"):
             if "@compiled" in path.read_text() and path.name != "jit.py":
                 assert path.resolve() in hashed, (
-                    f"{path} has compiled code outside {COMPILED_SOURCES}"
+                    f"{path} has compiled code outside {compiled_sources()}"
                 )
     assert len(source_hash()) == 64
 

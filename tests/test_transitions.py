@@ -9,9 +9,9 @@ import pytest
 from conftest import random_state
 
 import aiauv_pin
-from aiauv_pin.derivatives import compiled_derivatives
+from aiauv_pin.dynamics.transitions import transition_jacobians
 from aiauv_pin.errors import ArgumentError
-from aiauv_pin.transitions import transition_jacobians
+from aiauv_pin.model.derivatives import compiled_derivatives
 
 pytest.importorskip("numba")
 

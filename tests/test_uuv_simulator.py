@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hydro import FRD_TO_FLU, HydroError, convert_fossen_matrices, read_hydrodynamics
-from hydro.urdf_xml import parse_bool
-from hydro.uuv_simulator import read_uuv_simulator
+from aiauv_hydro import FRD_TO_FLU, HydroError, convert_fossen_matrices, read_hydrodynamics
+from aiauv_hydro.urdf.uuv_simulator import read_uuv_simulator
+from aiauv_hydro.urdf.xml_reading import parse_bool
 
 REXROV = Path(__file__).parent / "data" / "rexrov_uuv_simulator.urdf"
 

@@ -9,7 +9,7 @@ import pinocchio as pin
 import pytest
 
 from aiauv_pin import load_vehicle, simulate
-from aiauv_pin.uvms import (
+from aiauv_pin.builders.uvms import (
     ellipsoid_added_mass,
     ellipsoid_hydrodynamics,
     inertia_equivalent_ellipsoid,

@@ -15,13 +15,13 @@ import pinocchio as pin
 import pytest
 
 import aiauv_pin
-from aiauv_pin.annotation import annotate_file
-from aiauv_pin.cli import main
+from aiauv_hydro.estimate.ellipsoid import ellipsoid_added_mass
+from aiauv_hydro.spec import HydroError
+from aiauv_hydro.urdf.block_reader import read_hydrodynamics, rpy_matrix
+from aiauv_pin.app.annotate_command import annotate_file
+from aiauv_pin.app.cli import main
+from aiauv_pin.description.xacro_loading import expand_xacro
 from aiauv_pin.errors import VehicleLoadError
-from aiauv_pin.xacro_loading import expand_xacro
-from hydro.ellipsoid import ellipsoid_added_mass
-from hydro.spec import HydroError
-from hydro.urdf_block import read_hydrodynamics, rpy_matrix
 
 PACKAGES = Path(__file__).parent / "data" / "uuv_packages"
 MINIROV = PACKAGES / "minirov_description" / "robots" / "minirov.urdf.xacro"
@@ -126,7 +126,7 @@ def _plugin_robot(model: str, extra: str = "", volume: str = "<volume>0.01</volu
 
 def _about_centre(link):
     """The link's added mass moved back to the centre of mass (0.2, 0, 0)."""
-    from hydro.spatial import motion_transform
+    from aiauv_hydro.numerics.spatial import motion_transform
 
     inverse = np.linalg.inv(motion_transform(np.eye(3), [0.2, 0.0, 0.0]))
     return inverse.T @ link.added_mass @ inverse
@@ -278,7 +278,7 @@ def test_uuv_xacro_vehicle_annotate_check_simulate(tmp_path, capsys):
     placement = pin.XYZQUATToSE3(run.q[-1, :7])
     assert np.isfinite(placement.translation).all()
     # playback: every link drawn (collision boxes; the propellers as their inertia ellipsoids)
-    from aiauv_pin import playback, viewer
+    from aiauv_pin.results import playback, viewer
 
     page = playback.write_playback(damped, run, tmp_path / "playback.html")
     commands = playback.read_commands(page.read_text(encoding="utf-8"))
@@ -314,8 +314,8 @@ def test_eca_a9_is_read_but_refused_for_its_inertia():
     """As published, ECA A9's inertia breaks the triangle inequality (0.6 + 30 < 35 kg m^2), so the
     validation gate refuses it in one line; its hydrodynamic block is still read (forward-speed
     damping included), and says what it cannot apply (a thruster with no limit)."""
+    from aiauv_hydro.urdf.block_reader import read_hydrodynamics
     from aiauv_pin.errors import PhysicalParameterError
-    from hydro.urdf_block import read_hydrodynamics
 
     eca = Path(__file__).parent / "data" / "eca_a9_uuv_simulator.urdf"
     with pytest.raises(PhysicalParameterError, match="triangle inequality") as error:
@@ -339,7 +339,7 @@ def test_eca_a9_is_read_but_refused_for_its_inertia():
 
 
 def test_forward_speed_damping_conversion():
-    from hydro.uuv_simulator import convert_forward_speed_damping
+    from aiauv_hydro.urdf.uuv_simulator import convert_forward_speed_damping
 
     forward = np.zeros((6, 6))
     forward[1, 5], forward[1, 1] = 150.0, -162.0

@@ -5,6 +5,6 @@
 - :mod:`aiauv_pin.interop.mjcf`: ``aiauv export ... -o X.xml`` (a MuJoCo model).
 """
 
-from .errors import InteropError
+from aiauv_pin.interop.interop_errors import InteropError
 
 __all__ = ["InteropError"]

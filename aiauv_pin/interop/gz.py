@@ -56,16 +56,15 @@ import defusedxml
 import defusedxml.ElementTree as SafeElementTree
 import numpy as np
 
-from hydro.spec import HydroError, LinkHydrodynamics
-from hydro.urdf_block import parse_robot_text, read_hydrodynamics
-from hydro.urdf_writer import format_number, format_numbers, fossen_link_element
-from hydro.urdf_xml import parse_bool
-
-from ..atomic import write_text as atomic_write_text
-from ..errors import InputLimitError, VehicleLoadError
-from ..input_limits import read_text
-from .common import ExportSource, load_export_source, rpy_of, rpy_to_matrix
-from .errors import InteropError
+from aiauv_hydro.spec import HydroError, LinkHydrodynamics
+from aiauv_hydro.urdf.block_reader import parse_robot_text, read_hydrodynamics
+from aiauv_hydro.urdf.block_writer import format_number, format_numbers, fossen_link_element
+from aiauv_hydro.urdf.xml_reading import parse_bool
+from aiauv_pin._internal.atomic import write_text as atomic_write_text
+from aiauv_pin.description.input_limits import read_text
+from aiauv_pin.errors import InputLimitError, VehicleLoadError
+from aiauv_pin.interop.export_source import ExportSource, load_export_source, rpy_of, rpy_to_matrix
+from aiauv_pin.interop.interop_errors import InteropError
 
 #: SNAME letters of the force/moment axes and of the velocities, in our twist order.
 FORCE_AXES = "xyzkmn"
@@ -131,7 +130,7 @@ def _numbers(text: str | None, count: int, what: str) -> np.ndarray:
 
 
 def _parse_bool(text: str | None, what: str) -> bool:
-    """:func:`hydro.urdf_xml.parse_bool`, its error as an :class:`InteropError`."""
+    """:func:`aiauv_hydro.urdf.xml_reading.parse_bool`, its error as an :class:`InteropError`."""
     try:
         return parse_bool(text, what)
     except HydroError as exc:
@@ -659,7 +658,7 @@ def sdf_text(source: ExportSource, *, added_mass: str = "sdf") -> str:
     """The SDF model of a loaded vehicle (see the module docstring).
 
     Args:
-        source: The vehicle (from :func:`~aiauv_pin.interop.common.load_export_source`).
+        source: The vehicle (from :func:`~aiauv_pin.interop.export_source.load_export_source`).
         added_mass: ``"sdf"`` (``<fluid_added_mass>``) or ``"plugin"`` (``<xDotU>``-style terms).
     """
     if added_mass not in ("sdf", "plugin"):

@@ -32,11 +32,10 @@ from xml.etree.ElementTree import Element, SubElement, indent, tostring
 import numpy as np
 import pinocchio as pin
 
-from hydro.urdf_writer import format_number, format_numbers
-
-from ..atomic import write_text as atomic_write_text
-from .common import ExportSource, Shape, load_export_source, rpy_to_matrix
-from .errors import InteropError
+from aiauv_hydro.urdf.block_writer import format_number, format_numbers
+from aiauv_pin._internal.atomic import write_text as atomic_write_text
+from aiauv_pin.interop.export_source import ExportSource, Shape, load_export_source, rpy_to_matrix
+from aiauv_pin.interop.interop_errors import InteropError
 
 #: Dynamic viscosity of water at 20 degC [Pa s] (MuJoCo's ``viscosity`` option).
 WATER_VISCOSITY = 1.0e-3

@@ -4,7 +4,7 @@ Installed with the package as the pytest plugin ``aiauv`` (entry point ``pytest1
 
     pytest --aiauv-vehicle my_aiauv.urdf [--aiauv-vehicle other.urdf ...] [--aiauv-seed N]
 
-runs :mod:`aiauv_pin.testing.suite` (every check of :mod:`aiauv_pin.consistency`) on each vehicle,
+runs :mod:`aiauv_pin.testing.suite` (every check of :mod:`aiauv_pin.checks.consistency`) on each vehicle,
 with test ids such as ``test_energy_conserved[my_aiauv]`` (the URDF's robot name, else the file
 stem). Without ``--aiauv-vehicle`` the plugin does nothing. In your own tests, request the
 ``aiauv_vehicle`` fixture (parametrised over the ``--aiauv-vehicle`` files) or call the checks
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import warnings
 
-from ..consistency import CheckResult
+from aiauv_pin.checks.consistency import CheckResult
 
 
 class ConsistencyWarning(UserWarning):

@@ -39,8 +39,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 def _robot_name(path: Path) -> str:
     """The URDF's ``<robot name>``, or the file stem if it cannot be read."""
-    from hydro.spec import HydroError
-    from hydro.urdf_block import parse_robot_text
+    from aiauv_hydro.spec import HydroError
+    from aiauv_hydro.urdf.block_reader import parse_robot_text
 
     try:
         name = parse_robot_text(path.read_text(encoding="utf-8"), str(path)).get("name", "")
@@ -104,7 +104,7 @@ def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
 @pytest.fixture(scope="session")
 def aiauv_seed(request: pytest.FixtureRequest) -> int:
     """Seed of the consistency checks' random states (``--aiauv-seed``)."""
-    from aiauv_pin.consistency import SEED
+    from aiauv_pin.checks.consistency import SEED
 
     seed = request.config.getoption("aiauv_seed")
     return SEED if seed is None else seed
@@ -114,7 +114,7 @@ def aiauv_seed(request: pytest.FixtureRequest) -> int:
 def aiauv_vehicle(aiauv_vehicle_path: Path):
     """The vehicle loaded from one ``--aiauv-vehicle`` URDF (one load per file and session)."""
     from aiauv_pin.errors import AiauvError
-    from aiauv_pin.loading import load_vehicle
+    from aiauv_pin.model.loading import load_vehicle
 
     try:
         return load_vehicle(aiauv_vehicle_path)

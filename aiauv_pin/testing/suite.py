@@ -1,4 +1,4 @@
-"""The dynamics-consistency suite: one test per check of :mod:`aiauv_pin.consistency`.
+"""The dynamics-consistency suite: one test per check of :mod:`aiauv_pin.checks.consistency`.
 
 Collected by the ``aiauv`` pytest plugin when ``--aiauv-vehicle`` is given; each test is
 parametrised over the vehicles (``test_energy_conserved[my_aiauv]``) and fails with one line giving
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from aiauv_pin import consistency as checks
+from aiauv_pin.checks import consistency as checks
 from aiauv_pin.testing import assert_check
 
 

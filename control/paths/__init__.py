@@ -38,7 +38,7 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
-from control.paths.base import (
+from aiauv_control.paths.base import (
     VERTICAL_TOLERANCE,
     Path,
     PathError,
@@ -46,10 +46,10 @@ from control.paths.base import (
     UserPath,
     Vector3,
 )
-from control.paths.helix import HelixPath, helix_point
-from control.paths.line import LinePath, line_frame, line_point
-from control.paths.waypoints import WaypointPath, waypoints_point
-from hydro.jit import compiled, user_or_builtin
+from aiauv_control.paths.helix import HelixPath, helix_point
+from aiauv_control.paths.line import LinePath, line_frame, line_point
+from aiauv_control.paths.waypoints import WaypointPath, waypoints_point
+from aiauv_hydro.numerics.jit import compiled, user_or_builtin
 
 #: Path types of scenario files: ``type`` -> class. A new path type is a new module defining its
 #: class (and compiled function), one line here and one branch in :func:`builtin_path_point`.
@@ -75,7 +75,7 @@ def builtin_path_point(kind, position, params) -> PathPoint:
 
 
 #: ``path_point_of(user, kind, position, params) -> PathPoint``: a user's path function (``user``)
-#: or the built-in path ``kind`` (``user = None``), see :func:`hydro.jit.user_or_builtin`.
+#: or the built-in path ``kind`` (``user = None``), see :func:`aiauv_hydro.numerics.jit.user_or_builtin`.
 path_point_of = user_or_builtin(builtin_path_point)
 
 __all__ = [

@@ -1,6 +1,6 @@
 """Base of the paths: the :class:`PathPoint` record, the :class:`Path` interface, input checks.
 
-See :mod:`control.paths` for the frame convention.
+See :mod:`aiauv_control.paths` for the frame convention.
 """
 
 from __future__ import annotations
@@ -127,13 +127,13 @@ class Path(abc.ABC):
 
     type_name: ClassVar[str]
     function: ClassVar[Callable]
-    #: Number of a built-in path in :func:`control.paths.builtin_path_point` (-1: a user's own).
+    #: Number of a built-in path in :func:`aiauv_control.paths.builtin_path_point` (-1: a user's own).
     kind_code: ClassVar[int] = -1
 
     @property
     def user_function(self):
         """The function to pass to compiled code: ``None`` for a built-in path (chosen by
-        :attr:`kind_code`; see :func:`hydro.jit.user_or_builtin`)."""
+        :attr:`kind_code`; see :func:`aiauv_hydro.numerics.jit.user_or_builtin`)."""
         return None if self.kind_code >= 0 else self.function
 
     params: np.ndarray

@@ -1,4 +1,4 @@
-"""Circular helix (:mod:`control.paths`): closest point by safeguarded Newton, rotating frame.
+"""Circular helix (:mod:`aiauv_control.paths`): closest point by safeguarded Newton, rotating frame.
 
 The frame is the Frenet frame turned by ``-tau s`` (rotation-minimising).
 """
@@ -12,7 +12,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from control.paths.base import (
+from aiauv_control.paths.base import (
     VERTICAL_TOLERANCE,
     Path,
     PathPoint,
@@ -22,7 +22,7 @@ from control.paths.base import (
     _unit,
     _vector,
 )
-from hydro.jit import compiled
+from aiauv_hydro.numerics.jit import compiled
 
 
 @compiled

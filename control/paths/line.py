@@ -1,4 +1,4 @@
-"""Straight line (:mod:`control.paths`): ``N2`` = world up projected onto the normal plane."""
+"""Straight line (:mod:`aiauv_control.paths`): ``N2`` = world up projected onto the normal plane."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from control.paths.base import (
+from aiauv_control.paths.base import (
     VERTICAL_TOLERANCE,
     Path,
     PathPoint,
@@ -18,7 +18,7 @@ from control.paths.base import (
     _unit,
     _vector,
 )
-from hydro.jit import compiled
+from aiauv_hydro.numerics.jit import compiled
 
 # --------------------------------------------------------------------------------------------
 # Compiled kernels

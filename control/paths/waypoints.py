@@ -1,4 +1,4 @@
-"""Waypoint path (:mod:`control.paths`): a polyline with circular-arc corner fillets."""
+"""Waypoint path (:mod:`aiauv_control.paths`): a polyline with circular-arc corner fillets."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from control.paths.base import (
+from aiauv_control.paths.base import (
     Path,
     PathError,
     PathPoint,
@@ -18,8 +18,8 @@ from control.paths.base import (
     _number,
     _vector,
 )
-from control.paths.line import line_frame
-from hydro.jit import compiled, interpreted
+from aiauv_control.paths.line import line_frame
+from aiauv_hydro.numerics.jit import compiled, interpreted
 
 LINE_PIECE, ARC_PIECE = 0.0, 1.0
 PIECE_STRIDE = 25

@@ -38,7 +38,7 @@ exclude_patterns = ["_build", "_generated"]
 
 def _write_sweep_parameters(app) -> None:
     """The table of sweep parameters, generated from the code so that it cannot drift."""
-    from aiauv_pin.sweep_spec import PARAMETERS
+    from aiauv_pin.scenario.sweep_spec import PARAMETERS
 
     lines = ["| parameter | kind | meaning |", "|---|---|---|"]
     for name, (kind, meaning) in PARAMETERS.items():
@@ -64,14 +64,14 @@ def _write_generated(app, name: str, text: str) -> None:
 
 def _write_scenario_keys(app) -> None:
     """The table of scenario-file keys, generated from the schema so that it cannot drift."""
-    from aiauv_pin.scenario_schema import markdown_table
+    from aiauv_pin.scenario.parameters import markdown_table
 
     _write_generated(app, "scenario_keys.md", markdown_table())
 
 
 def _write_vehicle_keys(app) -> None:
     """The table of vehicle-spec keys with units and ranges, generated from the schema."""
-    from aiauv_pin.vehicle_spec_schema import markdown_keys
+    from aiauv_pin.builders.vehicle_spec_schema import markdown_keys
 
     _write_generated(app, "vehicle_keys.md", markdown_keys())
 

@@ -1,0 +1,129 @@
+"""One object that carries a vehicle's records into compiled code from Python cheaply.
+
+Calling a compiled kernel from Python costs numba a type check and an unboxing of every array it
+is given; the kernels' records (:class:`~aiauv_pin.kernels.records.Model`,
+:class:`~aiauv_pin.kernels.records.Workspace`) hold some 60 arrays, which cost more than one
+evaluation itself (issue 15). A :class:`Handle` is a numba structure reference holding both
+records: it crosses the boundary as one pointer, and the entry points below unpack it in compiled
+code. The records inside share their arrays with the ones :class:`~aiauv_pin.kernels.evaluation.FastModel`
+holds (no copy).
+
+Handles are made by :func:`new_handle`, compiled and cached like every kernel (numba's own
+constructor of a structure reference would be compiled again in every process).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import types
+from numba.experimental import structref
+
+from aiauv_hydro.numerics.jit import compiled
+from aiauv_pin.kernels import articulated_body as kernels
+
+
+@structref.register
+class HandleType(types.StructRef):
+    """numba type of :class:`Handle` (fields ``model``, ``workspace``, ``still_water``, ``no_servo``)."""
+
+    def preprocess_fields(self, fields):
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+
+class Handle(structref.StructRefProxy):
+    """A vehicle's :class:`~aiauv_pin.kernels.records.Model`, its reusable workspace and its still-water
+    :class:`~aiauv_pin.kernels.records.Environment` and empty :class:`~aiauv_pin.kernels.records.Servo`
+    records, as one object."""
+
+    def __new__(cls, model, workspace, still_water, no_servo):
+        return structref.StructRefProxy.__new__(cls, model, workspace, still_water, no_servo)
+
+
+structref.define_proxy(Handle, HandleType, ["model", "workspace", "still_water", "no_servo"])
+
+
+@compiled
+def new_handle(model, workspace, still_water, no_servo):
+    """A :class:`Handle` of these records (compiled and cached)."""
+    return Handle(model, workspace, still_water, no_servo)
+
+
+#: :func:`checked_acceleration_of`'s verdicts: the state is usable, or which argument is not.
+STATE_OK, STATE_Q_NOT_FINITE, STATE_V_NOT_FINITE, STATE_TAU_NOT_FINITE = 0, 1, 2, 3
+STATE_QUATERNION_NOT_UNIT, STATE_T_NOT_FINITE = 4, 5
+
+
+@compiled
+def state_verdict(t, q, v, tau, tolerance, exact_below, q_unit):
+    """Check a state as :mod:`aiauv_pin.model.array_checks` does, in compiled code: all finite, and the base
+    quaternion ``q[3:7]`` of unit norm within ``tolerance``.
+
+    Not ``fastmath``: the norm is summed in the order :func:`aiauv_pin.model.array_checks.configuration`
+    uses, so that a normalised quaternion is bit-identical to the one it makes.
+
+    Args:
+        t: Time [s].
+        q, v, tau: Configuration (nq,), velocity and generalised force (nv,).
+        tolerance: Largest accepted ``| |quaternion| - 1 |``.
+        exact_below: Deviations up to this are left as they are.
+        q_unit: Output (nq,): ``q`` with its quaternion normalised, written only when it needed it.
+
+    Returns:
+        ``(verdict, normalised)``: a ``STATE_*`` code, and whether ``q_unit`` holds the state.
+    """
+    if not math.isfinite(t):
+        return STATE_T_NOT_FINITE, False
+    for i in range(q.shape[0]):
+        if not math.isfinite(q[i]):
+            return STATE_Q_NOT_FINITE, False
+    for i in range(v.shape[0]):
+        if not math.isfinite(v[i]):
+            return STATE_V_NOT_FINITE, False
+    for i in range(tau.shape[0]):
+        if not math.isfinite(tau[i]):
+            return STATE_TAU_NOT_FINITE, False
+    norm = math.sqrt(q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6])
+    deviation = abs(norm - 1.0)
+    if deviation > tolerance:
+        return STATE_QUATERNION_NOT_UNIT, False
+    if deviation <= exact_below:
+        return STATE_OK, False
+    for i in range(q.shape[0]):
+        q_unit[i] = q[i]
+    for i in range(3, 7):
+        q_unit[i] = q[i] / norm
+    return STATE_OK, True
+
+
+@compiled(fastmath=True)
+def checked_acceleration_of(handle, t, q, v, tau, tolerance, exact_below, out):
+    """:func:`aiauv_pin.kernels.articulated_body.acceleration_into` in still water without servo, after
+    :func:`state_verdict`; returns its verdict (``out`` is written only when it is ``STATE_OK``).
+
+    One compiled call with the arguments checked inside it: the checked ``Vehicle.acceleration``
+    from Python costs about what the unchecked one does (issue 15).
+    """
+    W = handle.workspace
+    verdict, normalised = state_verdict(t, q, v, tau, tolerance, exact_below, W.q_stage)
+    if verdict != STATE_OK:
+        return verdict
+    state = W.q_stage if normalised else q
+    kernels.acceleration_into(
+        handle.model, handle.still_water, handle.no_servo, t, state, v, tau, W, out, 0.0
+    )
+    return STATE_OK
+
+
+@compiled(fastmath=True)
+def acceleration_of(handle, env, servo, t, q, v, tau, out):
+    """:func:`aiauv_pin.kernels.articulated_body.acceleration_into` on the records of ``handle``."""
+    kernels.acceleration_into(handle.model, env, servo, t, q, v, tau, handle.workspace, out, 0.0)
+
+
+@compiled(fastmath=True)
+def step_of(handle, env, servo, t, q, v, tau, dt, method, q_out, v_out):
+    """:func:`aiauv_pin.kernels.articulated_body.step_into` on the records of ``handle``."""
+    kernels.step_into(
+        handle.model, env, servo, t, q, v, tau, dt, method, handle.workspace, q_out, v_out
+    )

@@ -1,0 +1,5 @@
+"""A vehicle: loading, validation, the :class:`~aiauv_pin.model.vehicle.Vehicle` and its derivatives.
+
+May import :mod:`aiauv_pin.kernels`, :mod:`aiauv_pin.description`, :mod:`aiauv_pin._internal`,
+:mod:`aiauv_hydro`.
+"""

@@ -1,0 +1,270 @@
+"""The one validation gate of vehicle parameters, shared by ``check``, ``simulate``, ``load_vehicle``,
+``build`` and sweeps (all of them load through :func:`aiauv_pin.load_vehicle`, which calls
+:func:`validate_parameters` and :func:`validate_mass_matrix`), so every command gives the same
+verdict on the same file.
+
+Refused (:class:`aiauv_pin.errors.PhysicalParameterError`, one line naming the parameter):
+
+* non-finite numbers anywhere (also refused earlier by the URDF and hydrodynamics readers);
+* a negative link mass, or a vehicle whose links all have zero mass;
+* a rigid inertia that is not positive semi-definite or breaks the triangle inequality
+  ``I_a + I_b >= I_c`` of its principal moments (relative tolerance :data:`TRIANGLE_TOLERANCE`):
+  no real body has it;
+* added mass, linear damping ``D_L`` or quadratic damping ``D_Q`` whose symmetric part is not
+  positive semi-definite (relative tolerance :data:`PSD_TOLERANCE`): such damping feeds energy into
+  the vehicle (the UUV Simulator reader refuses the same, :mod:`aiauv_hydro.urdf.uuv_simulator`);
+* implausible magnitudes, far outside any underwater vehicle (thresholds below, each orders of
+  magnitude beyond real vehicles): gravity above :data:`MAX_GRAVITY`, fluid density outside
+  ``[MIN_FLUID_DENSITY, MAX_FLUID_DENSITY]``, a link mass above :data:`MAX_LINK_MASS`, a principal
+  moment of inertia above :data:`MAX_INERTIA`, a volume above :data:`MAX_VOLUME`, a distance (joint
+  origin, centre of gravity or buoyancy, thruster position) above :data:`MAX_DISTANCE`, an added-mass
+  or damping entry above :data:`MAX_COEFFICIENT`, a thrust limit above :data:`MAX_THRUST`;
+* a thruster farther from its link's origin than ``THRUSTER_REACH * size + THRUSTER_MARGIN``, with
+  ``size`` the link's extent (its geometry, centre of gravity and buoyancy, and the origins of the
+  joints it carries);
+* a mass matrix ``M(q)`` that is not positive definite at the neutral configuration (some body has
+  neither mass nor added mass), or not finite.
+
+:func:`explain_divergence` names a suspect parameter when a run diverges (a damping time constant or
+a thrust that accelerates the vehicle implausibly).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from aiauv_hydro.spec import HydroSpec
+from aiauv_pin.description.urdf_validation import UrdfStructure
+from aiauv_pin.errors import PhysicalParameterError
+
+#: Largest gravitational acceleration [m/s^2] (the Sun's surface has 274; Earth 9.81).
+MAX_GRAVITY = 100.0
+#: Smallest and largest fluid density [kg/m^3] (air is 1.2; mercury 13 500).
+MIN_FLUID_DENSITY = 1e-3
+MAX_FLUID_DENSITY = 2e4
+#: Largest mass of one link [kg].
+MAX_LINK_MASS = 1e6
+#: Largest principal moment of inertia of one link [kg m^2].
+MAX_INERTIA = 1e8
+#: Largest displaced volume of one link [m^3].
+MAX_VOLUME = 1e3
+#: Largest distance of a joint origin, centre of gravity or buoyancy or thruster from its link [m].
+MAX_DISTANCE = 1e3
+#: Largest magnitude of an added-mass or damping entry [SI].
+MAX_COEFFICIENT = 1e9
+#: Largest thrust limit [N].
+MAX_THRUST = 1e7
+#: A thruster may sit at most ``THRUSTER_REACH * size + THRUSTER_MARGIN`` [m] from its link origin.
+THRUSTER_REACH = 2.0
+THRUSTER_MARGIN = 1.0
+#: Relative tolerance of the positive semi-definiteness checks (of the largest entry's magnitude).
+PSD_TOLERANCE = 1e-9
+#: Relative tolerance of the triangle inequality (of the largest principal moment).
+TRIANGLE_TOLERANCE = 1e-6
+
+
+def _refuse(where: str, message: str) -> PhysicalParameterError:
+    return PhysicalParameterError(f"{where}: {message}" if where else message)
+
+
+def _check_psd(matrix: np.ndarray, what: str, where: str) -> None:
+    peak = float(np.max(np.abs(matrix)))
+    if peak > MAX_COEFFICIENT:
+        raise _refuse(where, f"{what} has an entry of {peak:.3g}, above {MAX_COEFFICIENT:g}")
+    symmetric = 0.5 * (matrix + matrix.T)
+    smallest = float(np.min(np.linalg.eigvalsh(symmetric))) if peak > 0 else 0.0
+    if smallest < -PSD_TOLERANCE * peak:
+        raise _refuse(
+            where,
+            f"{what} is not positive semi-definite (eigenvalue {smallest:.4g} of its symmetric "
+            "part): it would feed energy into the vehicle",
+        )
+
+
+def link_sizes(structure: UrdfStructure, hydro: HydroSpec) -> dict[str, float]:
+    """Extent of each link from its origin [m]: geometry, CG, CB, origins of its child joints."""
+    sizes = dict.fromkeys(structure.links, 0.0)
+    sizes.update(structure.geometry_extents)  # read in the validation walk
+    for name, inertial in structure.inertials.items():
+        sizes[name] = max(sizes[name], float(np.linalg.norm(inertial.xyz)))
+    for joint in structure.joints:
+        sizes[joint.parent] = max(sizes[joint.parent], float(np.linalg.norm(joint.xyz)))
+    for link in hydro.links:
+        if link.link in sizes:
+            extent = float(np.linalg.norm(link.center_of_buoyancy))
+            if link.crossflow is not None:
+                extent += float(link.crossflow.length)
+            sizes[link.link] = max(sizes[link.link], extent)
+    return sizes
+
+
+def validate_parameters(structure: UrdfStructure, hydro: HydroSpec, where: str = "") -> None:
+    """Refuse non-physical or implausible parameters (see the module docstring).
+
+    Args:
+        structure: The validated URDF tree (with the links' geometry extents).
+        hydro: The hydrodynamic parameters.
+        where: Prefix of the error messages (the file).
+
+    Raises:
+        PhysicalParameterError: One line naming the parameter and the threshold.
+    """
+    if not (math.isfinite(hydro.gravity) and 0.0 <= hydro.gravity <= MAX_GRAVITY):
+        raise _refuse(where, f"gravity {hydro.gravity:.4g} m/s^2 outside [0, {MAX_GRAVITY:g}]")
+    rho = hydro.fluid_density
+    if not (math.isfinite(rho) and MIN_FLUID_DENSITY <= rho <= MAX_FLUID_DENSITY):
+        raise _refuse(
+            where,
+            f"fluid_density {rho:.4g} kg/m^3 outside [{MIN_FLUID_DENSITY:g}, {MAX_FLUID_DENSITY:g}]",
+        )
+    total_mass = 0.0
+    for name, inertial in structure.inertials.items():
+        what = f"link '{name}'"
+        mass = inertial.mass
+        if not (math.isfinite(mass) and 0.0 <= mass <= MAX_LINK_MASS):
+            raise _refuse(where, f"{what}: mass {mass:.4g} kg outside [0, {MAX_LINK_MASS:g}]")
+        total_mass += mass
+        inertia = inertial.inertia
+        if not np.all(np.isfinite(inertia)):
+            raise _refuse(where, f"{what}: inertia is not finite")
+        peak = float(np.max(np.abs(inertia)))
+        if peak > MAX_INERTIA:
+            raise _refuse(
+                where, f"{what}: moment of inertia {peak:.4g} kg m^2 above {MAX_INERTIA:g}"
+            )
+        moments = np.linalg.eigvalsh(0.5 * (inertia + inertia.T))
+        if moments[-1] > MAX_INERTIA:
+            raise _refuse(
+                where,
+                f"{what}: moment of inertia {moments[-1]:.4g} kg m^2 above {MAX_INERTIA:g}",
+            )
+        if moments[0] + moments[1] < moments[2] - TRIANGLE_TOLERANCE * moments[2]:
+            raise _refuse(
+                where,
+                f"{what}: inertia breaks the triangle inequality (principal moments "
+                f"{moments[0]:.4g}, {moments[1]:.4g}, {moments[2]:.4g} kg m^2): no real body has it",
+            )
+        if float(np.linalg.norm(inertial.xyz)) > MAX_DISTANCE:
+            raise _refuse(where, f"{what}: centre of gravity farther than {MAX_DISTANCE:g} m")
+    if total_mass <= 0.0:
+        raise _refuse(
+            where, "every link has zero mass (no mass: the mass matrix would be singular)"
+        )
+    for joint in structure.joints:
+        if float(np.linalg.norm(joint.xyz)) > MAX_DISTANCE:
+            raise _refuse(
+                where,
+                f"joint '{joint.name}': origin farther than {MAX_DISTANCE:g} m from its parent",
+            )
+    for link in hydro.links:
+        what = f"link '{link.link}'"
+        if link.volume > MAX_VOLUME:
+            raise _refuse(where, f"{what}: volume {link.volume:.4g} m^3 above {MAX_VOLUME:g}")
+        if float(np.linalg.norm(link.center_of_buoyancy)) > MAX_DISTANCE:
+            raise _refuse(where, f"{what}: centre of buoyancy farther than {MAX_DISTANCE:g} m")
+        _check_psd(link.added_mass, f"{what}: added_mass", where)
+        _check_psd(link.linear_damping, f"{what}: linear_damping", where)
+        _check_psd(link.quadratic_damping, f"{what}: quadratic_damping", where)
+        # dissipative in forward motion (u_r > 0), as UUV Simulator's coefficients are meant
+        _check_psd(link.forward_speed_damping, f"{what}: linear_damping_forward_speed", where)
+    sizes = link_sizes(structure, hydro)
+    for thruster in hydro.thrusters:
+        what = f"thruster '{thruster.name}'"
+        if thruster.max_thrust > MAX_THRUST:
+            raise _refuse(
+                where, f"{what}: max_thrust {thruster.max_thrust:.4g} N above {MAX_THRUST:g}"
+            )
+        distance = float(np.linalg.norm(thruster.position))
+        reach = THRUSTER_REACH * sizes.get(thruster.link, 0.0) + THRUSTER_MARGIN
+        if distance > reach:
+            raise _refuse(
+                where,
+                f"{what}: {distance:.4g} m from the origin of its link '{thruster.link}', farther "
+                f"than {reach:.4g} m (= {THRUSTER_REACH:g} x the link's size + {THRUSTER_MARGIN:g} m)",
+            )
+
+
+def validate_mass_matrix(vehicle, where: str = "") -> float:
+    """Refuse a vehicle whose ``M(q)`` at the neutral configuration is not finite and positive
+    definite; return its smallest eigenvalue.
+
+    Raises:
+        PhysicalParameterError: One line.
+    """
+    mass_matrix = vehicle.mass_matrix(vehicle.neutral_configuration())
+    if not np.all(np.isfinite(mass_matrix)):
+        raise _refuse(where, "mass matrix M(q) is not finite at the neutral configuration")
+    eigenvalues = np.linalg.eigvalsh(0.5 * (mass_matrix + mass_matrix.T))
+    scale = max(float(np.max(np.abs(eigenvalues))), 1e-300)
+    if eigenvalues[0] <= 1e-12 * scale:
+        raise _refuse(
+            where,
+            f"mass matrix M(q) is singular at the neutral configuration (smallest eigenvalue "
+            f"{eigenvalues[0]:.3g}): some body has neither mass nor added mass",
+        )
+    return float(eigenvalues[0])
+
+
+def divergence_suspect(vehicle, dt: float) -> str | None:
+    """The parameter most likely to make a fixed-step run diverge at step ``dt``, or ``None``.
+
+    Looks at, per link, the damping rates ``D_ii / M_ii`` (``M_ii`` the rigid inertia of the link's
+    body plus the link's added mass; quadratic damping at 1 m/s or 1 rad/s), and at the largest
+    thrust over the vehicle's mass;
+    a rate ``r`` with ``r dt > 1`` (explicit Runge-Kutta schemes lose stability near ``r dt = 2.8``)
+    or a thrust accelerating the vehicle by more than ``1000 m/s^2`` is named.
+    """
+    try:
+        total_mass = sum(float(i.mass) for i in vehicle.model.inertias[1:])
+        worst: tuple[float, str] | None = None
+        by_link = {}
+        for frame in vehicle.model.frames:
+            by_link.setdefault(frame.name, frame)
+        for link in vehicle.hydro.links:
+            frame = by_link.get(link.link)
+            inertia = (
+                vehicle.model.inertias[int(frame.parentJoint)].matrix()
+                if frame is not None
+                else None
+            )
+            diagonal = np.diag(link.added_mass).copy()
+            if inertia is not None:
+                diagonal += np.diag(inertia)
+            for label, matrix in (
+                ("linear_damping", link.linear_damping),
+                ("quadratic_damping", link.quadratic_damping),
+            ):
+                for i in range(6):
+                    if diagonal[i] <= 0.0:
+                        continue
+                    rate = float(matrix[i, i]) / float(diagonal[i])
+                    if rate * dt > 1.0 and (worst is None or rate > worst[0]):
+                        worst = (
+                            rate,
+                            f"link '{link.link}' {label}[{i}][{i}] = {matrix[i, i]:.4g} gives a "
+                            f"time constant of {1.0 / rate:.3g} s, shorter than dt = {dt:g} s",
+                        )
+        if worst is not None:
+            return worst[1]
+        if total_mass > 0 and vehicle.hydro.thrusters:
+            thrust = float(np.max(vehicle.max_thrust))
+            if thrust / total_mass > 1e3:
+                name = vehicle.hydro.thrusters[int(np.argmax(vehicle.max_thrust))].name
+                return (
+                    f"thruster '{name}' max_thrust = {thrust:.4g} N accelerates the "
+                    f"{total_mass:.4g} kg vehicle by {thrust / total_mass:.3g} m/s^2"
+                )
+    except Exception:  # a hint must never hide the divergence itself
+        return None
+    return None
+
+
+def explain_divergence(vehicle, dt: float, message: str) -> str:
+    """A divergence message naming a suspect parameter when one exists (else ``message``)."""
+    suspect = divergence_suspect(vehicle, dt)
+    if suspect is None:
+        return message
+    head = message.split("; try a smaller step")[0]
+    return f"{head}; suspect parameter: {suspect}"

@@ -1,0 +1,654 @@
+"""An articulated underwater vehicle: Pinocchio rigid-body dynamics plus per-link hydrodynamics.
+
+Equations of motion in Pinocchio's generalised coordinates (free-flyer base = the URDF root link,
+velocity ``v`` = base body twist followed by joint rates; Antonelli 2018, Ch. 6; the paper's eq. (19)):
+
+    (M_RB(q) + M_A(q)) dv + C_RB(q, v) v + sum_i J_i^T [M_A,i (J_i_dot v + [omega_i x v_c,i; 0])
+        + C_A,i(nu_r,i) nu_r,i - tau_D,i(nu_r,i)] + g(q) = tau
+
+with, for each link i, ``J_i`` its body Jacobian, ``nu_i = J_i v`` its twist in the link frame,
+``nu_r,i = nu_i - (R_i^T V_c, 0)`` its twist relative to a constant irrotational current ``V_c``
+(Fossen 2021, eq. (10.4)), ``M_A,i`` its added mass about the link origin (so
+``M_A(q) = sum_i J_i^T M_A,i J_i`` exactly, never lagged), ``C_A,i`` the added-mass Coriolis matrix
+(Fossen 2021, eq. (6.46)), ``tau_D,i`` the damping wrench and ``g(q)`` the hydrostatic restoring
+force (weight minus buoyancy; Fossen 2021, eq. (4.6)). The relative-velocity form
+``M_A nu_r_dot + C_A(nu_r) nu_r`` is Fossen 2021, eq. (10.5) (``d/dt`` of the current seen from a
+rotating link is ``-omega x v_c``, which gives the ``omega x v_c`` term above).
+
+Pinocchio's algorithms do the rigid part (``computeAllTerms``: CRBA, RNEA bias, Jacobians); the fluid
+part is evaluated batched over links with numpy. This is the reference implementation
+(``backend="pinocchio"``). With ``backend="auto"`` (default) or ``"numba"``, :meth:`Vehicle.acceleration`,
+:meth:`Vehicle.restoring_forces`, :meth:`Vehicle.thrust_matrix` and :meth:`Vehicle.frame_motion` run the
+compiled kernels of :mod:`aiauv_pin.kernels` (an articulated-body algorithm whose bodies carry the full
+6x6 rigid + added inertia), tested against this path to 1e-9; ``"auto"`` falls back to Pinocchio when
+numba is missing or the model has joints the kernels do not handle. The environment variable
+``AIAUV_BACKEND`` overrides the default for vehicles created without an explicit backend.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from aiauv_hydro.currents import Current, as_current
+from aiauv_hydro.laws.crossflow import gauss_legendre_unit
+from aiauv_hydro.laws.fluid_terms import CROSSFLOW_NODES, FluidModel, add_body_fluid_bias
+from aiauv_hydro.laws.kirchhoff import momentum_in_world
+from aiauv_hydro.numerics.spatial import motion_transform
+from aiauv_hydro.spec import HydroSpec
+from aiauv_pin.errors import ArgumentError
+from aiauv_pin.kernels.records import Model, Thrusters, rigid_bodies, unsupported_reason
+from aiauv_pin.model.array_checks import (
+    EXACT_QUATERNION_DEVIATION,
+    QUATERNION_TOLERANCE,
+    configuration,
+    finite_time,
+    float_array,
+    optional_current,
+)
+
+_LOCAL = pin.ReferenceFrame.LOCAL
+
+_BLAS_CONTROLLER = None
+
+#: Smallest ``nv`` for which the Pinocchio path limits BLAS to one thread: the limit itself costs
+#: about 0.1 ms (threadpoolctl), more than the whole gain on small matrices.
+SINGLE_THREAD_BLAS_FROM_NV = 32
+
+
+def single_threaded_blas(nv: int):
+    """Context that limits BLAS to one thread while the Pinocchio path evaluates, then restores it.
+
+    Its matrices (nv x nv, a few hundred at most) are far too small for threads to pay: on 2 cores
+    the threaded products and solve cost 3.3x more at 127 links (median of 15 interleaved rounds;
+    issue 15). threadpoolctl limits the BLAS that numpy actually loaded, only for the duration of
+    the call, so a user's own numpy work keeps its threads; an environment variable such as
+    ``OPENBLAS_NUM_THREADS`` would act only if set before numpy is imported, and on the whole
+    process. Below :data:`SINGLE_THREAD_BLAS_FROM_NV` it does nothing.
+    """
+    global _BLAS_CONTROLLER
+    if nv < SINGLE_THREAD_BLAS_FROM_NV:
+        return contextlib.nullcontext()
+    if _BLAS_CONTROLLER is None:
+        from threadpoolctl import ThreadpoolController
+
+        _BLAS_CONTROLLER = ThreadpoolController()  # inspects the loaded libraries once
+    return _BLAS_CONTROLLER.limit(limits=1, user_api="blas")
+
+
+#: Accepted values of ``Vehicle(backend=...)``.
+BACKENDS = ("auto", "numba", "pinocchio")
+
+
+@dataclass(frozen=True)
+class FluidForces:
+    """The fluid and hydrostatic terms of the equations of motion at one state.
+
+    Attributes:
+        mass_matrix: ``M_RB(q) + M_A(q)`` (nv x nv) [kg, kg m, kg m^2].
+        bias: Everything on the left-hand side that does not multiply ``dv``:
+            ``C_RB v + added-mass bias and Coriolis + g(q) - damping`` (nv,) [N, N m].
+    """
+
+    mass_matrix: np.ndarray
+    bias: np.ndarray
+
+
+class Vehicle:
+    """An underwater multibody vehicle ready for simulation.
+
+    Build it with :func:`aiauv_pin.load_vehicle`. The arrays it returns are in Pinocchio's conventions:
+    ``q`` has the base position, base orientation quaternion ``(x, y, z, w)`` and joint angles
+    (``model.nq``); ``v`` has the base twist in the base frame ``(v, omega)`` and joint rates
+    (``model.nv``).
+
+    Attributes:
+        model: The Pinocchio model (free-flyer root). Its gravity is ``(0, 0, -g)`` when restoring
+            forces are on and zero otherwise, so that with every fluid effect off
+            ``acceleration == pinocchio.aba``.
+        hydro: The hydrodynamic parameters read from the URDF.
+        name: Robot name from the URDF.
+        added_mass, damping, restoring: Which fluid effects are on.
+        backend: ``"auto"``, ``"numba"`` or ``"pinocchio"`` (see the module docstring); settable.
+    """
+
+    def __init__(
+        self,
+        model: pin.Model,
+        hydro: HydroSpec,
+        *,
+        name: str = "vehicle",
+        added_mass: bool = True,
+        damping: bool = True,
+        restoring: bool = True,
+        backend: str | None = None,
+    ) -> None:
+        self.model = model
+        self.hydro = hydro
+        self.name = name
+        self.added_mass = bool(added_mass)
+        self.damping = bool(damping)
+        self.restoring = bool(restoring)
+        self.urdf_path: Path | None = None  # set by load_vehicle; the viewer reads visuals from it
+        self.model.gravity = pin.Motion(
+            np.array([0.0, 0.0, -hydro.gravity if restoring else 0.0]), np.zeros(3)
+        )
+        self.data = model.createData()
+        self._packed: Model | None = None
+        self._setup_fluid()
+        self._setup_thrusters()
+        self._scratch = (np.zeros((model.njoints - 1, 6)), np.zeros((3, 6)))
+        self._fast = None
+        self._fast_reason: str | None = None
+        self.backend = os.environ.get("AIAUV_BACKEND", "auto") if backend is None else backend
+
+    # ------------------------------------------------------------------ set-up
+    def _link_placement(self, link: str) -> tuple[int, pin.SE3]:
+        frame_id = self.model.getFrameId(link, pin.FrameType.BODY)
+        if frame_id >= len(self.model.frames):
+            raise ValueError(f"unknown link '{link}'")
+        frame = self.model.frames[frame_id]
+        return int(frame.parentJoint), frame.placement
+
+    def _body_of(self, link: str) -> tuple[int, pin.SE3]:
+        """Index of the body (Pinocchio joint - 1) that carries ``link``, and its placement there."""
+        joint, placement = self._link_placement(link)
+        if joint < 1:
+            raise ValueError(f"link '{link}' is fixed to the world, not to the vehicle")
+        return joint - 1, placement
+
+    def _setup_fluid(self) -> None:
+        """Per-body and per-link fluid data, packed once as
+        :class:`aiauv_hydro.laws.fluid_terms.FluidModel` records."""
+        model, hydro = self.model, self.hydro
+        nb = model.njoints - 1
+        gravity = hydro.gravity if self.restoring else 0.0
+        rho = hydro.fluid_density
+        added = np.zeros((nb, 6, 6))
+        buoyancy = np.zeros((nb, 4))  # (B, B c_B) per body [N, N m]
+        probe_moment = np.zeros((nb, 3))
+        probe_volume = np.zeros(nb)
+        link_body, link_from_body = [], []
+        for link in hydro.links:
+            b, placement = self._body_of(link.link)
+            x = motion_transform(placement.rotation, placement.translation)  # nu_link = X nu_body
+            link_body.append(b)
+            link_from_body.append(x)
+            if self.added_mass:
+                added[b] += x.T @ link.added_mass @ x  # M_A moves as X^T M_A X
+            if link.volume > 0.0:
+                centre = placement.act(np.asarray(link.center_of_buoyancy, dtype=float))
+                force = rho * link.volume * gravity  # Archimedes (Fossen 2021, eq. (4.5))
+                buoyancy[b, 0] += force
+                buoyancy[b, 1:] += force * centre
+                probe_moment[b] += link.volume * centre
+                probe_volume[b] += link.volume
+        weight = np.zeros((nb, 4))  # (W, W c_G) per body
+        for b in range(nb):
+            inertia = model.inertias[b + 1]
+            weight[b, 0] = inertia.mass * gravity
+            weight[b, 1:] = inertia.mass * gravity * inertia.lever
+        probe = np.zeros((nb, 3))
+        has_volume = probe_volume > 0.0
+        probe[has_volume] = probe_moment[has_volume] / probe_volume[has_volume, None]
+        links = hydro.links if self.damping else ()
+        nl = len(links)
+        identity = np.eye(6)
+        linear = np.array([link.linear_damping for link in links]).reshape(nl, 6, 6)
+        quadratic = np.array([link.quadratic_damping for link in links]).reshape(nl, 6, 6)
+        forward = np.array([link.forward_speed_damping for link in links]).reshape(nl, 6, 6)
+        cylinder = np.tile(identity, (nl, 1, 1))
+        length = np.zeros(nl)
+        strip = np.zeros(nl)
+        has_crossflow = np.zeros(nl, dtype=np.int64)
+        for k, link in enumerate(links):
+            if link.crossflow:
+                c = link.crossflow
+                cylinder[k] = motion_transform(c.rotation, c.translation)
+                length[k], strip[k] = c.length, c.strip_coefficient
+                has_crossflow[k] = 1
+        link_from = np.array(link_from_body[:nl]).reshape(nl, 6, 6)
+        nodes, weights = gauss_legendre_unit(CROSSFLOW_NODES)
+
+        def pack(hydrostatics: np.ndarray) -> FluidModel:
+            return FluidModel(
+                added_mass=np.ascontiguousarray(added),
+                hydrostatics=np.ascontiguousarray(hydrostatics),
+                current_probe=probe,
+                link_body=np.array(link_body[:nl], dtype=np.int64),
+                link_from_body=np.ascontiguousarray(link_from),
+                link_is_body=np.array(
+                    [np.array_equal(x, identity) for x in link_from], dtype=np.int64
+                ),
+                linear_damping=np.ascontiguousarray(linear),
+                quadratic_damping=np.ascontiguousarray(quadratic),
+                quadratic_is_diagonal=np.array(
+                    [np.count_nonzero(d - np.diag(np.diag(d))) == 0 for d in quadratic],
+                    dtype=np.int64,
+                ),
+                forward_speed_damping=np.ascontiguousarray(forward),
+                has_forward_speed_damping=np.array(
+                    [np.any(d != 0.0) for d in forward], dtype=np.int64
+                ),
+                has_crossflow=has_crossflow,
+                cylinder_from_link=np.ascontiguousarray(cylinder),
+                cylinder_is_link=np.array(
+                    [np.array_equal(x, identity) for x in cylinder], dtype=np.int64
+                ),
+                cylinder_length=length,
+                strip_coefficient=strip,
+                gauss_nodes=np.ascontiguousarray(nodes),
+                gauss_weights=np.ascontiguousarray(weights),
+            )
+
+        # The kernels take weight and buoyancy through
+        # aiauv_hydro.laws.fluid_terms.hydrostatic_wrench. The Pinocchio
+        # reference computes both independently, as Pinocchio's generalised gravity of the rigid
+        # model and of a copy carrying each body's displaced mass rho V at its centre of buoyancy
+        # (Fossen 2021, eq. (4.6)), so its fluid model has no hydrostatics.
+        self._fluid_reference = pack(np.zeros((nb, 4)))
+        self._fluid_net = pack(buoyancy - weight)
+        self._setup_buoyancy_model()
+        self._has_fluid = bool(added.any() or nl)
+        # generalised inertia per Pinocchio body (rigid plus added), for the momentum
+        self._inertia_in_body = (
+            np.array([model.inertias[b + 1].matrix() for b in range(nb)]) + added
+        )
+
+    def _setup_buoyancy_model(self) -> None:
+        model = self.model
+        buoyancy_model = pin.Model(model)
+        for joint in range(model.njoints):
+            buoyancy_model.inertias[joint] = pin.Inertia.Zero()
+        rho = self.hydro.fluid_density
+        for link in self.hydro.links:
+            if link.volume == 0.0:
+                continue
+            joint, placement = self._link_placement(link.link)
+            displaced = pin.Inertia(
+                rho * link.volume, placement.act(link.center_of_buoyancy), np.zeros((3, 3))
+            )
+            buoyancy_model.inertias[joint] = buoyancy_model.inertias[joint] + displaced
+        buoyancy_model.gravity = model.gravity
+        self._buoyancy_model = buoyancy_model
+        self._buoyancy_data = buoyancy_model.createData()
+        self._has_buoyancy = any(link.volume != 0.0 for link in self.hydro.links)
+
+    def _setup_thrusters(self) -> None:
+        body, wrenches = [], []
+        for thruster in self.hydro.thrusters:
+            b, placement = self._body_of(thruster.link)
+            direction = placement.rotation @ thruster.direction
+            position = placement.act(thruster.position)
+            body.append(b)
+            wrenches.append(np.concatenate((direction, np.cross(position, direction))))
+        self._thrusters = Thrusters(
+            body=np.array(body, dtype=np.int64), unit_wrench=np.array(wrenches).reshape(-1, 6)
+        )
+
+    def fluid_model(self, include_hydrostatics: bool = True) -> FluidModel:
+        """The packed per-body and per-link fluid parameters the laws of
+        :mod:`aiauv_hydro.laws.fluid_terms` take.
+
+        Args:
+            include_hydrostatics: With the hydrostatics (buoyancy minus weight, what the compiled kernels
+                use) or without (the Pinocchio reference computes them with Pinocchio).
+        """
+        return self._fluid_net if include_hydrostatics else self._fluid_reference
+
+    def packed_model(self) -> Model:
+        """The vehicle as the flat records of :mod:`aiauv_pin.kernels.articulated_body` (a :class:`Model`).
+
+        Rigid data come from the Pinocchio model (joint placements, axes and inertias), fluid data
+        from :meth:`fluid_model`; both backends therefore describe one set of equations.
+
+        Raises:
+            ValueError: A joint the kernels do not support (see :func:`unsupported_reason`).
+        """
+        if self._packed is None:
+            reason = unsupported_reason(self.model)
+            if reason is not None:
+                raise ValueError(f"fast backend: {reason}")
+            self._packed = Model(
+                bodies=rigid_bodies(self.model, self._fluid_net.added_mass),
+                fluid=self._fluid_net,
+                thrusters=self._thrusters,
+            )
+        return self._packed
+
+    # ------------------------------------------------------------------ backend
+    @property
+    def backend(self) -> str:
+        """Requested backend: ``"auto"``, ``"numba"`` or ``"pinocchio"``."""
+        return self._backend
+
+    @backend.setter
+    def backend(self, value: str) -> None:
+        if not isinstance(value, str) or value not in BACKENDS:
+            raise ArgumentError(
+                f"unknown backend {value!r:.40} (expected one of {', '.join(BACKENDS)})"
+            )
+        self._backend = value
+        self._fast = None
+        if value != "pinocchio":
+            self._fast = self._build_fast()
+            if self._fast is None and value == "numba":
+                raise ArgumentError(f"numba backend unavailable: {self._fast_reason}")
+
+    def _build_fast(self):
+        from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE
+
+        if not NUMBA_AVAILABLE:
+            self._fast_reason = "numba is disabled (NUMBA_DISABLE_JIT)"
+            return None
+        try:
+            from aiauv_pin.kernels import load_fast_model
+
+            fast_model = load_fast_model()
+        except ImportError as exc:
+            self._fast_reason = f"numba cannot be imported ({exc.__class__.__name__})"
+            return None
+        try:
+            return fast_model(self)
+        except ValueError as exc:
+            self._fast_reason = str(exc)
+            return None
+
+    @property
+    def active_backend(self) -> str:
+        """The backend in use: ``"numba"`` or ``"pinocchio"``."""
+        return "pinocchio" if self._fast is None else "numba"
+
+    @property
+    def fallback_reason(self) -> str | None:
+        """Why ``backend="auto"`` fell back to Pinocchio (``None`` if it did not)."""
+        return self._fast_reason if self._fast is None else None
+
+    @property
+    def fast(self):
+        """The compiled model (:class:`aiauv_pin.kernels.evaluation.FastModel`) or ``None`` on Pinocchio."""
+        return self._fast
+
+    # ------------------------------------------------------------------ properties
+    @property
+    def nq(self) -> int:
+        """Size of the configuration vector."""
+        return self.model.nq
+
+    @property
+    def nv(self) -> int:
+        """Size of the velocity vector (6 + number of joints)."""
+        return self.model.nv
+
+    @property
+    def joint_names(self) -> list[str]:
+        """Names of the actuated joints, in the order of ``v[6:]``."""
+        return list(self.model.names)[2:]
+
+    @property
+    def thruster_names(self) -> list[str]:
+        """Names of the thrusters, in the order of the thrust vector."""
+        return [t.name for t in self.hydro.thrusters]
+
+    @property
+    def max_thrust(self) -> np.ndarray:
+        """Thrust limits [N], one per thruster."""
+        return np.array([t.max_thrust for t in self.hydro.thrusters])
+
+    def neutral_configuration(self) -> np.ndarray:
+        """Base at the world origin, level, joints at zero."""
+        return pin.neutral(self.model)
+
+    # ------------------------------------------------------------------ dynamics
+    def _body_states(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Rotations, origins and twists of every body after Pinocchio's forward kinematics."""
+        data = self.data
+        joints = range(1, self.model.njoints)
+        rotation = np.array([data.oMi[j].rotation for j in joints])
+        position = np.array([data.oMi[j].translation for j in joints])
+        twist = np.array([data.v[j].vector for j in joints])
+        return rotation, position, twist
+
+    def _currents_at_probes(
+        self, current: Current, t: float, rotation: np.ndarray, position: np.ndarray
+    ) -> np.ndarray:
+        """Water velocity at each body's probe point (nb, 3) [m/s], world axes."""
+        if current.is_zero:
+            return np.zeros((len(position), 3))
+        probe = position + np.einsum("nij,nj->ni", rotation, self._fluid_reference.current_probe)
+        return np.array([current.velocity(t, point) for point in probe])
+
+    def _q(self, q) -> np.ndarray:
+        return configuration(q, self.model.nq)
+
+    def _v(self, v, name: str = "v") -> np.ndarray:
+        return float_array(v, name, (self.model.nv,))
+
+    def _body_jacobians(self) -> np.ndarray:
+        """Local Jacobians of every body (nb, 6, nv), after ``computeJointJacobians``."""
+        return np.array(
+            [
+                pin.getJointJacobian(self.model, self.data, j, _LOCAL)
+                for j in range(1, self.model.njoints)
+            ]
+        )
+
+    def _added_mass_matrix(self, jac: np.ndarray) -> np.ndarray:
+        """``sum_i J_i^T M_A,i J_i``, accumulated body by body (no (nb, nv, nv) temporary)."""
+        mass = np.zeros((self.nv, self.nv))
+        for b, added in enumerate(self._fluid_reference.added_mass):
+            if added.any():
+                mass += jac[b].T @ added @ jac[b]
+        return mass
+
+    def _hydro_terms(self, q: np.ndarray, v: np.ndarray, current, t: float):
+        """Rigid + fluid mass matrix and left-hand-side bias (the Pinocchio reference path).
+
+        Pinocchio gives the rigid part (``computeAllTerms``: CRBA, RNEA bias with the weight,
+        Jacobians, bias accelerations); every fluid term comes from
+        :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`, the function the compiled kernels call.
+        """
+        model, data = self.model, self.data
+        pin.computeAllTerms(model, data, q, v)
+        mass = np.triu(data.M) + np.triu(data.M, 1).T
+        bias = data.nle.copy()
+        if not self._has_fluid:
+            if self.restoring and self._has_buoyancy:
+                bias -= pin.computeGeneralizedGravity(self._buoyancy_model, self._buoyancy_data, q)
+            return mass, bias
+        rotation, position, twist = self._body_states()
+        currents = self._currents_at_probes(as_current(current), t, rotation, position)
+        if self.restoring and self._has_buoyancy:
+            bias -= pin.computeGeneralizedGravity(self._buoyancy_model, self._buoyancy_data, q)
+        fluid_bias, scratch = self._scratch
+        fluid_bias[:] = 0.0
+        relative = np.empty_like(twist)
+        add_body_fluid_bias(
+            self._fluid_reference, rotation, twist, currents, fluid_bias, relative, scratch
+        )
+        jac = self._body_jacobians()
+        if self.added_mass:
+            # M_A times the bias acceleration J_dot v (data.a with zero dv after computeAllTerms);
+            # M_A J dv goes into the mass matrix
+            accel = np.array([data.a[j].vector for j in range(1, model.njoints)])
+            fluid_bias += np.einsum("nij,nj->ni", self._fluid_reference.added_mass, accel)
+            mass += self._added_mass_matrix(jac)
+        bias += np.einsum("nji,nj->i", jac, fluid_bias)
+        return mass, bias
+
+    def acceleration(
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        tau: np.ndarray,
+        current=None,
+        *,
+        t: float = 0.0,
+    ) -> np.ndarray:
+        """Forward dynamics ``dv`` [m/s^2, rad/s^2] in Pinocchio's convention.
+
+        Args:
+            q: Configuration (nq,).
+            v: Generalised velocity (nv,) [m/s, rad/s].
+            tau: Generalised actuator forces (nv,) [N, N m]; thrusters enter through
+                :meth:`thrust_matrix`.
+            current: Water velocity: ``None`` (still water), a constant world velocity (3,) [m/s], or
+                a :class:`aiauv_hydro.currents.Current` (sampled at each body at time ``t``).
+            t: Time [s] at which a time-varying current is sampled.
+
+        Returns:
+            ``dv`` (nv,), the time derivative of ``v``'s coordinates (Fossen's ``nu_dot`` for the base).
+        """
+        if self._fast is not None and current is None:
+            # the arguments checked in the compiled call itself (the checks below cost more than
+            # an evaluation); anything it does not take goes on to the checks, which name it
+            out = self._fast.checked_acceleration(
+                q, v, tau, t, QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION
+            )
+            if out is not None:
+                return out
+        q, v, tau = self._q(q), self._v(v), self._v(tau, "tau")
+        current = optional_current(current)
+        t = finite_time(t)
+        if self._fast is not None:
+            return self._fast.acceleration(q, v, tau, current, t=t)
+        with single_threaded_blas(self.nv):
+            mass, bias = self._hydro_terms(q, v, current, t)
+            return np.linalg.solve(mass, tau - bias)
+
+    def acceleration_derivatives(
+        self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, current=None, *, t: float = 0.0
+    ):
+        """Exact Jacobians of :meth:`acceleration` (see :mod:`aiauv_pin.model.derivatives`).
+
+        Returns:
+            An :class:`aiauv_pin.model.derivatives.AccelerationDerivatives`: ``(acceleration, da_dq,
+            da_dv, da_dtau, da_dcurrent)``, ``da_dq`` with respect to ``q (+) dq`` (tangent space, as
+            ``pinocchio.integrate``), ``da_dcurrent`` with respect to a uniform current (world axes).
+        """
+        from aiauv_pin.model.derivatives import acceleration_derivatives
+
+        return acceleration_derivatives(self, q, v, tau, current, t=t)
+
+    def fluid_forces(
+        self, q: np.ndarray, v: np.ndarray, current=None, *, t: float = 0.0
+    ) -> FluidForces:
+        """Mass matrix and bias of the equations of motion ``M dv + bias = tau``."""
+        q, v, current = self._q(q), self._v(v), optional_current(current)
+        with single_threaded_blas(self.nv):
+            mass, bias = self._hydro_terms(q, v, current, t)
+        return FluidForces(mass, bias)
+
+    def mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        """``M(q) = M_RB(q) + sum_i J_i^T M_A,i J_i`` (nv x nv), symmetric positive definite."""
+        q = self._q(q)
+        mass = pin.crba(self.model, self.data, q)
+        mass = np.triu(mass) + np.triu(mass, 1).T  # CRBA fills the upper triangle
+        if self.added_mass and self._fluid_reference.added_mass.any():
+            pin.computeJointJacobians(self.model, self.data, q)
+            with single_threaded_blas(self.nv):
+                mass += self._added_mass_matrix(self._body_jacobians())
+        return mass
+
+    def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
+        """Kinetic energy of body and fluid, ``v^T M(q) v / 2`` [J] (water at rest)."""
+        v = self._v(v)
+        return 0.5 * float(v @ self.mass_matrix(q) @ v)
+
+    def restoring_forces(self, q: np.ndarray) -> np.ndarray:
+        """Hydrostatic generalised force ``g(q)`` (weight minus buoyancy) as on the left-hand side [N, N m].
+
+        Zero when the vehicle was loaded with ``restoring=False``. The compiled backend evaluates
+        :func:`aiauv_hydro.laws.fluid_terms.hydrostatic_wrench`; the Pinocchio reference,
+        Pinocchio's generalised
+        gravity of the vehicle and of its displaced water.
+        """
+        q = self._q(q)
+        if self._fast is not None:
+            return self._fast.restoring_forces(q)
+        weight = pin.computeGeneralizedGravity(self.model, self.data, q)
+        if not self._has_buoyancy:
+            return weight
+        return weight - pin.computeGeneralizedGravity(self._buoyancy_model, self._buoyancy_data, q)
+
+    def thrust_matrix(self, q: np.ndarray) -> np.ndarray:
+        """``B(q)`` (nv x m): generalised forces of unit thrusts (the paper's eq. (20))."""
+        q = self._q(q)
+        if self._fast is not None:
+            return self._fast.thrust_matrix(q)
+        pin.computeJointJacobians(self.model, self.data, q)
+        matrix = np.zeros((self.nv, len(self.hydro.thrusters)))
+        for k, (b, wrench) in enumerate(
+            zip(self._thrusters.body, self._thrusters.unit_wrench, strict=True)
+        ):
+            jac = pin.getJointJacobian(self.model, self.data, int(b) + 1, _LOCAL)
+            matrix[:, k] = jac.T @ wrench
+        return matrix
+
+    def momentum_in_world(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Impulse of body plus fluid about the world origin, in world axes (6,).
+
+        For added mass, Kirchhoff's impulse ``M_A nu`` (Lamb 1932, Sec. 119); in an ideal fluid with no
+        external force it is conserved.
+
+        Returns:
+            ``(linear [kg m/s], angular [kg m^2/s])``.
+        """
+        q, v = self._q(q), self._v(v)
+        pin.forwardKinematics(self.model, self.data, q, v)
+        rotation, position, twist = self._body_states()
+        return momentum_in_world(self._inertia_in_body, twist, rotation, position)
+
+    # ------------------------------------------------------------------ kinematics
+    def frame_id(self, name: str) -> int:
+        """Pinocchio frame index of a link or frame, with a one-line error if unknown."""
+        if not isinstance(name, str) or not self.model.existFrame(name):
+            raise ArgumentError(f"unknown link or frame {name!r:.80}")
+        return self.model.getFrameId(name)
+
+    def frame_placement(self, q: np.ndarray, name: str) -> pin.SE3:
+        """Pose of a link or frame in the world."""
+        q = self._q(q)
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return self.data.oMf[self.frame_id(name)].copy()
+
+    def frame_motion(
+        self, q: np.ndarray, v: np.ndarray, frame_id: int
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Pose and velocity of a frame in one call.
+
+        Args:
+            q: Configuration (nq,).
+            v: Velocity (nv,) [m/s, rad/s].
+            frame_id: Pinocchio frame index (see :meth:`frame_id`).
+
+        Returns:
+            ``(rotation to world (3x3), position in world [m], twist (v, omega) in the frame's axes)``.
+        """
+        q, v = self._q(q), self._v(v)
+        if isinstance(frame_id, bool) or not isinstance(frame_id, (int, np.integer)):
+            raise ArgumentError(f"frame_id must be a frame index (int), got {frame_id!r:.40}")
+        if not 0 <= int(frame_id) < len(self.model.frames):
+            raise ArgumentError(
+                f"frame_id must be in [0, {len(self.model.frames)}), got {int(frame_id)}"
+            )
+        frame_id = int(frame_id)
+        if self._fast is not None:
+            return self._fast.frame_motion(q, v, frame_id)
+        pin.forwardKinematics(self.model, self.data, q, v)
+        pose = pin.updateFramePlacement(self.model, self.data, frame_id)
+        twist = pin.getFrameVelocity(self.model, self.data, frame_id, _LOCAL)
+        return pose.rotation.copy(), pose.translation.copy(), twist.vector.copy()
+
+    def link_placements(self, q: np.ndarray, links: list[str] | None = None) -> list[pin.SE3]:
+        """World poses of several links (default: every link with hydrodynamics)."""
+        names = [link.link for link in self.hydro.links] if links is None else links
+        ids = [self.frame_id(n) for n in names]
+        q = self._q(q)
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return [self.data.oMf[i].copy() for i in ids]

@@ -1,0 +1,1016 @@
+"""Result files of a run: ``timeseries.csv``, ``summary.json`` and ``figures/``.
+
+What they hold fits the run: path errors, named in the path's frame, only for a run that follows
+a path (:func:`aiauv_pin.scenario.definition.followed_path`), the motion of the base for one that does not
+(:func:`figures_of`, :func:`aiauv_pin.scenario.definition.summary`); ``timeseries.csv`` has a unit in every
+header cell and the whole state, written so that it reads back exactly
+(:func:`timeseries_table`, :func:`read_timeseries`, :func:`timeseries_trajectory`).
+
+The run is logged at every controller sample (every step by default) and ``summary.json``'s
+integrals (work) and settling times use every logged sample. ``timeseries.csv`` holds every
+``csv_period`` of the scenario (0.04 s by default, rounded to a whole number of logged samples;
+the last sample is always included; ``None`` writes every sample). The figures draw, per curve,
+the minimum and maximum of each of at most :data:`PLOT_BUCKETS` consecutive runs of samples (in
+time order), which at their size is indistinguishable from drawing every sample.
+
+Speed: pass :func:`preload_plotting` as ``after_first_chunk`` to
+:func:`aiauv_pin.scenario.definition.run_paper_scenario` and matplotlib (about 0.3 s of imports) is
+imported in a
+background thread while the compiled scenario loop runs (its kernels release the GIL); no backend
+is selected until figures are written (Agg). The figures are drawn by two processes on Linux.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+import sys
+import threading
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from aiauv_pin._internal.atomic import atomic_path, write_text
+from aiauv_pin._internal.text import signed
+from aiauv_pin.scenario.definition import ScenarioResult, cross_track_axes, summary
+from aiauv_pin.simulation.fixed_step import Trajectory
+
+_preload: threading.Thread | None = None
+_stop_warming = threading.Event()  # set when the figures are due: the warm-up stops early
+_math_parser = None  # one math-text parser for every figure of this process (its cache shared)
+
+#: Math text the figures write (legends, axis labels) and the log axes' tick labels: parsed while
+#: the simulation runs (:func:`_warm_math`), so that drawing them in this process only looks them
+#: up (a forked figure process parses its own, :func:`_forget_parsed_math`). A string missing here
+#: is parsed when drawn, as before.
+_MATH_TEXT = (
+    "$p_y$",
+    "$p_z$",
+    "$e_1$",
+    "$e_2$",
+    "$e_1$ (horizontal)",
+    "$e_2$ (vertical)",
+    r"$\tilde\omega$ [rad/s]",
+    "$u$",
+    "$u_d$",
+    r"$\tilde\phi$ [rad]",
+    r"$|\tilde\phi|$ [rad]",
+    r"$\tilde\omega_y$",
+    r"$\tilde\omega_z$",
+    "$q_{y,0}$",
+    "$q_{z,0}$",
+    *(f"$x^I_{axis}$" for axis in "xyz"),
+    *(rf"$x_{{ref,{axis}}}$" for axis in "xyz"),
+    *(rf"$\mathdefault{{10^{{{k}}}}}$" for k in range(0, -11, -1)),
+)
+
+
+def _import_plotting() -> None:
+    try:
+        import matplotlib.backends.backend_agg
+        import matplotlib.pyplot  # noqa: F401
+        import mpl_toolkits.mplot3d  # noqa: F401
+
+        _warm_plotting()
+    except Exception:
+        pass
+
+
+def _warm_plotting() -> None:
+    """Draw a small figure off screen with what the figures use first (log axis with math-text
+    tick labels, a legend with a math-text label, a title, a 3-D axes), so that matplotlib's lazy
+    one-time work (fonts, the math-text grammar, tick and marker set-up) is done, about 0.2 s per
+    process, before the figure processes fork. No backend is selected and nothing is written."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(2.0, 2.0), dpi=FIGURE_DPI)
+    ax = fig.add_subplot(2, 1, 1)
+    ax.set_yscale("log")
+    ax.plot([0.0, 1.0], [1e-4, 1e-1], label="$u_d$")
+    ax.legend()
+    ax.set(title="warm-up", xlabel="t [s]")
+    fig.add_subplot(2, 1, 2, projection="3d").plot([0.0, 1.0], [0.0, 1.0], [0.0, 1.0])
+    FigureCanvasAgg(fig).draw()
+    _warm_math()
+
+
+def _shared_math_parser():
+    """The math-text parser of this process's Agg figures (see :func:`_render`).
+
+    It is the one an Agg renderer makes for itself, whose output type differs between matplotlib
+    versions (``"agg"`` up to 3.10, ``"path"`` from 3.11, with 6 and 5 values per parse): a parser
+    of the other type made every figure with math text fail on Python 3.10, where matplotlib 3.11
+    is not available.
+    """
+    global _math_parser
+    if _math_parser is None:
+        from matplotlib.backends.backend_agg import RendererAgg
+
+        _math_parser = RendererAgg(1, 1, FIGURE_DPI).mathtext_parser
+    return _math_parser
+
+
+def _math_cache_clear():
+    """``cache_clear`` of matplotlib's math-text cache (``MathTextParser._parse_cached``, a private
+    ``functools.lru_cache``), or ``None`` if this matplotlib has no such cache."""
+    mathtext = sys.modules.get("matplotlib.mathtext")
+    if mathtext is None:
+        return None
+    return getattr(getattr(mathtext.MathTextParser, "_parse_cached", None), "cache_clear", None)
+
+
+def _warm_math() -> None:
+    """Parse :data:`_MATH_TEXT` as the figures' 10-point labels at :data:`FIGURE_DPI`, until the
+    figures are due (:data:`_stop_warming`). Only where a forked process can empty the cache again
+    (:func:`_forget_parsed_math`): a matplotlib without that private cache gets no warm-up, so its
+    figure processes never share parsed text."""
+    import matplotlib as mpl
+    import matplotlib.mathtext  # what _math_cache_clear looks in
+    from matplotlib.font_manager import FontProperties
+
+    if _math_cache_clear() is None:
+        return
+    parser = _shared_math_parser()
+    for size in ("xtick.labelsize", "legend.fontsize", "axes.labelsize"):
+        prop = FontProperties(size=mpl.rcParams[size])
+        for text in _MATH_TEXT:
+            if _stop_warming.is_set():
+                return
+            parser.parse(text, FIGURE_DPI, prop)
+
+
+def preload_plotting() -> None:
+    """Start importing matplotlib in a background thread, once (no backend is selected)."""
+    global _preload
+    if _preload is None and "matplotlib.pyplot" not in sys.modules:
+        _preload = threading.Thread(target=_import_plotting, name="aiauv-preload", daemon=True)
+        _preload.start()
+
+
+def _wait_for_preload() -> None:
+    if _preload is not None:
+        _stop_warming.set()
+        _preload.join()
+
+
+@dataclass(frozen=True)
+class TimeseriesColumn:
+    """One column of ``timeseries.csv``: its name, unit and values (one per logged sample)."""
+
+    name: str
+    unit: str
+    values: np.ndarray
+
+
+#: Diagnostics the controllers log, as columns: ``(info key, column names, unit)``; the paper's
+#: controller logs all of them, every run ``p``, a run that follows a path also ``cross_track``
+#: and ``path_s`` (:func:`aiauv_pin.scenario.definition.add_path_errors`).
+_INFO_COLUMNS = (
+    ("p", ("p_x", "p_y", "p_z"), "m"),
+    ("cross_track", ("e_1", "e_2"), "m"),
+    ("path_s", ("s",), "m"),
+    ("u", ("u",), "m/s"),
+    ("phi_tilde", ("phi_tilde",), "rad"),
+    ("omega_tilde", ("omega_tilde_y", "omega_tilde_z"), "rad/s"),
+    ("base_angles", ("q_y0", "q_z0"), "rad"),
+    ("x_ref", ("x_ref_x", "x_ref_y", "x_ref_z"), "-"),
+    ("pointing", ("pointing_x", "pointing_y", "pointing_z"), "-"),
+)
+#: Per-joint and per-thruster diagnostics of the paper's controller: ``(info key, column prefix)``
+#: (joint references in the joint's unit, torques [N m] or [N], thrusts [N]).
+_NAMED_COLUMNS = (
+    ("joint_references", "qref_"),
+    ("joint_torque", "tau_"),
+    ("thrust", "thrust_"),
+)
+#: The base's configuration and twist (Pinocchio's free flyer: ``q[:7]`` = position [m] and
+#: quaternion ``(x, y, z, w)``, ``v[:6]`` = linear [m/s] and angular [rad/s] velocity in the body
+#: frame) as columns: ``(name, unit)``.
+BASE_CONFIGURATION = (
+    ("base_x", "m"),
+    ("base_y", "m"),
+    ("base_z", "m"),
+    ("base_quat_x", "-"),
+    ("base_quat_y", "-"),
+    ("base_quat_z", "-"),
+    ("base_quat_w", "-"),
+)
+BASE_TWIST = (
+    ("base_u", "m/s"),
+    ("base_v", "m/s"),
+    ("base_w", "m/s"),
+    ("base_p", "rad/s"),
+    ("base_q", "rad/s"),
+    ("base_r", "rad/s"),
+)
+#: Number format of ``timeseries.csv``: 17 significant digits, which read back to the same float,
+#: so :func:`read_timeseries` returns the logged values bit for bit (Python's shortest such text,
+#: ``repr``, takes 1.6 times as long to write; it is kept for the time, ``0.04`` rather than
+#: ``0.040000000000000001``).
+CSV_FORMAT = "%.17g"
+TIME_FORMAT = "%r"
+
+
+def _rate_unit(unit: str) -> str:
+    return f"{unit}/s"
+
+
+def _effort_unit(unit: str) -> str:
+    return "N" if unit == "m" else "N m"
+
+
+def timeseries_table(result: ScenarioResult) -> list[TimeseriesColumn]:
+    """The columns of ``timeseries.csv``, in order, with their units.
+
+    Every run: time ``t`` [s], the end-effector's world position ``p_x, p_y, p_z`` [m], every joint
+    angle ``q_<joint>`` [rad] (or [m] for a prismatic joint), the base's position ``base_x, base_y,
+    base_z`` [m] and quaternion ``base_quat_x, _y, _z, _w`` [-] (Pinocchio's order), its twist in
+    the body frame ``base_u, base_v, base_w`` [m/s] and ``base_p, base_q, base_r`` [rad/s], and
+    every joint rate ``v_<joint>`` [rad/s] (or [m/s]): the whole state ``(q, v)``
+    (:func:`timeseries_trajectory` reads it back). A run that follows a path adds the cross-track
+    errors ``e_1, e_2`` [m] along the path frame's normals (named in ``summary.json``'s
+    ``cross_track_axes``) and the path parameter ``s`` [m]; the paper's controller adds its
+    diagnostics (surge ``u`` [m/s], pointing error ``phi_tilde`` [rad], ``omega_tilde_y, _z``
+    [rad/s], base angles ``q_y0, q_z0`` [rad], reference and actual pointing directions [-], joint
+    references ``qref_<joint>``, torques ``tau_<joint>`` [N m] and thrusts ``thrust_<name>`` [N]).
+    """
+    tr = result.trajectory
+    info = tr.info
+    q, v = np.asarray(tr.q), np.asarray(tr.v)
+    units = result.position_units
+    table = [TimeseriesColumn("t", "s", np.asarray(tr.t))]
+
+    def add_info(key: str, names, unit: str) -> None:
+        values = np.asarray(info[key]).reshape(len(tr.t), -1)
+        table.extend(TimeseriesColumn(name, unit, values[:, k]) for k, name in enumerate(names))
+
+    paper = "u" in info
+    for key, names, unit in _INFO_COLUMNS:
+        if key in info and (paper or key in ("p", "cross_track", "path_s")):
+            add_info(key, names, unit)
+    table.extend(
+        TimeseriesColumn(f"q_{name}", unit, q[:, 7 + k])
+        for k, (name, unit) in enumerate(zip(result.joint_names, units, strict=True))
+    )
+    if paper:
+        for key, prefix in _NAMED_COLUMNS:
+            values = np.asarray(info[key])
+            if key == "thrust":
+                owners = [(name, "N") for name in result.thruster_names]
+            else:
+                effort = key == "joint_torque"
+                owners = [
+                    (name, _effort_unit(unit) if effort else unit)
+                    for name, unit in zip(result.joint_names, units, strict=True)
+                ]
+            table.extend(
+                TimeseriesColumn(f"{prefix}{name}", unit, values[:, k])
+                for k, (name, unit) in enumerate(owners)
+            )
+    table.extend(
+        TimeseriesColumn(name, unit, q[:, k]) for k, (name, unit) in enumerate(BASE_CONFIGURATION)
+    )
+    table.extend(TimeseriesColumn(name, unit, v[:, k]) for k, (name, unit) in enumerate(BASE_TWIST))
+    table.extend(
+        TimeseriesColumn(f"v_{name}", _rate_unit(unit), v[:, 6 + k])
+        for k, (name, unit) in enumerate(zip(result.joint_names, units, strict=True))
+    )
+    seen: set[str] = set()
+    for column in table:
+        if column.name in seen:
+            raise ValueError(
+                f"timeseries.csv: two columns named '{column.name}' (rename the joint or thruster)"
+            )
+        seen.add(column.name)
+    return table
+
+
+def timeseries_columns(result: ScenarioResult) -> dict[str, np.ndarray]:
+    """Columns of ``timeseries.csv`` by name, in order (:func:`timeseries_table` without units)."""
+    return {column.name: column.values for column in timeseries_table(result)}
+
+
+def column_header(name: str, unit: str) -> str:
+    """Header cell of a column: ``"name [unit]"`` (``[-]`` for a dimensionless one)."""
+    return f"{name} [{unit}]"
+
+
+def parse_header(cell: str) -> tuple[str, str]:
+    """``(name, unit)`` of a header cell written by :func:`column_header` (unit ``""`` if none)."""
+    cell = cell.strip()
+    if cell.endswith("]") and " [" in cell:
+        name, unit = cell[:-1].rsplit(" [", 1)
+        return name, unit
+    return cell, ""
+
+
+#: Largest number of min/max buckets per plotted curve (each contributes two points).
+PLOT_BUCKETS = 2000
+
+
+def csv_rows(result: ScenarioResult) -> np.ndarray:
+    """Indices of the logged samples written to ``timeseries.csv`` (every ``csv_period``)."""
+    t = result.trajectory.t
+    n = len(t)
+    period = getattr(result.scenario, "csv_period", None)
+    if period is None or n < 2:
+        return np.arange(n)
+    stride = max(1, round(period / float(t[1] - t[0])))
+    rows = np.arange(0, n, stride)
+    if rows[-1] != n - 1:
+        rows = np.append(rows, n - 1)
+    return rows
+
+
+def format_table(header: list[str], table: np.ndarray, fmt: str | Sequence[str] = "%.9g") -> str:
+    """CSV text of a 2-D float table (same text as ``np.savetxt(..., delimiter=",")``).
+
+    ``fmt`` is a ``%`` format of one number, or one per column; ``"%r"`` writes Python's ``repr``
+    (the shortest text that reads back to the same float)."""
+    n_rows, n_columns = table.shape
+    formats = [fmt] * n_columns if isinstance(fmt, str) else list(fmt)
+    line = ",".join(formats) + "\n"
+    body = (line * n_rows) % tuple(table.ravel().tolist()) if n_rows else ""
+    return ",".join(header) + "\n" + body
+
+
+def write_timeseries(result: ScenarioResult, path: Path) -> Path:
+    """Write ``timeseries.csv``: one row per ``csv_period`` (see the module docstring), a header
+    of ``name [unit]`` cells (:func:`timeseries_table`), numbers that read back exactly
+    (:data:`CSV_FORMAT`, :data:`TIME_FORMAT`)."""
+    columns = timeseries_table(result)
+    rows = csv_rows(result)
+    table = np.column_stack([np.asarray(column.values, dtype=float)[rows] for column in columns])
+    header = [column_header(column.name, column.unit) for column in columns]
+    formats = [TIME_FORMAT if column.name == "t" else CSV_FORMAT for column in columns]
+    return write_text(path, format_table(header, table, formats))
+
+
+@dataclass(frozen=True)
+class Timeseries:
+    """A ``timeseries.csv`` read back (:func:`read_timeseries`).
+
+    Attributes:
+        columns: Values by column name (without the unit), in the file's order.
+        units: Unit of each column (``"-"``: dimensionless; ``""``: none given).
+    """
+
+    columns: dict[str, np.ndarray]
+    units: dict[str, str]
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+    @property
+    def joint_names(self) -> list[str]:
+        """Joints with both an angle ``q_<joint>`` and a rate ``v_<joint>`` column, in order."""
+        return [
+            name[2:]
+            for name in self.columns
+            if name.startswith("v_") and f"q_{name[2:]}" in self.columns
+        ]
+
+
+def read_timeseries(path: str | os.PathLike) -> Timeseries:
+    """Read a ``timeseries.csv`` written by :func:`write_timeseries`: every value exactly as logged.
+
+    Raises:
+        ValueError: Not such a file (no header, a ragged row, a cell that is not a number), one line
+            naming the file and the row.
+    """
+    import csv
+
+    with open(path, newline="", encoding="utf-8") as handle:
+        rows = list(csv.reader(handle))
+    if not rows or not rows[0]:
+        raise ValueError(f"{path}: empty, expected a header of 'name [unit]' cells")
+    header = [parse_header(cell) for cell in rows[0]]
+    values = np.empty((len(rows) - 1, len(header)))
+    for k, row in enumerate(rows[1:]):
+        if len(row) != len(header):
+            raise ValueError(f"{path}: row {k + 2} has {len(row)} cells, the header {len(header)}")
+        try:
+            values[k] = [float(cell) for cell in row]
+        except ValueError:
+            raise ValueError(f"{path}: row {k + 2} holds a cell that is not a number") from None
+    return Timeseries(
+        columns={name: values[:, j] for j, (name, _) in enumerate(header)},
+        units={name: unit for name, unit in header},
+    )
+
+
+#: Diagnostics :func:`timeseries_trajectory` puts back into ``info`` (the playback draws ``p``,
+#: ``thrust`` and ``x_ref``).
+_INFO_READ_BACK = {key: names for key, names, _ in _INFO_COLUMNS}
+
+
+def timeseries_trajectory(path: str | os.PathLike | Timeseries) -> Trajectory:
+    """The run of a ``timeseries.csv`` as a :class:`aiauv_pin.simulation.fixed_step.Trajectory`: times, the
+    configurations ``q`` (base position, quaternion ``x, y, z, w``, joint angles) and velocities
+    ``v`` (base twist in the body frame, joint rates) of its rows, exactly as logged, and the
+    diagnostics it holds (``p``, ``cross_track``, ``path_s``, the paper controller's, ``thrust``)
+    in ``info``. The generalised forces are not in the file: ``tau`` is NaN.
+
+    Raises:
+        ValueError: A file without the state columns (one line naming the first one missing).
+    """
+    series = path if isinstance(path, Timeseries) else read_timeseries(path)
+    joints = series.joint_names
+    names = (
+        ["t"]
+        + [name for name, _ in BASE_CONFIGURATION]
+        + [f"q_{joint}" for joint in joints]
+        + [name for name, _ in BASE_TWIST]
+        + [f"v_{joint}" for joint in joints]
+    )
+    for name in names:
+        if name not in series.columns:
+            where = path if not isinstance(path, Timeseries) else "timeseries"
+            raise ValueError(f"{where}: no column '{name}', so no state to rebuild the run from")
+    t = series["t"]
+    q = np.column_stack([series[name] for name in names[1 : 8 + len(joints)]])
+    v = np.column_stack([series[name] for name in names[8 + len(joints) :]])
+    info: dict[str, np.ndarray] = {}
+    for key, columns in _INFO_READ_BACK.items():
+        if all(name in series.columns for name in columns):
+            stacked = np.column_stack([series[name] for name in columns])
+            info[key] = stacked[:, 0] if len(columns) == 1 else stacked
+    for key, prefix in _NAMED_COLUMNS:
+        columns = [name for name in series.columns if name.startswith(prefix)]
+        if columns:
+            info[key] = np.column_stack([series[name] for name in columns])
+    return Trajectory(t=t, q=q, v=v, tau=np.full(v.shape, np.nan), info=info)
+
+
+def envelope(t: np.ndarray, y: np.ndarray, buckets: int = PLOT_BUCKETS):
+    """``(t, y)`` reduced to the minimum and maximum of each of ``buckets`` runs of samples.
+
+    The points keep their time order, so a line through them covers the same pixels as one
+    through every sample when a bucket is narrower than a pixel. Short series are returned as is.
+    """
+    n = len(y)
+    if n <= 2 * buckets:
+        return t, y
+    size = -(-n // buckets)
+    padded = size * buckets
+    index = np.arange(padded).reshape(buckets, size)
+    index = np.minimum(index, n - 1)
+    values = y[index]
+    low = index[np.arange(buckets), np.argmin(values, axis=1)]
+    high = index[np.arange(buckets), np.argmax(values, axis=1)]
+    keep = np.unique(np.concatenate((low, high, [0, n - 1])))
+    return t[keep], y[keep]
+
+
+def _plot(ax, t, y, *args, **kwargs):
+    """``ax.plot`` of the :func:`envelope` of ``(t, y)``."""
+    return ax.plot(*envelope(np.asarray(t), np.asarray(y)), *args, **kwargs)
+
+
+def write_summary(result: ScenarioResult, path: Path, extra: dict | None = None) -> dict:
+    """Write ``summary.json`` and return its content."""
+    content = summary(result)
+    if extra:
+        content.update(extra)
+    write_text(path, json.dumps(content, indent=2, allow_nan=False) + "\n")
+    return content
+
+
+#: Resolution of PNG figures [dots per inch].
+FIGURE_DPI = 200
+#: Figure formats: PNG (raster, :data:`FIGURE_DPI`), SVG and PDF (vector).
+FIGURE_FORMATS = ("png", "svg", "pdf")
+
+FIGURES = (
+    "fig2_cross_track.png",
+    "fig3_surge.png",
+    "fig4_phi_tilde.png",
+    "fig5_omega_tilde.png",
+    "fig6_base_angles.png",
+    "fig7_pointing.png",
+    "path_3d.png",
+)
+"""File names of the figures, in drawing order."""
+
+#: Extra ``savefig`` options per format: PNG with zlib level 1, the same pixels as the default
+#: level 6 in about half the encoding time (files about 20 % larger).
+_SAVE_OPTIONS = {"png": {"pil_kwargs": {"compress_level": 1}}}
+
+#: Figures of a run that follows a path without the paper controller's diagnostics.
+PATH_FIGURES = ("fig2_cross_track.png", "path_3d.png")
+#: Figures of a run that follows no path (a passive run): the base's displacement from its start
+#: and speed against time, and the 3-D trajectories of the base and the end-effector.
+MOTION_FIGURES = ("base_motion.png", "motion_3d.png")
+
+
+def figures_of(result: ScenarioResult) -> tuple[str, ...]:
+    """The figures drawn for ``result``: all of :data:`FIGURES` with the paper's controller's
+    diagnostics, :data:`PATH_FIGURES` for another run that follows a path, else
+    :data:`MOTION_FIGURES`."""
+    if result.followed_path is None:
+        return MOTION_FIGURES
+    if "u" in result.trajectory.info:
+        return FIGURES
+    return PATH_FIGURES
+
+
+#: Legend labels of the cross-track errors by what they measure
+#: (:func:`aiauv_pin.scenario.definition.cross_track_axes`).
+_CROSS_TRACK_LABELS = {
+    ("p_y", "p_z"): ("$p_y$", "$p_z$"),
+    ("horizontal", "vertical"): ("$e_1$ (horizontal)", "$e_2$ (vertical)"),
+    ("N1", "N2"): ("$e_1$ (along $N_1$)", "$e_2$ (along $N_2$)"),
+}
+
+
+def _error_axes(plt, title: str):
+    """A figure with an error panel above its log-scale companion (``|error|``, shared time axis)."""
+    fig, (ax, ax_log) = plt.subplots(
+        2, 1, figsize=(6, 4.6), sharex=True, gridspec_kw={"height_ratios": (3, 2)}
+    )
+    ax.set_title(title)
+    ax.axhline(0.0, color="k", lw=0.5)
+    ax_log.set_yscale("log")
+    # minor ticks (labelled over less than a decade) as plain numbers, "2e-02", not "2 x 10^-2":
+    # narrow enough to leave the axis label in the figure
+    from matplotlib.ticker import LogFormatter
+
+    ax_log.yaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(1, 0.4)))
+    ax_log.set_xlabel("t [s]")
+    ax_log.grid(True, which="major", lw=0.3)
+    return fig, ax, ax_log
+
+
+def _plot_error(ax, ax_log, t, y, **kwargs) -> None:
+    """``y`` on the linear panel and ``|y|`` on the log-scale one (zeros are not drawn there)."""
+    _plot(ax, t, y, **kwargs)
+    magnitude = np.abs(np.asarray(y, dtype=float))
+    _plot(ax_log, t, np.where(magnitude > 0.0, magnitude, np.nan), **kwargs)
+
+
+def default_path_points(result: ScenarioResult, n: int = 400) -> np.ndarray | None:
+    """The drawn path when none is given: the path the run followed over the arc length the
+    end-effector covered (its closest points' range, with a margin), (n, 3) world points [m];
+    ``None`` for a run that follows no path (a passive run)."""
+    path = result.followed_path
+    if path is None:
+        return None
+    s = result.trajectory.info["path_s"]
+    low, high = float(np.min(s)), float(np.max(s))
+    margin = 0.05 * max(high - low, 1.0)
+    return path.sample((low - margin, high + margin), n)
+
+
+def final_line(content: dict) -> str:
+    """What ``aiauv simulate`` prints of a run's final state, from its ``summary.json`` content:
+    the errors from the path it followed, in the path's frame (``p_y``, ``p_z`` on the paper's
+    x-axis; else the distance and its components named by ``cross_track_axes``, and the arc
+    length reached), or for a run that follows no path the base's position, its distance from its
+    start and its speed; the paper controller's surge and pointing error when it ran."""
+    final = content["final"]
+    axes = content.get("cross_track_axes")
+    if axes is None:
+        x, y, z = final["base_position"]
+        text = (
+            f"final base position = ({signed(x, 3)}, {signed(y, 3)}, {signed(z, 3)}) m, "
+            f"{final['base_distance']:.4f} m from its start, speed {final['base_speed']:.4f} m/s"
+        )
+    elif "p_y" in final:
+        text = f"final p_y = {signed(final['p_y'], 4)} m, p_z = {signed(final['p_z'], 4)} m"
+    else:
+        e_1, e_2 = final["cross_track"]
+        text = (
+            f"final cross-track error = {final['cross_track_error']:.4f} m "
+            f"({axes[0]} {signed(e_1, 4)} m, {axes[1]} {signed(e_2, 4)} m) "
+            f"at along-track s = {final['along_track']:.2f} m"
+        )
+    if "u" in final:
+        text += f", u = {final['u']:.4f} m/s, phi_tilde = {final['phi_tilde']:.4f} rad"
+    return text
+
+
+def live_path_points(scenario, n: int = 400) -> np.ndarray:
+    """The path to draw before a run: the scenario's path from 5 m behind the start's closest
+    point to 20 % beyond the arc length covered at the desired speed, (n, 3) world points [m]."""
+    path = scenario.path_to_follow
+    s0 = path.closest(scenario.start).s
+    speed = max(abs(float(scenario.controller_gains.u_d)), 0.1)
+    return path.sample((s0 - 5.0, s0 + 1.2 * speed * scenario.duration + 5.0), n)
+
+
+def _set_equal_axes(ax, points: np.ndarray) -> None:
+    """Equal scales on the three axes of a 3-D plot, framing ``points`` (N, 3) [m]."""
+    low, high = np.nanmin(points, axis=0), np.nanmax(points, axis=0)
+    centre = (low + high) / 2.0
+    half = max(float(np.max(high - low)) / 2.0, 1e-3) * 1.05
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.set_box_aspect((1.0, 1.0, 1.0))
+    from matplotlib.ticker import MaxNLocator
+
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):  # tick labels that do not run into each other
+        axis.set_major_locator(MaxNLocator(5))
+
+
+def _draw(
+    name: str,
+    result: ScenarioResult,
+    plt,
+    *,
+    vehicle_name: str | None = None,
+    path_points: np.ndarray | None = None,
+):
+    """The figure ``name`` of :data:`FIGURES` or :data:`MOTION_FIGURES`, titled with a name.
+
+    Args:
+        name: One of :data:`FIGURES` or :data:`MOTION_FIGURES`.
+        result: The run.
+        plt: ``matplotlib.pyplot``.
+        vehicle_name: Name in the titles (``aiauv simulate``: its output folder's; default: the
+            scenario's case).
+        path_points: World points of the path the 3-D figure draws, (N, 3) [m] (default:
+            :func:`default_path_points`).
+    """
+    tr = result.trajectory
+    info, t = tr.info, tr.t
+    case = vehicle_name if vehicle_name else result.scenario.case
+    if name == "fig2_cross_track.png":
+        fig, ax, ax_log = _error_axes(plt, f"Cross-track errors ({case})")
+        # on the paper's x-axis the path normals are y and z: e_1 = p_y, e_2 = p_z
+        s = info["path_s"]
+        axes = cross_track_axes(result.scenario, (float(np.min(s)), float(np.max(s))))
+        labels = _CROSS_TRACK_LABELS[axes]
+        _plot_error(ax, ax_log, t, info["cross_track"][:, 0], label=labels[0])
+        _plot_error(ax, ax_log, t, info["cross_track"][:, 1], label=labels[1])
+        ax.set_ylabel("cross-track error [m]")
+        ax_log.set_ylabel("|error| [m]")
+        ax.legend()
+    elif name == "fig3_surge.png":
+        fig, ax = plt.subplots(figsize=(6, 3.2))
+        _plot(ax, t, info["u"], label="$u$")
+        u_d = result.scenario.controller_gains.u_d
+        ax.axhline(u_d, color="k", ls="--", lw=0.8, label="$u_d$")
+        ax.set(xlabel="t [s]", ylabel="surge velocity [m/s]", title=f"Surge velocity ({case})")
+        ax.legend()
+    elif name == "fig4_phi_tilde.png":
+        fig, ax, ax_log = _error_axes(plt, f"Pointing error ({case})")
+        _plot_error(ax, ax_log, t, info["phi_tilde"])
+        ax.set_ylabel(r"$\tilde\phi$ [rad]")
+        ax_log.set_ylabel(r"$|\tilde\phi|$ [rad]")
+    elif name == "fig5_omega_tilde.png":
+        fig, ax, ax_log = _error_axes(plt, f"Angular velocity error ({case})")
+        _plot_error(ax, ax_log, t, info["omega_tilde"][:, 0], label=r"$\tilde\omega_y$")
+        _plot_error(ax, ax_log, t, info["omega_tilde"][:, 1], label=r"$\tilde\omega_z$")
+        ax.set_ylabel(r"$\tilde\omega$ [rad/s]")
+        ax_log.set_ylabel("|error| [rad/s]")
+        ax.legend()
+    elif name == "fig6_base_angles.png":
+        fig, ax = plt.subplots(figsize=(6, 3.2))
+        _plot(ax, t, info["base_angles"][:, 0], label="$q_{y,0}$")
+        _plot(ax, t, info["base_angles"][:, 1], label="$q_{z,0}$")
+        ax.set(xlabel="t [s]", ylabel="base angle [rad]", title=f"Base angles ({case})")
+        ax.legend()
+    elif name == "fig7_pointing.png":
+        fig, axes = plt.subplots(3, 1, figsize=(6, 5), sharex=True)
+        for k, axis in enumerate("xyz"):
+            _plot(axes[k], t, info["pointing"][:, k], label=f"$x^I_{axis}$")
+            _plot(axes[k], t, info["x_ref"][:, k], ls="--", label=rf"$x_{{ref,{axis}}}$")
+            axes[k].legend(loc="right")
+            axes[k].set_ylabel(f"{axis} [-]")
+        axes[-1].set_xlabel("t [s]")
+        axes[0].set_title(f"End-effector and reference pointing direction ({case})")
+    elif name == "path_3d.png":
+        fig = plt.figure(figsize=(6, 4.5))
+        ax = fig.add_subplot(projection="3d")
+        p = info["p"]
+        stride = max(1, len(p) // (2 * PLOT_BUCKETS))  # a smooth space curve: every stride-th point
+        path = np.concatenate((p[::stride], p[-1:]))
+        ax.plot(path[:, 0], path[:, 1], path[:, 2], label="end-effector")
+        drawn = default_path_points(result) if path_points is None else path_points
+        drawn = np.asarray(drawn, dtype=float)
+        if drawn.ndim != 2 or drawn.shape[1] != 3:
+            raise ValueError(f"path_points must be an (N, 3) array, got shape {drawn.shape}")
+        ax.plot(drawn[:, 0], drawn[:, 1], drawn[:, 2], "k--", lw=0.8, label="path")
+        ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"Path ({case})")
+        _set_equal_axes(ax, np.concatenate((path, drawn)))
+        ax.legend()
+    elif name == "base_motion.png":
+        fig, (ax, ax_speed) = plt.subplots(2, 1, figsize=(6, 4.6), sharex=True)
+        q, v = np.asarray(tr.q), np.asarray(tr.v)
+        for k, axis in enumerate("xyz"):
+            _plot(ax, t, q[:, k] - q[0, k], label=f"${axis}$")
+        ax.set(ylabel="displacement [m]", title=f"Base motion from its start ({case})")
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.legend()
+        # the body-frame linear velocity's length is the world speed of the base origin
+        _plot(ax_speed, t, np.linalg.norm(v[:, :3], axis=1))
+        ax_speed.set(xlabel="t [s]", ylabel="speed [m/s]")
+    elif name == "motion_3d.png":
+        fig = plt.figure(figsize=(6, 4.5))
+        ax = fig.add_subplot(projection="3d")
+        drawn = []
+        for label, points in (("base", np.asarray(tr.q)[:, :3]), ("end-effector", info["p"])):
+            stride = max(1, len(points) // (2 * PLOT_BUCKETS))
+            points = np.concatenate((points[::stride], points[-1:]))
+            (line,) = ax.plot(points[:, 0], points[:, 1], points[:, 2], label=label)
+            ax.scatter(*points[0], marker="o", s=12, color=line.get_color())  # the start
+            drawn.append(points)
+        ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"Trajectory ({case})")
+        _set_equal_axes(ax, np.concatenate(drawn))
+        ax.legend()
+    else:
+        raise ValueError(f"unknown figure {name!r}")
+    return fig
+
+
+def figure_path(folder: Path, name: str, figure_format: str = "png") -> Path:
+    """File of figure ``name`` (of :data:`FIGURES`) in ``figure_format``."""
+    return Path(folder) / Path(name).with_suffix(f".{figure_format}")
+
+
+#: Fixed margins (fractions of the figure) of each kind of figure: they fit the labels
+#: :func:`_draw` writes, and cost nothing, where ``tight_layout`` drew every text once more to
+#: measure it (about 40 % of the drawing time).
+_MARGINS = {
+    "error": {"left": 0.13, "right": 0.97, "bottom": 0.1, "top": 0.93, "hspace": 0.08},
+    "single": {"left": 0.12, "right": 0.97, "bottom": 0.15, "top": 0.9},
+    "three": {"left": 0.13, "right": 0.97, "bottom": 0.09, "top": 0.94, "hspace": 0.1},
+    "3d": {"left": 0.02, "right": 0.92, "bottom": 0.06, "top": 0.93},
+}
+_LAYOUT_OF = {
+    "base_motion.png": "error",
+    "motion_3d.png": "3d",
+    "fig2_cross_track.png": "error",
+    "fig4_phi_tilde.png": "error",
+    "fig5_omega_tilde.png": "error",
+    "fig7_pointing.png": "three",
+    "path_3d.png": "3d",
+}
+
+
+def _render(
+    result: ScenarioResult, folder: Path, names, figure_format: str = "png", **drawing
+) -> list[Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    written = []
+    for name in names:
+        fig = _draw(name, result, plt, **drawing)
+        fig.subplots_adjust(**_MARGINS[_LAYOUT_OF.get(name, "single")])
+        if figure_format == "png":  # the renderer savefig reuses, with the shared parser
+            fig.set_dpi(FIGURE_DPI)
+            fig.canvas.get_renderer().mathtext_parser = _shared_math_parser()
+        path = figure_path(folder, name, figure_format)
+        with atomic_path(path) as temporary:
+            fig.savefig(
+                temporary,
+                dpi=FIGURE_DPI,
+                format=figure_format,
+                **_SAVE_OPTIONS.get(figure_format, {}),
+            )
+        plt.close(fig)
+        written.append(path)
+    return written
+
+
+def _fork_context():
+    """A ``fork`` multiprocessing context on Linux (cheap: the child shares the result), else None."""
+    import multiprocessing
+    import sys
+
+    if sys.platform != "linux" or "fork" not in multiprocessing.get_all_start_methods():
+        return None
+    return multiprocessing.get_context("fork")
+
+
+def _die_with_parent(parent: int) -> None:
+    """Initializer of the figure worker: it is killed (SIGKILL) when the process that forked it
+    dies, however it dies (:func:`aiauv_pin._internal.parent_death.die_with_parent`)."""
+    import signal
+
+    from aiauv_pin._internal.parent_death import die_with_parent
+
+    die_with_parent(parent, signal.SIGKILL)
+
+
+#: The figures from the slowest to draw to the fastest (measured, 2026-11), the order in which
+#: :func:`_run_tasks` hands them out.
+_SLOWEST_FIRST = (
+    "fig7_pointing.png",
+    "fig2_cross_track.png",
+    "fig4_phi_tilde.png",
+    "fig5_omega_tilde.png",
+    "path_3d.png",
+    "fig3_surge.png",
+    "fig6_base_angles.png",
+    "motion_3d.png",
+    "base_motion.png",
+)
+
+
+def _take_tasks(tasks, taken) -> None:
+    """Run the tasks no process has taken yet, one at a time (``taken``: shared next index)."""
+    while True:
+        with taken.get_lock():
+            index = taken.value
+            taken.value += 1
+        if index >= len(tasks):
+            return
+        tasks[index]()
+
+
+def _forget_parsed_math() -> None:
+    """Empty the math-text cache in a forked process: its entries hold the parent's fonts, whose
+    font files the two processes would read through one shared file offset (matplotlib itself
+    empties its font cache on fork for the same reason)."""
+    global _math_parser
+    _math_parser = None
+    clear = _math_cache_clear()
+    if clear is not None:  # without it, _warm_math parsed nothing to share
+        clear()
+
+
+def _task_worker(tasks, taken, sender, parent: int) -> None:
+    """The forked process of :func:`_run_tasks`: take tasks, then send ``None`` or the exception."""
+    _die_with_parent(parent)
+    _forget_parsed_math()
+    failure = None
+    try:
+        _take_tasks(tasks, taken)
+    except BaseException as exc:  # reported to the parent, which raises it
+        failure = exc
+    try:
+        sender.send(failure)
+    except Exception:  # an exception that does not pickle
+        sender.send(RuntimeError(f"{failure.__class__.__name__}: {failure}"))
+
+
+def _run_tasks(tasks, parallel: bool = True, here_first=None):
+    """Run zero-argument ``tasks`` (slowest first) in this process and one forked process.
+
+    Each process takes the next task nobody has taken, so both finish about together whatever
+    each task costs. The forked process (Linux, more than one CPU, ``parallel``) shares the run
+    without copying it, and is killed if this one dies (:func:`_die_with_parent`). Otherwise the
+    tasks run here, in order.
+
+    Args:
+        tasks: What to run; only side effects (files) count.
+        parallel: Use a second process where possible.
+        here_first: Run in this process before it takes tasks (while the other process starts on
+            them); its value is returned.
+
+    Raises:
+        The exception of a failed task: at once (the forked process is stopped) if it failed
+        here; once this process has run the tasks left, if it failed in the forked process.
+    """
+    import os
+
+    context = _fork_context() if parallel and (os.cpu_count() or 1) > 1 else None
+    if context is None or len(tasks) < 2:
+        value = here_first() if here_first is not None else None
+        for task in tasks:
+            task()
+        return value
+    taken = context.Value("i", 0)
+    receiver, sender = context.Pipe(duplex=False)
+    worker = context.Process(
+        target=_task_worker, args=(tasks, taken, sender, os.getpid()), name="aiauv-figures"
+    )
+    worker.start()
+    sender.close()
+    try:
+        value = here_first() if here_first is not None else None
+        _take_tasks(tasks, taken)
+    except BaseException:
+        worker.kill()
+        worker.join()
+        raise
+    try:
+        failure = receiver.recv()
+    except EOFError:  # died without a word (killed)
+        worker.join()
+        failure = RuntimeError(f"the figure process died (exit status {worker.exitcode})")
+    worker.join()
+    receiver.close()
+    if failure is not None:
+        raise failure
+    return value
+
+
+def _prepare_figures(figure_format: str) -> None:
+    """Check the format and import matplotlib (Agg) here, before a figure process forks."""
+    if figure_format not in FIGURE_FORMATS:
+        raise ValueError(
+            f"unknown figure format '{figure_format}' (expected {', '.join(FIGURE_FORMATS)})"
+        )
+    _wait_for_preload()  # no import may be in progress in another thread when forking
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot
+    import mpl_toolkits.mplot3d  # noqa: F401
+
+
+def _figure_tasks(result: ScenarioResult, folder: Path, figure_format: str, drawing: dict):
+    """One task per figure of ``result``, slowest first."""
+    names = figures_of(result)
+    ordered = [name for name in _SLOWEST_FIRST if name in names]
+    ordered += [name for name in names if name not in ordered]
+    return [
+        functools.partial(_render, result, folder, (name,), figure_format, **drawing)
+        for name in ordered
+    ]
+
+
+def write_figures(
+    result: ScenarioResult,
+    folder: Path,
+    *,
+    parallel: bool = True,
+    figure_format: str = "png",
+    vehicle_name: str | None = None,
+    path_points: np.ndarray | None = None,
+) -> list[Path]:
+    """The figures of ``result`` (:func:`figures_of`): the paper's Figs. 2-7 and the 3-D path
+    (:data:`FIGURES`) with its controller, the cross-track errors and the 3-D path for another run
+    that follows a path, the base's motion and the 3-D trajectories for a run that follows none.
+    Every axis is labelled with its unit.
+
+    Error figures (cross-track, ``phi_tilde``, ``omega_tilde``) have a log-scale panel of the
+    error's magnitude under the linear one, so that final errors of 1e-5 are visible; the 3-D path
+    has equal axes. With ``parallel`` (on Linux, with more than one CPU) a forked process draws
+    some of them while this one draws the others (:func:`_run_tasks`); that process is killed if
+    this one dies (:func:`_die_with_parent`).
+
+    Args:
+        result: The run.
+        folder: Where to write.
+        parallel: Draw in two processes where possible.
+        figure_format: ``"png"`` (:data:`FIGURE_DPI` dpi), ``"svg"`` or ``"pdf"``.
+        vehicle_name: Name in the titles (default: the scenario's case).
+        path_points: The path drawn in the 3-D figure, world points (N, 3) [m] (default:
+            :func:`default_path_points`).
+
+    Returns:
+        The files written, in the order of :func:`figures_of`.
+    """
+    _prepare_figures(figure_format)
+    folder = Path(folder)
+    drawing = {"vehicle_name": vehicle_name, "path_points": path_points}
+    _run_tasks(_figure_tasks(result, folder, figure_format, drawing), parallel)
+    return [figure_path(folder, name, figure_format) for name in figures_of(result)]
+
+
+def write_results(
+    result: ScenarioResult,
+    out_dir: Path,
+    extra: dict | None = None,
+    *,
+    figure_format: str = "png",
+    vehicle_name: str | None = None,
+    path_points: np.ndarray | None = None,
+    also: Sequence[Callable[[], object]] = (),
+    parallel: bool = True,
+) -> dict:
+    """Write every result file of a run into ``out_dir``; return the summary.
+
+    The files are written by two processes where possible (see :func:`_run_tasks`), ``also``
+    first (the slowest, e.g. the playback page), then the figures and ``timeseries.csv``;
+    ``summary.json`` is written here meanwhile.
+
+    Args:
+        result: The run.
+        out_dir: The output folder.
+        extra: Entries added to ``summary.json``.
+        figure_format: See :func:`write_figures`.
+        vehicle_name: Name in the figure titles (default: the stem of ``extra["vehicle"]``, else
+            the scenario's case).
+        path_points: See :func:`write_figures`.
+        also: More tasks that write files (zero-argument callables), run beside the figures,
+            in this process or in the forked one (so only their files count).
+        parallel: See :func:`write_figures`.
+    """
+    _prepare_figures(figure_format)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if vehicle_name is None and extra and extra.get("vehicle"):
+        vehicle_name = Path(str(extra["vehicle"])).stem
+    drawing = {"vehicle_name": vehicle_name, "path_points": path_points}
+    tasks = [
+        *also,
+        *_figure_tasks(result, out_dir / "figures", figure_format, drawing),
+        functools.partial(write_timeseries, result, out_dir / "timeseries.csv"),
+    ]
+    return _run_tasks(
+        tasks,
+        parallel,
+        here_first=functools.partial(write_summary, result, out_dir / "summary.json", extra),
+    )

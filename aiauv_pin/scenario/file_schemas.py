@@ -1,0 +1,285 @@
+"""The schema of scenario files (pydantic v2, strict) and the ``aiauv schema`` command.
+
+Every key of a scenario file (:class:`ScenarioFile`) is declared once here with its type, its
+plausible range, its unit in brackets and its meaning (the machinery:
+:mod:`aiauv_pin._internal.schema_validation`). The ranges are plausibility bounds: a value beyond them would
+make a run diverge or overflow (a current of 1e6 m/s, a tidal period of 1e-300 s, ``k_d =
+1e308``), not a physical limit of the method.
+
+Sweep specs (:mod:`aiauv_pin.scenario.sweep_spec`) name the keys of :class:`ScenarioFile`; their schema is
+generated from it (:func:`aiauv_pin.scenario.sweep_spec.sweep_file_model`). Vehicle specs have theirs in
+:mod:`aiauv_pin.builders.vehicle_spec_schema`. The models only check; the reader
+(:func:`aiauv_pin.scenario.toml_file.scenario_from_mapping`) builds the data classes the rest of the
+code uses.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Annotated, Literal, Union
+
+from pydantic import BaseModel, Discriminator, Field, Tag
+
+from aiauv_control.path_following import CURRENT_COMPENSATION_OPTIONS, PathFollowingGains
+from aiauv_control.reduced_attitude import FEEDFORWARD_OPTIONS
+from aiauv_pin._internal.schema_validation import Direction, key, number, strict_config, vector
+from aiauv_pin.dynamics.lagged_added_mass import ADDED_MASS_SCHEMES
+from aiauv_pin.scenario.definition import CASES, CONTROLLERS
+
+#: Integrators of :func:`aiauv_pin.simulate`.
+METHODS = ("rk4", "euler", "midpoint")
+
+# Plausibility ranges (documented in docs/source/scenario.md through SCHEMA's table)
+
+#: Largest distance from the origin of a position [m].
+MAX_POSITION = 1.0e5
+#: Largest water or vehicle speed [m/s] (ten times a strong tidal current).
+MAX_SPEED = 10.0
+#: Largest simulated duration [s] (about 28 hours).
+MAX_DURATION = 1.0e5
+
+Position = vector(-MAX_POSITION, MAX_POSITION)
+Speed3 = vector(-MAX_SPEED, MAX_SPEED)
+Distance = number(-MAX_POSITION, MAX_POSITION)
+Size = number(1.0e-3, MAX_POSITION)
+Angle = number(-1.0e3, 1.0e3)
+ZERO = [0.0, 0.0, 0.0]
+
+
+class StartTable(BaseModel):
+    """``[start]``: where and how the vehicle starts (straight, at rest but for ``surge``)."""
+
+    model_config = strict_config("start")
+    position: key(
+        Position, "m", "end-effector start, world axes; the vehicle straight (default 0, 2, 2)"
+    )
+    heading: key(
+        Direction, "-", "direction the vehicle points at the start (default: the path's tangent)"
+    )
+    surge: key(number(-MAX_SPEED, MAX_SPEED), "m/s", "initial forward speed")
+
+
+def _path_type(name: str, default=...):
+    return key(Literal[name], "-", "path type", default)
+
+
+class LineTable(BaseModel):
+    """``[path] type = "line"``: :class:`aiauv_control.paths.LinePath`."""
+
+    model_config = strict_config("line")
+    type: _path_type("line", "line")
+    point: key(Position, "m", "a point of the line (s = 0 there)", ...)
+    direction: key(Direction, "-", "direction of the line (normalised; nonzero)", ...)
+
+
+class HelixTable(BaseModel):
+    """``[path] type = "helix"``: :class:`aiauv_control.paths.HelixPath`."""
+
+    model_config = strict_config("helix")
+    type: _path_type("helix")
+    centre: key(Position, "m", "a point of the helix axis", ...)
+    axis: key(Direction, "-", "helix axis (normalised; pitch > 0 turns right-handed about it)", ...)
+    radius: key(Size, "m", "helix radius", ...)
+    pitch: key(Distance, "m/turn", "advance along the axis per turn (0: a circle)", ...)
+    start_angle: key(Angle, "rad", "angle of the point s = 0 about the axis", 0.0)
+
+
+class WaypointsTable(BaseModel):
+    """``[path] type = "waypoints"``: :class:`aiauv_control.paths.WaypointPath`."""
+
+    model_config = strict_config("waypoints")
+    type: _path_type("waypoints")
+    points: key(
+        Annotated[list[Position], Field(min_length=2, max_length=10_000)],
+        "m",
+        "waypoints [[x, y, z], ...], 2 to 10000",
+        ...,
+    )
+    corner_radius: key(Size, "m", "radius of the arcs rounding the corners", 1.0)
+
+
+def _tagged_union(tables: dict[str, type[BaseModel]], default: str | None):
+    """The tables as one type, the member chosen by the ``type`` key (``default`` when absent)."""
+
+    def tag(value) -> str | None:
+        if not isinstance(value, Mapping):
+            return None
+        found = value.get("type", default)
+        return found if isinstance(found, str) else None
+
+    members = tuple(Annotated[model, Tag(name)] for name, model in tables.items())
+    return Annotated[Union[members], Discriminator(tag)]  # noqa: UP007
+
+
+#: The path tables by ``type`` (the same keys as the classes of :data:`aiauv_control.paths.PATH_TYPES`).
+PATH_TABLES: dict[str, type[BaseModel]] = {
+    "line": LineTable,
+    "helix": HelixTable,
+    "waypoints": WaypointsTable,
+}
+
+
+def _current_type(name: str, default=...):
+    return key(Literal[name], "-", "current type", default)
+
+
+class ConstantCurrentTable(BaseModel):
+    """``[current] type = "constant"`` (the default): uniform and steady."""
+
+    model_config = strict_config("constant")
+    type: _current_type("constant", "constant")
+    velocity: key(Speed3, "m/s", "water velocity, world axes", ZERO)
+
+
+class TidalCurrentTable(BaseModel):
+    """``[current] type = "tidal"``: ``V(t) = V_0 + A sin(2 pi t / T + phi)``."""
+
+    model_config = strict_config("tidal")
+    type: _current_type("tidal")
+    velocity: key(Speed3, "m/s", "mean water velocity V_0, world axes", ZERO)
+    amplitude: key(Speed3, "m/s", "amplitude A of the oscillation, world axes", ...)
+    period: key(number(1.0, 1.0e7), "s", "period T of the oscillation (a tide: hours)", ...)
+    phase: key(Angle, "rad", "phase phi", 0.0)
+
+
+class ShearCurrentTable(BaseModel):
+    """``[current] type = "shear"``: ``V(z) = V_0 + G (z - z_0)``."""
+
+    model_config = strict_config("shear")
+    type: _current_type("shear")
+    velocity: key(Speed3, "m/s", "water velocity V_0 at z_0, world axes", ZERO)
+    gradient: key(vector(-1.0, 1.0), "1/s", "shear G, world axes", ...)
+    reference_z: key(number(-1.0e4, 1.0e4), "m", "depth z_0 where the current is V_0", 0.0)
+
+
+#: The current tables by ``type`` (the keys of :data:`aiauv_hydro.currents.CURRENT_KEYS`).
+CURRENT_TABLES: dict[str, type[BaseModel]] = {
+    "constant": ConstantCurrentTable,
+    "tidal": TidalCurrentTable,
+    "shear": ShearCurrentTable,
+}
+
+_GAINS = PathFollowingGains()
+
+
+def gain(high: float, unit: str, meaning: str, *, zero: bool = False):
+    """An optional gain in ``(0, high]`` (``[0, high]`` if ``zero``)."""
+    return key(number(0.0, high, low_open=not zero), unit, meaning)
+
+
+CrossTrackGain = number(0.0, 100.0, low_open=True)
+
+
+class ControllerTable(BaseModel):
+    """``[controller]``: the controller and the gains of
+    :class:`aiauv_control.path_following.PathFollowingGains` (gains not given: the paper's for the case).
+    """
+
+    model_config = strict_config("controller")
+    type: key(
+        Literal[CONTROLLERS],
+        "-",
+        "paper (path following), none (passive: thrusters and joints idle) or thruster_turning",
+        "paper",
+    )
+    u_d: gain(MAX_SPEED, "m/s", f"desired surge speed (eq. 21, 25); default {_GAINS.u_d:g}")
+    k_e: key(
+        CrossTrackGain | Annotated[list[CrossTrackGain], Field(min_length=2, max_length=2)],
+        "1/s",
+        "cross-track gain (eq. 21), a number or [k_y, k_z]; default u_d / 10",
+    )
+    alpha: gain(100.0, "-", f"joint-reference shape parameter (eq. 22); default {_GAINS.alpha:g}")
+    k_p: gain(1.0e3, "-", f"pointing-error gain (eq. 23); default {_GAINS.k_p:g}")
+    k_d: gain(1.0e4, "s", "angular-velocity-error gain (eq. 23); default 19 or 12 by case")
+    k_qp: gain(1.0e6, "N m/rad", f"joint proportional gain (eq. 24); default {_GAINS.k_qp:g}")
+    k_qd: gain(
+        1.0e6, "N m s/rad", f"joint derivative gain (eq. 24); default {_GAINS.k_qd:g}", zero=True
+    )
+    k_1p: gain(
+        1.0e6, "N s/m", f"surge proportional gain (eq. 25); default {_GAINS.k_1p:g}", zero=True
+    )
+    k_1i: gain(1.0e6, "N/m", f"surge integral gain (eq. 25); default {_GAINS.k_1i:g}", zero=True)
+    q_max: gain(
+        math.pi, "rad", f"saturation of the base angles (eq. 22); default {_GAINS.q_max:.4g}"
+    )
+    feedforward: key(
+        Literal[FEEDFORWARD_OPTIONS], "-", "feedforward of eq. (23): exact or as printed"
+    )
+    turn_feedforward: key(
+        bool,
+        "-",
+        "beyond the paper: feed the reference turn rate (path curvature) forward through the "
+        "identified turn dynamics",
+    )
+    turn_curvature_gain: gain(
+        1.0e3, "1/(m rad)", "turn model: steady path curvature per radian of base angle"
+    )
+    turn_time_constant: gain(1.0e4, "s", "turn model: time constant of the turn rate", zero=True)
+    current_compensation: key(
+        Literal[CURRENT_COMPENSATION_OPTIONS],
+        "-",
+        "none (the paper's LOS) or integral_los (integral LOS against currents)",
+    )
+    los_integral_gain: gain(1.0e3, "-", "integral gain sigma of the integral LOS")
+    hydrostatic_compensation: key(
+        bool, "-", "beyond the paper: base angles balance the vehicle's restoring moment"
+    )
+    turn_moment_gain: gain(
+        1.0e6, "N m/rad", "effective hydrodynamic moment per radian of base angle"
+    )
+
+
+class OutputTable(BaseModel):
+    """``[output]``: what a run writes."""
+
+    model_config = strict_config("output")
+    csv_period: key(
+        number(1.0e-6, MAX_DURATION), "s", "time between rows of timeseries.csv (<= duration)"
+    )
+
+
+class ScenarioFile(BaseModel):
+    """A scenario file (every key optional; a key not given keeps the paper scenario's value)."""
+
+    model_config = strict_config("scenario")
+    case: key(Literal[CASES], "-", "paper case: the bundled vehicle and its k_d (default uniform)")
+    vehicle: key(
+        Annotated[str, Field(min_length=1, max_length=4096)],
+        "-",
+        "URDF or xacro of the vehicle, relative to the file naming it",
+    )
+    duration: key(number(0.0, MAX_DURATION, low_open=True), "s", "simulated time (default 300)")
+    # a step of more than 10 s says nothing about the vehicle (it may still diverge, which a run
+    # reports); the lower bound keeps duration / dt countable
+    dt: key(number(1.0e-6, 10.0), "s", "integration step (<= duration; default 0.004)")
+    method: key(Literal[METHODS], "-", "integrator (default euler)")
+    control_period: key(
+        number(1.0e-6, 100.0),
+        "s",
+        "sampling period of the guidance, base-angle and surge loops, a whole multiple of dt "
+        "(default: every step)",
+    )
+    continuous_joints: key(
+        bool, "-", "joint PD (eq. 24) as a continuous servo (true) or sampled with the controller"
+    )
+    added_mass: key(
+        Literal[ADDED_MASS_SCHEMES],
+        "-",
+        "exact (in the mass matrix) or lagged (UUV Simulator's and gz-sim's scheme; Python "
+        "controller)",
+    )
+    lagged_filter: key(
+        number(0.0, 1.0, low_open=True),
+        "-",
+        "filter coefficient alpha of the lagged scheme: 0.3 UUV Simulator, 1 gz-sim",
+    )
+    start: key(StartTable, "-", "the start")
+    path: key(
+        _tagged_union(PATH_TABLES, None), "-", "the path to follow (default: the world x-axis)"
+    )
+    current: key(
+        _tagged_union(CURRENT_TABLES, "constant"), "-", "the water current (default: none)"
+    )
+    controller: key(ControllerTable, "-", "the controller and its gains")
+    output: key(OutputTable, "-", "outputs")
