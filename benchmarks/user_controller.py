@@ -101,7 +101,7 @@ def user_path_following(t, q, v, model, workspace, parameters, state, tau, info)
     info[:3] = p
     info[3] = twist[0]
     info[4:6] = out.cross_track
-    info[6] = out.scalars[1]
+    info[6] = out.path_s[0]
 
 
 def user_controller(built_in: CompiledController) -> CompiledController:

@@ -472,7 +472,7 @@ class PathFollowingController:
         return PathFollowingCommand(
             joint_torques=out.joint_torques,
             thrusts=out.thrusts,
-            phi_tilde=float(out.scalars[0]),
+            phi_tilde=float(out.phi_tilde[0]),
             omega_tilde=out.omega_tilde,
             base_angles=out.base_angles,
             joint_references=out.joint_references,
@@ -482,5 +482,5 @@ class PathFollowingController:
             surge_integral=self._surge.integral,
             x_ref_ddot=out.x_ref_ddot,
             cross_track_error=out.cross_track,
-            path_parameter=float(out.scalars[1]),
+            path_parameter=float(out.path_s[0]),
         )

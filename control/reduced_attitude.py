@@ -50,6 +50,7 @@ from typing import Literal, NamedTuple
 import numpy as np
 
 from aiauv_control.laws import paper_laws as laws
+from aiauv_hydro.numerics.spatial import cross, skew  # noqa: F401  (skew: part of this module's API)
 
 Feedforward = Literal["exact", "paper"]
 FEEDFORWARD_OPTIONS: tuple[str, ...] = ("exact", "paper")
@@ -101,7 +102,7 @@ def _rotation(value, name: str = "R") -> np.ndarray:
     if not np.isfinite(array).all():
         raise ValueError(f"{name}: contains NaN or infinite values")
     orthogonality_error = np.abs(array.T @ array - _IDENTITY).max()
-    determinant = array[:, 0] @ _cross(array[:, 1], array[:, 2])
+    determinant = array[:, 0] @ cross(array[:, 1], array[:, 2])
     if orthogonality_error > _UNIT_TOLERANCE or determinant <= 0.0:
         raise ValueError(f"{name}: not a rotation matrix (R^T R != I or det R <= 0)")
     return array
@@ -153,19 +154,6 @@ def check_block_diagonal_inertia(J) -> np.ndarray:
 # --------------------------------------------------------------------------------------------------
 # geometry of the error
 # --------------------------------------------------------------------------------------------------
-def skew(v) -> np.ndarray:
-    """Cross-product matrix ``S(v)`` with ``S(v) w = v x w``."""
-    a, b, c = (float(v[0]), float(v[1]), float(v[2]))
-    return np.array([[0.0, -c, b], [c, 0.0, -a], [-b, a, 0.0]])
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a x b`` for 3-vectors (much faster than ``np.cross`` on single vectors)."""
-    return np.array(
-        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-    )
-
-
 def _one_plus_cos(y: np.ndarray) -> float:
     """``1 + e1 . y`` for unit ``y`` (:func:`aiauv_control.laws.paper_laws.one_plus_cos`)."""
     return float(laws.one_plus_cos(y[0], y[1], y[2]))
@@ -231,7 +219,9 @@ def reference_angular_velocity(R, x_ref, x_ref_dot) -> np.ndarray:
         x_ref_dot: Its time derivative in the world frame [1/s].
     """
     x_ref, x_ref_dot = _vector(x_ref, 3, "x_ref"), _vector(x_ref_dot, 3, "x_ref_dot")
-    return np.asarray(R, dtype=float).T @ _cross(x_ref, x_ref_dot)  # eq. (3)
+    return np.array(  # eq. (3)
+        laws.reference_rate_in_body(_rotation(R), x_ref[0], x_ref[1], x_ref[2], x_ref_dot)
+    )
 
 
 def reference_angular_acceleration(R, x_ref, x_ref_ddot) -> np.ndarray:
@@ -242,7 +232,9 @@ def reference_angular_acceleration(R, x_ref, x_ref_ddot) -> np.ndarray:
     :func:`reference_angular_velocity`, which also contains ``-omega x omega_ref^b``.
     """
     x_ref, x_ref_ddot = _vector(x_ref, 3, "x_ref"), _vector(x_ref_ddot, 3, "x_ref_ddot")
-    return np.asarray(R, dtype=float).T @ _cross(x_ref, x_ref_ddot)  # eq. (10), last line
+    return np.array(  # eq. (10), last line
+        laws.reference_rate_in_body(_rotation(R), x_ref[0], x_ref[1], x_ref[2], x_ref_ddot)
+    )
 
 
 def minimal_rotation_rate_correction(omega, omega_ref_b, x_ref_b) -> float:

@@ -223,7 +223,7 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
         info[o + i] = p[i]
     o += 3
     info[o] = twist[0]
-    info[o + 1] = out.scalars[0]
+    info[o + 1] = out.phi_tilde[0]
     info[o + 2] = out.omega_tilde[0]
     info[o + 3] = out.omega_tilde[1]
     info[o + 4] = out.base_angles[0]
@@ -247,4 +247,4 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
     o += n
     info[o] = out.cross_track[0]
     info[o + 1] = out.cross_track[1]
-    info[o + 2] = out.scalars[1]
+    info[o + 2] = out.path_s[0]

@@ -133,7 +133,7 @@ def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
         info[o + i] = p[i]
     o += 3
     info[o] = twist[0]
-    info[o + 1] = out.scalars[0]
+    info[o + 1] = out.phi_tilde[0]
     info[o + 2] = out.omega_tilde[0]
     info[o + 3] = out.omega_tilde[1]
     info[o + 4] = 0.0
@@ -148,7 +148,7 @@ def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
     o += 6
     info[o] = out.moments[0]
     info[o + 1] = out.moments[1]
-    info[o + 2] = out.scalars[2]
+    info[o + 2] = out.saturation_scale[0]
     o += 3
     m = out.thrusts.shape[0]
     for k in range(m):
@@ -163,4 +163,4 @@ def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
     o += n
     info[o] = out.cross_track[0]
     info[o + 1] = out.cross_track[1]
-    info[o + 2] = out.scalars[1]
+    info[o + 2] = out.path_s[0]

@@ -41,6 +41,7 @@ from aiauv_hydro.laws.fluid_terms import (
     stacked_row_dot,
 )
 from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled
+from aiauv_hydro.numerics.spatial import cross3, motion_cross, motion_to_child
 from aiauv_pin.kernels.disturbances import apply_disturbance
 from aiauv_pin.kernels.records import FREE_FLYER, REVOLUTE, Workspace
 from aiauv_pin.kernels.rotations import quaternion_rotation
@@ -85,27 +86,6 @@ def _matvec6(m, x, out):
         out[i] = s
 
 
-@compiled(fastmath=True)
-def _motion_transform(rot, trans, out):
-    """``X``: parent twists to the child frame at ``(R, p)`` (Featherstone 2008, eq. (2.24))."""
-    px, py, pz = trans[0], trans[1], trans[2]
-    for i in range(3):
-        r0, r1, r2 = rot[0, i], rot[1, i], rot[2, i]  # row i of R^T
-        out[i, 0] = r0
-        out[i, 1] = r1
-        out[i, 2] = r2
-        out[i + 3, 3] = r0
-        out[i + 3, 4] = r1
-        out[i + 3, 5] = r2
-        out[i + 3, 0] = 0.0
-        out[i + 3, 1] = 0.0
-        out[i + 3, 2] = 0.0
-        # -R^T [p]: row i of R^T times [p]
-        out[i, 3] = -(r1 * pz - r2 * py)
-        out[i, 4] = -(r2 * px - r0 * pz)
-        out[i, 5] = -(r0 * py - r1 * px)
-
-
 @compiled(fastmath=True, borrows_only=True)
 def _xT_add(xl, f, dst):
     """``dst += X^T f``: a child-frame force vector in the parent frame, ``(R f, p x R f + R n)``."""
@@ -113,12 +93,13 @@ def _xT_add(xl, f, dst):
     f0 = xl[0, 0] * f[0] + xl[0, 1] * f[1] + xl[0, 2] * f[2]
     f1 = xl[1, 0] * f[0] + xl[1, 1] * f[1] + xl[1, 2] * f[2]
     f2 = xl[2, 0] * f[0] + xl[2, 1] * f[1] + xl[2, 2] * f[2]
+    c0, c1, c2 = cross3(p0, p1, p2, f0, f1, f2)
     dst[0] += f0
     dst[1] += f1
     dst[2] += f2
-    dst[3] += xl[0, 0] * f[3] + xl[0, 1] * f[4] + xl[0, 2] * f[5] + p1 * f2 - p2 * f1
-    dst[4] += xl[1, 0] * f[3] + xl[1, 1] * f[4] + xl[1, 2] * f[5] + p2 * f0 - p0 * f2
-    dst[5] += xl[2, 0] * f[3] + xl[2, 1] * f[4] + xl[2, 2] * f[5] + p0 * f1 - p1 * f0
+    dst[3] += xl[0, 0] * f[3] + xl[0, 1] * f[4] + xl[0, 2] * f[5] + c0
+    dst[4] += xl[1, 0] * f[3] + xl[1, 1] * f[4] + xl[1, 2] * f[5] + c1
+    dst[5] += xl[2, 0] * f[3] + xl[2, 1] * f[4] + xl[2, 2] * f[5] + c2
 
 
 @compiled(fastmath=True, borrows_only=True)
@@ -255,16 +236,15 @@ def kinematics(bodies, q, v, W):
             rot_w[b, 2, 1] = a20 * r01 + a21 * r11 + a22 * r21
             rot_w[b, 2, 2] = a20 * r02 + a21 * r12 + a22 * r22
             # X nu_parent = (R^T (v - l x w), R^T w)  (Featherstone 2008, eq. (2.24))
-            pw0, pw1, pw2 = twist[parent, 3], twist[parent, 4], twist[parent, 5]
-            e0 = twist[parent, 0] - (l1 * pw2 - l2 * pw1)
-            e1 = twist[parent, 1] - (l2 * pw0 - l0 * pw2)
-            e2 = twist[parent, 2] - (l0 * pw1 - l1 * pw0)
-            v0 = r00 * e0 + r10 * e1 + r20 * e2
-            v1 = r01 * e0 + r11 * e1 + r21 * e2
-            v2 = r02 * e0 + r12 * e1 + r22 * e2
-            w0 = r00 * pw0 + r10 * pw1 + r20 * pw2
-            w1 = r01 * pw0 + r11 * pw1 + r21 * pw2
-            w2 = r02 * pw0 + r12 * pw1 + r22 * pw2
+            v0, v1, v2, w0, w1, w2 = motion_to_child(
+                xform[b],
+                twist[parent, 0],
+                twist[parent, 1],
+                twist[parent, 2],
+                twist[parent, 3],
+                twist[parent, 4],
+                twist[parent, 5],
+            )
         # joint motion S qd, the body twist, and the bias acceleration nu x (S qd)
         m0, m1, m2, m3, m4, m5 = s0 * qd, s1 * qd, s2 * qd, s3 * qd, s4 * qd, s5 * qd
         v0 += m0
@@ -281,12 +261,14 @@ def kinematics(bodies, q, v, W):
             w1,
             w2,
         )
-        bias_acc[b, 0] = w1 * m2 - w2 * m1 + v1 * m5 - v2 * m4
-        bias_acc[b, 1] = w2 * m0 - w0 * m2 + v2 * m3 - v0 * m5
-        bias_acc[b, 2] = w0 * m1 - w1 * m0 + v0 * m4 - v1 * m3
-        bias_acc[b, 3] = w1 * m5 - w2 * m4
-        bias_acc[b, 4] = w2 * m3 - w0 * m5
-        bias_acc[b, 5] = w0 * m4 - w1 * m3
+        (
+            bias_acc[b, 0],
+            bias_acc[b, 1],
+            bias_acc[b, 2],
+            bias_acc[b, 3],
+            bias_acc[b, 4],
+            bias_acc[b, 5],
+        ) = motion_cross(v0, v1, v2, w0, w1, w2, m0, m1, m2, m3, m4, m5)
 
 
 @compiled(fastmath=True)
@@ -715,20 +697,21 @@ def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
             a0, a1, a2 = bias_acc[b, 0], bias_acc[b, 1], bias_acc[b, 2]
             a3, a4, a5 = bias_acc[b, 3], bias_acc[b, 4], bias_acc[b, 5]
         else:
-            r00, r01, r02 = xform[b, 0, 0], xform[b, 0, 1], xform[b, 0, 2]
-            r10, r11, r12 = xform[b, 1, 0], xform[b, 1, 1], xform[b, 1, 2]
-            r20, r21, r22 = xform[b, 2, 0], xform[b, 2, 1], xform[b, 2, 2]
-            p0, p1, p2 = xform[b, 3, 0], xform[b, 3, 1], xform[b, 3, 2]
-            pw0, pw1, pw2 = acc[parent, 3], acc[parent, 4], acc[parent, 5]
-            e0 = acc[parent, 0] - (p1 * pw2 - p2 * pw1)
-            e1 = acc[parent, 1] - (p2 * pw0 - p0 * pw2)
-            e2 = acc[parent, 2] - (p0 * pw1 - p1 * pw0)
-            a0 = r00 * e0 + r10 * e1 + r20 * e2 + bias_acc[b, 0]
-            a1 = r01 * e0 + r11 * e1 + r21 * e2 + bias_acc[b, 1]
-            a2 = r02 * e0 + r12 * e1 + r22 * e2 + bias_acc[b, 2]
-            a3 = r00 * pw0 + r10 * pw1 + r20 * pw2 + bias_acc[b, 3]
-            a4 = r01 * pw0 + r11 * pw1 + r21 * pw2 + bias_acc[b, 4]
-            a5 = r02 * pw0 + r12 * pw1 + r22 * pw2 + bias_acc[b, 5]
+            a0, a1, a2, a3, a4, a5 = motion_to_child(
+                xform[b],
+                acc[parent, 0],
+                acc[parent, 1],
+                acc[parent, 2],
+                acc[parent, 3],
+                acc[parent, 4],
+                acc[parent, 5],
+            )
+            a0 += bias_acc[b, 0]
+            a1 += bias_acc[b, 1]
+            a2 += bias_acc[b, 2]
+            a3 += bias_acc[b, 3]
+            a4 += bias_acc[b, 4]
+            a5 += bias_acc[b, 5]
         ua = (
             u_vec[b, 0] * a0
             + u_vec[b, 1] * a1
@@ -921,12 +904,8 @@ def integrate(q, xi, out):
         h = math.sin(0.5 * t) / t
     v0, v1, v2 = xi[0], xi[1], xi[2]
     # V v = v + a w x v + c w x (w x v)
-    c0 = w1 * v2 - w2 * v1
-    c1 = w2 * v0 - w0 * v2
-    c2 = w0 * v1 - w1 * v0
-    d0 = w1 * c2 - w2 * c1
-    d1 = w2 * c0 - w0 * c2
-    d2 = w0 * c1 - w1 * c0
+    c0, c1, c2 = cross3(w0, w1, w2, v0, v1, v2)
+    d0, d1, d2 = cross3(w0, w1, w2, c0, c1, c2)
     p0 = v0 + a * c0 + c * d0
     p1 = v1 + a * c1 + c * d1
     p2 = v2 + a * c2 + c * d2
@@ -950,11 +929,6 @@ def integrate(q, xi, out):
     out[6] = nw / norm
     for i in range(7, q.shape[0]):
         out[i] = q[i] + xi[i - 1]
-
-
-@compiled(fastmath=True)
-def _cross(a0, a1, a2, b0, b1, b2):
-    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
 @compiled(fastmath=True, borrows_only=True)
@@ -984,23 +958,23 @@ def tangent_rate(xi, vel, out):
         d = 1.0 / t2 - (1.0 + c) / (2.0 * t * s)
     # angular part: J3^-1 w = w - p x w / 2 + d p x (p x w)
     w0, w1, w2 = vel[3], vel[4], vel[5]
-    x0, x1, x2 = _cross(p0, p1, p2, w0, w1, w2)
-    y0, y1, y2 = _cross(p0, p1, p2, x0, x1, x2)
+    x0, x1, x2 = cross3(p0, p1, p2, w0, w1, w2)
+    y0, y1, y2 = cross3(p0, p1, p2, x0, x1, x2)
     a0 = w0 - 0.5 * x0 + d * y0
     a1 = w1 - 0.5 * x1 + d * y1
     a2 = w2 - 0.5 * x2 + d * y2
     # Q a with Q = r/2 + c1 (pr + rp + prp) + c2 (ppr + rpp - 3 prp) + c3 (prpp + pprp)   (products
     # of skew matrices applied right to left)
-    pa0, pa1, pa2 = _cross(p0, p1, p2, a0, a1, a2)
-    ra0, ra1, ra2 = _cross(r0, r1, r2, a0, a1, a2)
-    pra0, pra1, pra2 = _cross(p0, p1, p2, ra0, ra1, ra2)
-    rpa0, rpa1, rpa2 = _cross(r0, r1, r2, pa0, pa1, pa2)
-    prpa0, prpa1, prpa2 = _cross(p0, p1, p2, rpa0, rpa1, rpa2)
-    ppra0, ppra1, ppra2 = _cross(p0, p1, p2, pra0, pra1, pra2)
-    ppa0, ppa1, ppa2 = _cross(p0, p1, p2, pa0, pa1, pa2)
-    rppa0, rppa1, rppa2 = _cross(r0, r1, r2, ppa0, ppa1, ppa2)
-    prppa0, prppa1, prppa2 = _cross(p0, p1, p2, rppa0, rppa1, rppa2)
-    pprpa0, pprpa1, pprpa2 = _cross(p0, p1, p2, prpa0, prpa1, prpa2)
+    pa0, pa1, pa2 = cross3(p0, p1, p2, a0, a1, a2)
+    ra0, ra1, ra2 = cross3(r0, r1, r2, a0, a1, a2)
+    pra0, pra1, pra2 = cross3(p0, p1, p2, ra0, ra1, ra2)
+    rpa0, rpa1, rpa2 = cross3(r0, r1, r2, pa0, pa1, pa2)
+    prpa0, prpa1, prpa2 = cross3(p0, p1, p2, rpa0, rpa1, rpa2)
+    ppra0, ppra1, ppra2 = cross3(p0, p1, p2, pra0, pra1, pra2)
+    ppa0, ppa1, ppa2 = cross3(p0, p1, p2, pa0, pa1, pa2)
+    rppa0, rppa1, rppa2 = cross3(r0, r1, r2, ppa0, ppa1, ppa2)
+    prppa0, prppa1, prppa2 = cross3(p0, p1, p2, rppa0, rppa1, rppa2)
+    pprpa0, pprpa1, pprpa2 = cross3(p0, p1, p2, prpa0, prpa1, prpa2)
     q0 = (
         0.5 * ra0
         + c1 * (pra0 + rpa0 + prpa0)
@@ -1021,8 +995,8 @@ def tangent_rate(xi, vel, out):
     )
     # linear part: J3^-1 (v - Q a)
     l0, l1, l2 = vel[0] - q0, vel[1] - q1, vel[2] - q2
-    x0, x1, x2 = _cross(p0, p1, p2, l0, l1, l2)
-    y0, y1, y2 = _cross(p0, p1, p2, x0, x1, x2)
+    x0, x1, x2 = cross3(p0, p1, p2, l0, l1, l2)
+    y0, y1, y2 = cross3(p0, p1, p2, x0, x1, x2)
     out[0] = l0 - 0.5 * x0 + d * y0
     out[1] = l1 - 0.5 * x1 + d * y1
     out[2] = l2 - 0.5 * x2 + d * y2
@@ -1306,9 +1280,10 @@ def frame_of_body_into(W, body, rotation, translation, rot, pos, frame_twist):
             )
     t0, t1, t2 = translation[0], translation[1], translation[2]
     w0, w1, w2 = W.twist[body, 3], W.twist[body, 4], W.twist[body, 5]
-    v0 = W.twist[body, 0] + (w1 * t2 - w2 * t1)
-    v1 = W.twist[body, 1] + (w2 * t0 - w0 * t2)
-    v2 = W.twist[body, 2] + (w0 * t1 - w1 * t0)
+    c0, c1, c2 = cross3(w0, w1, w2, t0, t1, t2)
+    v0 = W.twist[body, 0] + c0
+    v1 = W.twist[body, 1] + c1
+    v2 = W.twist[body, 2] + c2
     for i in range(3):
         r0, r1, r2 = rotation[0, i], rotation[1, i], rotation[2, i]  # row i of R_f^T
         frame_twist[i] = r0 * v0 + r1 * v1 + r2 * v2

@@ -22,6 +22,7 @@ import math
 import numpy as np
 
 from aiauv_hydro.numerics.jit import compiled
+from aiauv_hydro.numerics.spatial import cross3, motion_transform_into
 from aiauv_pin.kernels.articulated_body import EULER, integrate, tangent_rate
 from aiauv_pin.kernels.rotations import quaternion_rotation
 from aiauv_pin.kernels.tangent_rnea import (
@@ -35,7 +36,8 @@ from aiauv_pin.kernels.tangent_rnea import (
 # ---------------------------------------------------------------------- 3-vectors as tuples
 @compiled(fastmath=True, borrows_only=True)
 def _cr(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+    """``a x b`` for indexable 3-vectors (:func:`aiauv_hydro.numerics.spatial.cross3`)."""
+    return cross3(a[0], a[1], a[2], b[0], b[1], b[2])
 
 
 @compiled(fastmath=True, borrows_only=True)
@@ -209,21 +211,7 @@ def integrate_jacobians(xi, d_configuration, d_increment, scratch, scratch_matri
         base[i] = xi[i]
     integrate(identity, base[:6], moved)
     rows = quaternion_rotation(moved[3], moved[4], moved[5], moved[6])
-    p0, p1, p2 = moved[0], moved[1], moved[2]
-    for i in range(6):
-        for j in range(6):
-            d_configuration[i, j] = 0.0
-    for i in range(3):
-        r0, r1, r2 = rows[0][i], rows[1][i], rows[2][i]  # row i of R^T
-        d_configuration[i, 0] = r0
-        d_configuration[i, 1] = r1
-        d_configuration[i, 2] = r2
-        d_configuration[i + 3, 3] = r0
-        d_configuration[i + 3, 4] = r1
-        d_configuration[i + 3, 5] = r2
-        d_configuration[i, 3] = -(r1 * p2 - r2 * p1)
-        d_configuration[i, 4] = -(r2 * p0 - r0 * p2)
-        d_configuration[i, 5] = -(r0 * p1 - r1 * p0)
+    motion_transform_into(rows, moved[0], moved[1], moved[2], d_configuration)
     for i in range(6):
         unit[i] = 0.0
     for j in range(6):

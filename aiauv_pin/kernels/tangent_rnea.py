@@ -49,9 +49,14 @@ from aiauv_hydro.laws.fluid_terms import (
     coriolis_wrench_jacobian,
 )
 from aiauv_hydro.numerics.jit import compiled
+from aiauv_hydro.numerics.spatial import (
+    cross3,
+    motion_cross,
+    motion_to_child,
+    motion_transform_into,
+)
 from aiauv_pin.kernels.articulated_body import (
     _matvec6,
-    _motion_transform,
     _xT_add,
     body_bias,
     kinematics,
@@ -159,14 +164,10 @@ def new_derivative_workspace(model, nv: int) -> DerivativeWorkspace:
 # ---------------------------------------------------------------------- spatial helpers
 @compiled(fastmath=True, borrows_only=True)
 def _cross_motion(a, b, out):
-    """``out = a x b`` for motion vectors (Featherstone 2008, eq. (2.31))."""
-    v0, v1, v2, w0, w1, w2 = a[0], a[1], a[2], a[3], a[4], a[5]
-    out[0] = w1 * b[2] - w2 * b[1] + v1 * b[5] - v2 * b[4]
-    out[1] = w2 * b[0] - w0 * b[2] + v2 * b[3] - v0 * b[5]
-    out[2] = w0 * b[1] - w1 * b[0] + v0 * b[4] - v1 * b[3]
-    out[3] = w1 * b[5] - w2 * b[4]
-    out[4] = w2 * b[3] - w0 * b[5]
-    out[5] = w0 * b[4] - w1 * b[3]
+    """``out = a x b`` for motion vectors (:func:`aiauv_hydro.numerics.spatial.motion_cross`)."""
+    out[0], out[1], out[2], out[3], out[4], out[5] = motion_cross(
+        a[0], a[1], a[2], a[3], a[4], a[5], b[0], b[1], b[2], b[3], b[4], b[5]
+    )
 
 
 @compiled(fastmath=True, borrows_only=True)
@@ -190,25 +191,18 @@ def _apply_transpose_add(x, f, out):
 
 @compiled(fastmath=True, borrows_only=True)
 def _to_child(xl, m, out):
-    """``out = X m = (R^T (v - p x w), R^T w)`` for the placement ``xl`` (rows 0-2 ``R``, row 3 ``p``)."""
-    p0, p1, p2 = xl[3, 0], xl[3, 1], xl[3, 2]
-    w0, w1, w2 = m[3], m[4], m[5]
-    a0 = m[0] - (p1 * w2 - p2 * w1)
-    a1 = m[1] - (p2 * w0 - p0 * w2)
-    a2 = m[2] - (p0 * w1 - p1 * w0)
-    for i in range(3):
-        r0, r1, r2 = xl[0, i], xl[1, i], xl[2, i]
-        out[i] = r0 * a0 + r1 * a1 + r2 * a2
-        out[3 + i] = r0 * w0 + r1 * w1 + r2 * w2
+    """``out = X m = (R^T (v - p x w), R^T w)`` for the placement ``xl`` (rows 0-2 ``R``, row 3 ``p``;
+    :func:`aiauv_hydro.numerics.spatial.motion_to_child`)."""
+    out[0], out[1], out[2], out[3], out[4], out[5] = motion_to_child(
+        xl, m[0], m[1], m[2], m[3], m[4], m[5]
+    )
 
 
 @compiled(fastmath=True, borrows_only=True)
 def _times_skew(g, a0, a1, a2, out, add):
     """``out (+)= G [a]`` for a (6, 3) ``G`` (``[a] b = a x b``)."""
     for i in range(6):
-        c0 = g[i, 1] * a2 - g[i, 2] * a1
-        c1 = g[i, 2] * a0 - g[i, 0] * a2
-        c2 = g[i, 0] * a1 - g[i, 1] * a0
+        c0, c1, c2 = cross3(g[i, 0], g[i, 1], g[i, 2], a0, a1, a2)  # row i of G [a]
         if add:
             out[i, 0] += c0
             out[i, 1] += c1
@@ -354,7 +348,8 @@ def thrust_matrix_at(model, q, W, D):
     """``B(q)`` into ``D.thrust_matrix`` and the placements into ``D.xform`` (kinematics at ``q``)."""
     kinematics(model.bodies, q, W.zero_velocity, W)
     for b in range(model.bodies.parent.shape[0]):
-        _motion_transform(W.placement[b, :3], W.placement[b, 3], D.xform[b])
+        xl = W.placement[b]
+        motion_transform_into(xl[:3], xl[3, 0], xl[3, 1], xl[3, 2], D.xform[b])
     _thrust_matrix(model, D)
 
 
@@ -538,7 +533,8 @@ def acceleration_derivatives_into(
     sample_current(model, env, t, W)
     body_bias(model, W)
     for b in range(nb):
-        _motion_transform(W.placement[b, :3], W.placement[b, 3], D.xform[b])
+        xl = W.placement[b]
+        motion_transform_into(xl[:3], xl[3, 0], xl[3, 1], xl[3, 2], D.xform[b])
         for i in range(4):
             for j in range(3):
                 D.placement[b, i, j] = W.placement[b, i, j]

@@ -35,6 +35,7 @@ import numpy as np
 
 from aiauv_control.paths import path_point_of
 from aiauv_hydro.numerics.jit import compiled
+from aiauv_hydro.numerics.spatial import cross3
 
 #: ``|x_ref^b x e1|`` (with ``e1 . x_ref^b < 0``) at or below which ``phi_tilde = pi`` [-].
 ANTIPODAL_TOLERANCE = 1e-12
@@ -369,9 +370,10 @@ def restoring_moment_in_frame(base_rotation, base_position, rotation, position, 
     r0 = position[0] - base_position[0]
     r1 = position[1] - base_position[1]
     r2 = position[2] - base_position[2]
-    n0 -= r1 * f2 - r2 * f1
-    n1 -= r2 * f0 - r0 * f2
-    n2 -= r0 * f1 - r1 * f0
+    c0, c1, c2 = cross3(r0, r1, r2, f0, f1, f2)
+    n0 -= c0
+    n1 -= c1
+    n2 -= c2
     return (
         rotation[0, 0] * n0 + rotation[1, 0] * n1 + rotation[2, 0] * n2,
         rotation[0, 1] * n0 + rotation[1, 1] * n1 + rotation[2, 1] * n2,
@@ -437,6 +439,28 @@ def rate_correction(delta0, delta1, delta2, y0, y1, y2):
     return -delta0 - (y1 * delta1 + y2 * delta2) / one_plus_cos(y0, y1, y2)
 
 
+@compiled
+def reference_rate_in_body(R, r0, r1, r2, x_derivative):
+    """``R^T (x_ref x x_ref^(k))``: the reference's angular rate seen from the body, 3 floats.
+
+    With the first derivative ``x_ref_dot`` it is ``omega_ref^b``, the reference angular velocity
+    [rad/s] (eq. 3); with the second, ``x_ref_ddot``, the reference angular acceleration
+    [rad/s^2] of the feed-forward of eqs. (9) and (10) (finding 1:
+    ``d/dt (x_ref x x_ref_dot) = x_ref x x_ref_ddot``).
+
+    Args:
+        R: Body-to-world rotation (3, 3).
+        r0, r1, r2: The unit reference direction ``x_ref``, world axes.
+        x_derivative: Its first or second time derivative, world axes (3-indexable) [1/s], [1/s^2].
+    """
+    c0, c1, c2 = cross3(r0, r1, r2, x_derivative[0], x_derivative[1], x_derivative[2])
+    return (
+        R[0, 0] * c0 + R[1, 0] * c1 + R[2, 0] * c2,
+        R[0, 1] * c0 + R[1, 1] * c1 + R[2, 1] * c2,
+        R[0, 2] * c0 + R[1, 2] * c1 + R[2, 2] * c2,
+    )
+
+
 class AttitudeCommand(NamedTuple):
     """Output of :func:`reduced_attitude_law`."""
 
@@ -487,31 +511,18 @@ def reduced_attitude_law(R, omega, x_ref, x_dot, x_ddot, J, m_y, m_z, k_p, k_d, 
     y1 = R[0, 1] * r0 + R[1, 1] * r1 + R[2, 1] * r2
     y2 = R[0, 2] * r0 + R[1, 2] * r1 + R[2, 2] * r2
     _, row1, row2 = minimal_rotation(y0, y1, y2)
-    # omega_ref^b = R^T (x_ref x x_ref_dot)   (eq. 3)
-    c0 = r1 * x_dot[2] - r2 * x_dot[1]
-    c1 = r2 * x_dot[0] - r0 * x_dot[2]
-    c2 = r0 * x_dot[1] - r1 * x_dot[0]
-    w0 = R[0, 0] * c0 + R[1, 0] * c1 + R[2, 0] * c2
-    w1 = R[0, 1] * c0 + R[1, 1] * c1 + R[2, 1] * c2
-    w2 = R[0, 2] * c0 + R[1, 2] * c1 + R[2, 2] * c2
+    w0, w1, w2 = reference_rate_in_body(R, r0, r1, r2, x_dot)  # omega_ref^b   (eq. 3)
     # omega_tilde = H^T (omega - R_tilde omega_ref^b)   (eq. 8)
     ot_y = omega[1] - (row1[0] * w0 + row1[1] * w1 + row1[2] * w2)
     ot_z = omega[2] - (row2[0] * w0 + row2[1] * w1 + row2[2] * w2)
     # R_tilde R^T (x_ref x x_ref_ddot)   (eq. 9 with finding 1)
-    c0 = r1 * x_ddot[2] - r2 * x_ddot[1]
-    c1 = r2 * x_ddot[0] - r0 * x_ddot[2]
-    c2 = r0 * x_ddot[1] - r1 * x_ddot[0]
-    b0 = R[0, 0] * c0 + R[1, 0] * c1 + R[2, 0] * c2
-    b1 = R[0, 1] * c0 + R[1, 1] * c1 + R[2, 1] * c2
-    b2 = R[0, 2] * c0 + R[1, 2] * c1 + R[2, 2] * c2
+    b0, b1, b2 = reference_rate_in_body(R, r0, r1, r2, x_ddot)
     acc1 = row1[0] * b0 + row1[1] * b1 + row1[2] * b2
     acc2 = row2[0] * b0 + row2[1] * b1 + row2[2] * b2
     if exact:
         # + mu R_tilde (y x omega_ref^b)   (finding 2)
         mu = rate_correction(omega[0] - w0, omega[1] - w1, omega[2] - w2, y0, y1, y2)
-        s0 = y1 * w2 - y2 * w1
-        s1 = y2 * w0 - y0 * w2
-        s2 = y0 * w1 - y1 * w0
+        s0, s1, s2 = cross3(y0, y1, y2, w0, w1, w2)
         acc1 = acc1 + mu * (row1[0] * s0 + row1[1] * s1 + row1[2] * s2)
         acc2 = acc2 + mu * (row2[0] * s0 + row2[1] * s1 + row2[2] * s2)
     _, n1, n2 = error_axis_angle(y0, y1, y2)
@@ -656,7 +667,8 @@ class CommandBuffers(NamedTuple):
     x_ref_dot: np.ndarray  # (3,) [1/s]
     x_ref_ddot: np.ndarray  # (3,) [1/s^2]
     cross_track: np.ndarray  # (2,) [m] along N1, N2
-    scalars: np.ndarray  # (2,): phi_tilde [rad], path parameter s [m]
+    phi_tilde: np.ndarray  # (1,) [rad] (eq. 4)
+    path_s: np.ndarray  # (1,) path parameter s [m]
 
 
 def new_command_buffers(n_joints: int, n_thrusters: int) -> CommandBuffers:
@@ -671,7 +683,8 @@ def new_command_buffers(n_joints: int, n_thrusters: int) -> CommandBuffers:
         np.zeros(3),
         np.zeros(3),
         np.zeros(2),
-        np.zeros(2),
+        np.zeros(1),
+        np.zeros(1),
     )
 
 
@@ -822,5 +835,5 @@ def path_following_command(
         out.x_ref_ddot[i] = x_ddot[i]
     out.cross_track[0] = errors[0]
     out.cross_track[1] = errors[1]
-    out.scalars[0] = command.phi_tilde
-    out.scalars[1] = point.s
+    out.phi_tilde[0] = command.phi_tilde
+    out.path_s[0] = point.s

@@ -43,6 +43,7 @@ from aiauv_control.laws.paper_laws import (
 )
 from aiauv_control.paths import path_point_of
 from aiauv_hydro.numerics.jit import compiled
+from aiauv_hydro.numerics.spatial import cross3
 
 #: Plane codes of :func:`tunnel_allocation`: not a tunnel thruster, yaw (side force along body y,
 #: moment about body z), pitch (force along body z, moment about body y).
@@ -72,13 +73,22 @@ class TurningBuffers(NamedTuple):
     omega_tilde: np.ndarray  # (2,) [rad/s] (eq. 8)
     x_ref: np.ndarray  # (3,) reference direction (eq. 21)
     cross_track: np.ndarray  # (2,) [m] along N1, N2
-    scalars: np.ndarray  # (3,): phi_tilde [rad], path parameter s [m], saturation scale [-]
+    phi_tilde: np.ndarray  # (1,) [rad] (eq. 4)
+    path_s: np.ndarray  # (1,) path parameter s [m]
+    saturation_scale: np.ndarray  # (1,) scale of the tunnel thrusts [-]
 
 
 def new_turning_buffers(n_thrusters: int) -> TurningBuffers:
     """Zeroed :class:`TurningBuffers`."""
     return TurningBuffers(
-        np.zeros(n_thrusters), np.zeros(2), np.zeros(2), np.zeros(3), np.zeros(2), np.zeros(3)
+        np.zeros(n_thrusters),
+        np.zeros(2),
+        np.zeros(2),
+        np.zeros(3),
+        np.zeros(2),
+        np.zeros(1),
+        np.zeros(1),
+        np.zeros(1),
     )
 
 
@@ -134,10 +144,11 @@ def tunnel_allocation(moment_y, moment_z, plane, force_coeff, moment_coeff, max_
 def _rodrigues(k0, k1, k2, c, f, y):
     """``c y + k x y + (k . y) k f`` for a 3-sequence ``y`` (see :func:`sideslip_compensated`)."""
     ky = k0 * y[0] + k1 * y[1] + k2 * y[2]
+    x0, x1, x2 = cross3(k0, k1, k2, y[0], y[1], y[2])
     return (
-        c * y[0] + (k1 * y[2] - k2 * y[1]) + ky * k0 * f,
-        c * y[1] + (k2 * y[0] - k0 * y[2]) + ky * k1 * f,
-        c * y[2] + (k0 * y[1] - k1 * y[0]) + ky * k2 * f,
+        c * y[0] + x0 + ky * k0 * f,
+        c * y[1] + x1 + ky * k1 * f,
+        c * y[2] + x2 + ky * k2 * f,
     )
 
 
@@ -157,7 +168,7 @@ def sideslip_compensated(velocity, rotation, x_ref, x_dot, x_ddot):
     c = w0 * b0 + w1 * b1 + w2 * b2
     if c <= 0.0:
         return x_ref, x_dot, x_ddot
-    k0, k1, k2 = w1 * b2 - w2 * b1, w2 * b0 - w0 * b2, w0 * b1 - w1 * b0
+    k0, k1, k2 = cross3(w0, w1, w2, b0, b1, b2)
     f = 1.0 / (1.0 + c)
     return (
         _rodrigues(k0, k1, k2, c, f, x_ref),
@@ -247,6 +258,6 @@ def thruster_turning_command(
     errors = cross_track_errors(point, position, velocity)
     out.cross_track[0] = errors[0]
     out.cross_track[1] = errors[1]
-    out.scalars[0] = command.phi_tilde
-    out.scalars[1] = point.s
-    out.scalars[2] = scale
+    out.phi_tilde[0] = command.phi_tilde
+    out.path_s[0] = point.s
+    out.saturation_scale[0] = scale

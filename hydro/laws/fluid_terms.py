@@ -27,6 +27,7 @@ from typing import NamedTuple
 import numpy as np
 
 from aiauv_hydro.numerics.jit import compiled
+from aiauv_hydro.numerics.spatial import cross3
 
 #: Gauss-Legendre nodes on each of the two sub-intervals of the crossflow integral (see
 #: :func:`crossflow_wrench`; :func:`aiauv_hydro.laws.crossflow.gauss_legendre_unit` gives the rule).
@@ -145,14 +146,10 @@ def coriolis_of_momentum(v0, v1, v2, w0, w1, w2, f0, f1, f2, n0, n1, n2):
     Returns:
         The wrench as it appears on the left-hand side, 6 floats [N, N m].
     """
-    return (
-        w1 * f2 - w2 * f1,
-        w2 * f0 - w0 * f2,
-        w0 * f1 - w1 * f0,
-        v1 * f2 - v2 * f1 + w1 * n2 - w2 * n1,
-        v2 * f0 - v0 * f2 + w2 * n0 - w0 * n2,
-        v0 * f1 - v1 * f0 + w0 * n1 - w1 * n0,
-    )
+    a0, a1, a2 = cross3(w0, w1, w2, f0, f1, f2)
+    b0, b1, b2 = cross3(v0, v1, v2, f0, f1, f2)
+    c0, c1, c2 = cross3(w0, w1, w2, n0, n1, n2)
+    return a0, a1, a2, b0 + c0, b1 + c1, b2 + c2
 
 
 @compiled(fastmath=True)
@@ -184,9 +181,7 @@ def current_acceleration_wrench(added_mass, omega0, omega1, omega2, vc0, vc1, vc
     Returns:
         6 floats [N, N m] (left-hand side).
     """
-    a0 = omega1 * vc2 - omega2 * vc1
-    a1 = omega2 * vc0 - omega0 * vc2
-    a2 = omega0 * vc1 - omega1 * vc0
+    a0, a1, a2 = cross3(omega0, omega1, omega2, vc0, vc1, vc2)
     return (
         added_mass[0, 0] * a0 + added_mass[0, 1] * a1 + added_mass[0, 2] * a2,
         added_mass[1, 0] * a0 + added_mass[1, 1] * a1 + added_mass[1, 2] * a2,
@@ -335,17 +330,28 @@ def hydrostatic_wrench(force, moment0, moment1, moment2, up0, up1, up2):
     Returns:
         The wrench acting on the body, 6 floats [N, N m] (minus it on the left-hand side).
     """
-    return (
-        force * up0,
-        force * up1,
-        force * up2,
-        moment1 * up2 - moment2 * up1,
-        moment2 * up0 - moment0 * up2,
-        moment0 * up1 - moment1 * up0,
-    )
+    m0, m1, m2 = cross3(moment0, moment1, moment2, up0, up1, up2)
+    return force * up0, force * up1, force * up2, m0, m1, m2
 
 
 # ---------------------------------------------------------------------- composition per body
+@compiled(fastmath=True)
+def current_in_body(rotation, current, b):
+    """``v_c = R_b^T V_c``: the water velocity at body ``b``'s probe in its axes [m/s], 3 floats.
+
+    Args:
+        rotation: Body-to-world rotations (nb, 3, 3).
+        current: Water velocity at each body's probe point, world axes (nb, 3) [m/s].
+        b: The body.
+    """
+    c0, c1, c2 = current[b, 0], current[b, 1], current[b, 2]
+    return (
+        rotation[b, 0, 0] * c0 + rotation[b, 1, 0] * c1 + rotation[b, 2, 0] * c2,
+        rotation[b, 0, 1] * c0 + rotation[b, 1, 1] * c1 + rotation[b, 2, 1] * c2,
+        rotation[b, 0, 2] * c0 + rotation[b, 1, 2] * c1 + rotation[b, 2, 2] * c2,
+    )
+
+
 @compiled(fastmath=True, borrows_only=True)
 def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch):
     """Add every fluid term of every body to ``bias`` (left-hand side, body axes, about the origin).
@@ -357,7 +363,8 @@ def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch
     - sum_links X^T tau_D(X nu_r)``
 
     with the damping ``tau_D`` of each link (linear, quadratic, forward-speed and crossflow) in
-    its link frame.
+    its link frame (:func:`add_link_damping`, the walk over the links that the derivative
+    :func:`body_fluid_bias_jacobians` shares).
     The added-mass inertia term ``M_A dv`` is not here: it belongs to the mass matrix.
 
     Args:
@@ -370,35 +377,11 @@ def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch
         scratch: Work array (3, 6).
     """
     nb = twist.shape[0]
-    link_twist = scratch[0]
-    cylinder_twist = scratch[1]
-    link_wrench = scratch[2]
     # every record field read once, outside the loops (each read of a field is a counted reference)
     added, hydrostatics = fluid.added_mass, fluid.hydrostatics
-    link_body, link_from_body, link_is_body = (
-        fluid.link_body,
-        fluid.link_from_body,
-        fluid.link_is_body,
-    )
-    linear, quadratic, quadratic_is_diagonal = (
-        fluid.linear_damping,
-        fluid.quadratic_damping,
-        fluid.quadratic_is_diagonal,
-    )
-    forward, has_forward = fluid.forward_speed_damping, fluid.has_forward_speed_damping
-    has_crossflow, cylinder_from_link, cylinder_is_link = (
-        fluid.has_crossflow,
-        fluid.cylinder_from_link,
-        fluid.cylinder_is_link,
-    )
-    cylinder_length, strip_coefficient = fluid.cylinder_length, fluid.strip_coefficient
-    nodes, weights = fluid.gauss_nodes, fluid.gauss_weights
     for b in range(nb):
         # body by body in scalars, indexing the stacked arrays directly (no views)
-        c0, c1, c2 = current[b, 0], current[b, 1], current[b, 2]
-        vc0 = rotation[b, 0, 0] * c0 + rotation[b, 1, 0] * c1 + rotation[b, 2, 0] * c2
-        vc1 = rotation[b, 0, 1] * c0 + rotation[b, 1, 1] * c1 + rotation[b, 2, 1] * c2
-        vc2 = rotation[b, 0, 2] * c0 + rotation[b, 1, 2] * c1 + rotation[b, 2, 2] * c2
+        vc0, vc1, vc2 = current_in_body(rotation, current, b)
         r0, r1, r2 = twist[b, 0] - vc0, twist[b, 1] - vc1, twist[b, 2] - vc2
         r3, r4, r5 = twist[b, 3], twist[b, 4], twist[b, 5]
         relative[b, 0], relative[b, 1], relative[b, 2] = r0, r1, r2
@@ -432,53 +415,7 @@ def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch
             w = current_acceleration_wrench(added[b], r3, r4, r5, vc0, vc1, vc2)
             for i in range(6):
                 bias[b, i] += w[i]
-    for k in range(link_body.shape[0]):
-        b = link_body[k]
-        is_body = link_is_body[k]
-        if is_body:
-            for i in range(6):
-                link_twist[i] = relative[b, i]
-        else:
-            for i in range(6):
-                s = 0.0
-                for j in range(6):
-                    s += link_from_body[k, i, j] * relative[b, j]
-                link_twist[i] = s
-        w = damping_wrench(linear[k], quadratic[k], quadratic_is_diagonal[k], link_twist)
-        for i in range(6):
-            link_wrench[i] = w[i]
-        if has_forward[k]:
-            w = forward_speed_damping_wrench(forward[k], link_twist)
-            for i in range(6):
-                link_wrench[i] += w[i]
-        if has_crossflow[k]:
-            length = cylinder_length[k]
-            coefficient = strip_coefficient[k]
-            if cylinder_is_link[k]:
-                w = crossflow_wrench(link_twist, length, coefficient, nodes, weights)
-                for i in range(6):
-                    link_wrench[i] += w[i]
-            else:
-                for i in range(6):
-                    s = 0.0
-                    for j in range(6):
-                        s += cylinder_from_link[k, i, j] * link_twist[j]
-                    cylinder_twist[i] = s
-                w = crossflow_wrench(cylinder_twist, length, coefficient, nodes, weights)
-                for i in range(6):  # back to the link frame: X^T w
-                    s = 0.0
-                    for j in range(6):
-                        s += cylinder_from_link[k, j, i] * w[j]
-                    link_wrench[i] += s
-        if is_body:
-            for i in range(6):
-                bias[b, i] -= link_wrench[i]
-        else:
-            for i in range(6):
-                s = 0.0
-                for j in range(6):
-                    s += link_from_body[k, j, i] * link_wrench[j]
-                bias[b, i] -= s
+    add_link_damping(fluid, rotation, twist, current, bias, None, None, scratch, None)
 
 
 # ---------------------------------------------------------------------- lagged added mass
@@ -551,15 +488,21 @@ def coriolis_wrench_jacobian(inertia, twist, out):
         out: Output (6, 6) [N s/m, N s, N m s].
     """
     v0, v1, v2, w0, w1, w2 = twist[0], twist[1], twist[2], twist[3], twist[4], twist[5]
-    for j in range(6):  # column j of crf(nu) M
-        f0, f1, f2 = inertia[0, j], inertia[1, j], inertia[2, j]
-        n0, n1, n2 = inertia[3, j], inertia[4, j], inertia[5, j]
-        out[0, j] = w1 * f2 - w2 * f1
-        out[1, j] = w2 * f0 - w0 * f2
-        out[2, j] = w0 * f1 - w1 * f0
-        out[3, j] = v1 * f2 - v2 * f1 + w1 * n2 - w2 * n1
-        out[4, j] = v2 * f0 - v0 * f2 + w2 * n0 - w0 * n2
-        out[5, j] = v0 * f1 - v1 * f0 + w0 * n1 - w1 * n0
+    for j in range(6):  # column j of crf(nu) M: nu x* (column j of M)
+        out[0, j], out[1, j], out[2, j], out[3, j], out[4, j], out[5, j] = coriolis_of_momentum(
+            v0,
+            v1,
+            v2,
+            w0,
+            w1,
+            w2,
+            inertia[0, j],
+            inertia[1, j],
+            inertia[2, j],
+            inertia[3, j],
+            inertia[4, j],
+            inertia[5, j],
+        )
     f0 = _row_dot(inertia, 0, twist)
     f1 = _row_dot(inertia, 1, twist)
     f2 = _row_dot(inertia, 2, twist)
@@ -602,12 +545,11 @@ def current_acceleration_wrench_jacobian(
     for i in range(6):
         m0, m1, m2 = added_mass[i, 0], added_mass[i, 1], added_mass[i, 2]
         # row i of M_A[:, :3] [a] is (m_i x a)^T, [a] = [[0, -a2, a1], [a2, 0, -a0], [-a1, a0, 0]]
-        by_omega[i, 0] = -(m1 * vc2 - m2 * vc1)
-        by_omega[i, 1] = -(m2 * vc0 - m0 * vc2)
-        by_omega[i, 2] = -(m0 * vc1 - m1 * vc0)
-        by_current[i, 0] = m1 * omega2 - m2 * omega1
-        by_current[i, 1] = m2 * omega0 - m0 * omega2
-        by_current[i, 2] = m0 * omega1 - m1 * omega0
+        c0, c1, c2 = cross3(m0, m1, m2, vc0, vc1, vc2)
+        by_omega[i, 0], by_omega[i, 1], by_omega[i, 2] = -c0, -c1, -c2
+        by_current[i, 0], by_current[i, 1], by_current[i, 2] = cross3(
+            m0, m1, m2, omega0, omega1, omega2
+        )
 
 
 @compiled(fastmath=True, borrows_only=True)
@@ -786,6 +728,177 @@ def hydrostatic_wrench_jacobian(force, moment0, moment1, moment2, out):
 
 
 @compiled(fastmath=True, borrows_only=True)
+def add_link_damping(fluid, rotation, twist, current, bias, d_twist, d_current, vectors, matrices):
+    """The walk over the damped links: each link's damping on its body, its value or its derivative.
+
+    Link ``k`` of body ``b`` moves with ``nu_link = X nu_r`` (``X`` its ``link_from_body``, ``nu_r``
+    the body's twist relative to the water) and feels, in link axes, the sum of its terms
+
+    ``tau_D = damping_wrench + forward_speed_damping_wrench + X_cyl^T crossflow_wrench(X_cyl nu_link)``
+
+    which acts on the body as ``X^T tau_D``. With ``J_D = d tau_D / d nu_link`` (the sum of the
+    terms' ``*_jacobian``, the crossflow one moved by ``X_cyl^T J X_cyl``), this adds
+
+    * ``bias_b -= X^T tau_D`` when ``bias`` is given (the left-hand side,
+      :func:`add_body_fluid_bias`);
+    * ``d_twist_b -= X^T J_D X`` and ``d_current_b += (X^T J_D X)[:, :3]`` when ``d_twist`` is given
+      (``nu_r = nu - (v_c, 0)``; :func:`body_fluid_bias_jacobians`).
+
+    Every per-link term is written here once, its value next to its derivative, for both callers.
+    Compiled, the outputs that are ``None`` are pruned at compile time (two specialisations).
+
+    Args:
+        fluid: The vehicle's :class:`FluidModel`.
+        rotation: Body-to-world rotations (nb, 3, 3).
+        twist: Body twists in body axes (nb, 6) [m/s, rad/s].
+        current: Water velocity at each body's probe point, world axes (nb, 3) [m/s].
+        bias: Accumulator (nb, 6) [N, N m], or ``None``.
+        d_twist: Accumulator (nb, 6, 6) [N s/m, N s, N m s], or ``None`` (then ``d_current`` and
+            ``matrices`` are ``None`` too).
+        d_current: Accumulator (nb, 6, 3) [N s/m, N s], or ``None``.
+        vectors: Work array (3, 6).
+        matrices: Work array (3, 6, 6), or ``None``.
+    """
+    link_body, link_from_body, link_is_body = (
+        fluid.link_body,
+        fluid.link_from_body,
+        fluid.link_is_body,
+    )
+    linear, quadratic, quadratic_is_diagonal = (
+        fluid.linear_damping,
+        fluid.quadratic_damping,
+        fluid.quadratic_is_diagonal,
+    )
+    forward, has_forward = fluid.forward_speed_damping, fluid.has_forward_speed_damping
+    has_crossflow, cylinder_from_link, cylinder_is_link = (
+        fluid.has_crossflow,
+        fluid.cylinder_from_link,
+        fluid.cylinder_is_link,
+    )
+    cylinder_length, strip_coefficient = fluid.cylinder_length, fluid.strip_coefficient
+    nodes, weights = fluid.gauss_nodes, fluid.gauss_weights
+    relative = vectors[0]
+    link_twist = vectors[1]
+    cylinder_twist = vectors[2]
+    link_wrench = vectors[0]  # the body's relative twist is spent once the link's is formed
+    for k in range(link_body.shape[0]):
+        b = link_body[k]
+        vc0, vc1, vc2 = current_in_body(rotation, current, b)
+        relative[0], relative[1], relative[2] = (
+            twist[b, 0] - vc0,
+            twist[b, 1] - vc1,
+            twist[b, 2] - vc2,
+        )
+        relative[3], relative[4], relative[5] = twist[b, 3], twist[b, 4], twist[b, 5]
+        is_body = link_is_body[k]
+        _move_twist(link_from_body, k, is_body, relative, link_twist)
+        # linear and quadratic damping
+        if bias is not None:
+            w = damping_wrench(linear[k], quadratic[k], quadratic_is_diagonal[k], link_twist)
+            for i in range(6):
+                link_wrench[i] = w[i]
+        if d_twist is not None:
+            damping_wrench_jacobian(linear[k], quadratic[k], link_twist, matrices[1])
+        # forward-speed damping
+        if has_forward[k]:
+            if bias is not None:
+                w = forward_speed_damping_wrench(forward[k], link_twist)
+                for i in range(6):
+                    link_wrench[i] += w[i]
+            if d_twist is not None:
+                forward_speed_damping_wrench_jacobian(forward[k], link_twist, matrices[0])
+                _add_matrix(matrices[0], matrices[1])
+        # crossflow drag, in the cylinder frame
+        if has_crossflow[k]:
+            length = cylinder_length[k]
+            coefficient = strip_coefficient[k]
+            on_link = cylinder_is_link[k]
+            _move_twist(cylinder_from_link, k, on_link, link_twist, cylinder_twist)
+            if bias is not None:
+                w = crossflow_wrench(cylinder_twist, length, coefficient, nodes, weights)
+                if on_link:
+                    for i in range(6):
+                        link_wrench[i] += w[i]
+                else:
+                    for i in range(6):  # back to the link frame: X_cyl^T w
+                        s = 0.0
+                        for j in range(6):
+                            s += cylinder_from_link[k, j, i] * w[j]
+                        link_wrench[i] += s
+            if d_twist is not None:
+                crossflow_wrench_jacobian(
+                    cylinder_twist, length, coefficient, nodes, weights, matrices[0]
+                )
+                if on_link:
+                    _add_matrix(matrices[0], matrices[1])
+                else:
+                    _add_congruent(cylinder_from_link[k], matrices[0], matrices[2], matrices[1])
+        # on the body: X^T tau_D (left-hand side: minus); d/dnu_r X^T J_D X, and v_c enters as -v
+        if bias is not None:
+            if is_body:
+                for i in range(6):
+                    bias[b, i] -= link_wrench[i]
+            else:
+                for i in range(6):
+                    s = 0.0
+                    for j in range(6):
+                        s += link_from_body[k, j, i] * link_wrench[j]
+                    bias[b, i] -= s
+        if d_twist is not None:
+            link_jac = matrices[1]
+            if not is_body:
+                for i in range(6):
+                    for j in range(6):
+                        matrices[0, i, j] = 0.0
+                _add_congruent(link_from_body[k], link_jac, matrices[2], matrices[0])
+                link_jac = matrices[0]
+            for i in range(6):
+                for j in range(6):
+                    d_twist[b, i, j] -= link_jac[i, j]
+                for j in range(3):
+                    d_current[b, i, j] += link_jac[i, j]
+
+
+@compiled(fastmath=True, borrows_only=True)
+def _move_twist(transforms, k, is_identity, twist, out):
+    """``out = X_k twist`` with ``X_k = transforms[k]`` (a copy where ``is_identity``) (6,)."""
+    if is_identity:
+        for i in range(6):
+            out[i] = twist[i]
+        return
+    for i in range(6):
+        s = 0.0
+        for j in range(6):
+            s += transforms[k, i, j] * twist[j]
+        out[i] = s
+
+
+@compiled(fastmath=True, borrows_only=True)
+def _add_matrix(a, out):
+    """``out += a`` (6, 6)."""
+    for i in range(6):
+        for j in range(6):
+            out[i, j] += a[i, j]
+
+
+@compiled(fastmath=True, borrows_only=True)
+def _add_congruent(x, a, tmp, out):
+    """``out += X^T a X`` for 6x6 matrices (a Jacobian moved by the motion transform ``X``)."""
+    for i in range(6):
+        for j in range(6):
+            s = 0.0
+            for m in range(6):
+                s += a[i, m] * x[m, j]
+            tmp[i, j] = s
+    for i in range(6):
+        for j in range(6):
+            s = 0.0
+            for m in range(6):
+                s += x[m, i] * tmp[m, j]
+            out[i, j] += s
+
+
+@compiled(fastmath=True, borrows_only=True)
 def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_current, d_up, scratch):
     """Derivatives of :func:`add_body_fluid_bias` for every body, added to the outputs.
 
@@ -799,7 +912,8 @@ def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_curren
 
     with ``C'`` from :func:`coriolis_wrench_jacobian` and ``J_D`` the sum of
     :func:`damping_wrench_jacobian`, :func:`forward_speed_damping_wrench_jacobian` and
-    :func:`crossflow_wrench_jacobian` (moved to the link frame by ``X_cyl^T J X_cyl``).
+    :func:`crossflow_wrench_jacobian` (moved to the link frame by ``X_cyl^T J X_cyl``), summed by
+    :func:`add_link_damping`, the walk over the links that :func:`add_body_fluid_bias` shares.
 
     Args:
         fluid: The vehicle's :class:`FluidModel`.
@@ -813,18 +927,11 @@ def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_curren
     """
     nb = twist.shape[0]
     jac = scratch[0]
-    link_jac = scratch[1]
     tmp = scratch[2]
     cur = scratch[3]
     rel = scratch[4, 0]
-    link_twist = scratch[4, 1]
-    cyl_twist = scratch[4, 2]
     for b in range(nb):
-        rot = rotation[b]
-        c0, c1, c2 = current[b, 0], current[b, 1], current[b, 2]
-        vc0 = rot[0, 0] * c0 + rot[1, 0] * c1 + rot[2, 0] * c2
-        vc1 = rot[0, 1] * c0 + rot[1, 1] * c1 + rot[2, 1] * c2
-        vc2 = rot[0, 2] * c0 + rot[1, 2] * c1 + rot[2, 2] * c2
+        vc0, vc1, vc2 = current_in_body(rotation, current, b)
         for i in range(6):
             rel[i] = twist[b, i]
         rel[0] -= vc0
@@ -849,88 +956,6 @@ def body_fluid_bias_jacobians(fluid, rotation, twist, current, d_twist, d_curren
         for i in range(6):
             for j in range(3):
                 d_up[b, i, j] -= tmp[i, j]
-    for k in range(fluid.link_body.shape[0]):
-        b = fluid.link_body[k]
-        rot = rotation[b]
-        c0, c1, c2 = current[b, 0], current[b, 1], current[b, 2]
-        for i in range(6):
-            rel[i] = twist[b, i]
-        rel[0] -= rot[0, 0] * c0 + rot[1, 0] * c1 + rot[2, 0] * c2
-        rel[1] -= rot[0, 1] * c0 + rot[1, 1] * c1 + rot[2, 1] * c2
-        rel[2] -= rot[0, 2] * c0 + rot[1, 2] * c1 + rot[2, 2] * c2
-        x_link = fluid.link_from_body[k]
-        if fluid.link_is_body[k]:
-            for i in range(6):
-                link_twist[i] = rel[i]
-        else:
-            for i in range(6):
-                s = 0.0
-                for j in range(6):
-                    s += x_link[i, j] * rel[j]
-                link_twist[i] = s
-        damping_wrench_jacobian(
-            fluid.linear_damping[k], fluid.quadratic_damping[k], link_twist, link_jac
-        )
-        if fluid.has_forward_speed_damping[k]:
-            forward_speed_damping_wrench_jacobian(fluid.forward_speed_damping[k], link_twist, jac)
-            for i in range(6):
-                for j in range(6):
-                    link_jac[i, j] += jac[i, j]
-        if fluid.has_crossflow[k]:
-            x_cyl = fluid.cylinder_from_link[k]
-            if fluid.cylinder_is_link[k]:
-                for i in range(6):
-                    cyl_twist[i] = link_twist[i]
-            else:
-                for i in range(6):
-                    s = 0.0
-                    for j in range(6):
-                        s += x_cyl[i, j] * link_twist[j]
-                    cyl_twist[i] = s
-            crossflow_wrench_jacobian(
-                cyl_twist,
-                fluid.cylinder_length[k],
-                fluid.strip_coefficient[k],
-                fluid.gauss_nodes,
-                fluid.gauss_weights,
-                jac,
-            )
-            if fluid.cylinder_is_link[k]:
-                for i in range(6):
-                    for j in range(6):
-                        link_jac[i, j] += jac[i, j]
-            else:  # link_jac += X_cyl^T jac X_cyl
-                for i in range(6):
-                    for j in range(6):
-                        s = 0.0
-                        for m in range(6):
-                            s += jac[i, m] * x_cyl[m, j]
-                        tmp[i, j] = s
-                for i in range(6):
-                    for j in range(6):
-                        s = 0.0
-                        for m in range(6):
-                            s += x_cyl[m, i] * tmp[m, j]
-                        link_jac[i, j] += s
-        # the link's damping acts on X nu_r: d_twist -= X^T link_jac X, d_current += its [:, :3]
-        if fluid.link_is_body[k]:
-            for i in range(6):
-                for j in range(6):
-                    d_twist[b, i, j] -= link_jac[i, j]
-                for j in range(3):
-                    d_current[b, i, j] += link_jac[i, j]
-            continue
-        for i in range(6):
-            for j in range(6):
-                s = 0.0
-                for m in range(6):
-                    s += link_jac[i, m] * x_link[m, j]
-                tmp[i, j] = s
-        for i in range(6):
-            for j in range(6):
-                s = 0.0
-                for m in range(6):
-                    s += x_link[m, i] * tmp[m, j]
-                d_twist[b, i, j] -= s
-                if j < 3:
-                    d_current[b, i, j] += s
+    add_link_damping(
+        fluid, rotation, twist, current, None, d_twist, d_current, scratch[4, :3], scratch[:3]
+    )

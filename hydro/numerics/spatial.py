@@ -1,14 +1,93 @@
-"""Spatial (6-D) vector algebra used by the hydrodynamic models, batched over leading axes.
+"""Spatial (6-D) vector algebra used by the hydrodynamic models and the compiled kernels.
 
 Twists are ``(v, omega)`` and wrenches ``(f, n)``: linear part first, the order of Pinocchio's
 ``Motion.vector`` and ``Force.vector`` and of Fossen's ``nu`` and ``tau`` (Featherstone 2008, Ch. 2).
+
+The products are written once, on scalars, and compiled
+(:func:`aiauv_hydro.numerics.jit.compiled`): the compiled
+kernels call them from compiled code, where LLVM inlines them (so they cost what the unrolled
+formulas cost), and the batched NumPy helpers below call their interpreted form on arrays.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from aiauv_hydro.numerics.jit import compiled, interpreted
 
+
+# ---------------------------------------------------------------------- on scalars (compiled)
+@compiled
+def cross3(a0, a1, a2, b0, b1, b2):
+    """Cross product ``a x b = S(a) b`` of two 3-vectors given by their components, 3 values
+    (Fossen 2021, eq. (2.10)); the components may be floats or NumPy arrays (element-wise)."""
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+
+
+@compiled
+def motion_cross(v0, v1, v2, w0, w1, w2, m0, m1, m2, m3, m4, m5):
+    """Spatial cross product of motions ``(v, w) x (m_v, m_w) = (w x m_v + v x m_w, w x m_w)``
+    (Featherstone 2008, eq. (2.31)), 6 floats."""
+    a0, a1, a2 = cross3(w0, w1, w2, m0, m1, m2)
+    b0, b1, b2 = cross3(v0, v1, v2, m3, m4, m5)
+    c0, c1, c2 = cross3(w0, w1, w2, m3, m4, m5)
+    return a0 + b0, a1 + b1, a2 + b2, c0, c1, c2
+
+
+@compiled
+def motion_to_child(placement, v0, v1, v2, w0, w1, w2):
+    """A motion ``(v, w)`` of a parent frame in a child frame placed at ``(R, p)`` in it:
+    ``X (v, w) = (R^T (v - p x w), R^T w)`` (Featherstone 2008, eq. (2.24)), 6 floats.
+
+    Args:
+        placement: The child's placement (4, 3): rows 0-2 the rotation ``R`` (child to parent),
+            row 3 the origin ``p`` [m].
+        v0, v1, v2, w0, w1, w2: The motion in parent axes at the parent origin [m/s, rad/s] (or
+            [m/s^2, rad/s^2]).
+    """
+    p0, p1, p2 = placement[3, 0], placement[3, 1], placement[3, 2]
+    c0, c1, c2 = cross3(p0, p1, p2, w0, w1, w2)
+    e0, e1, e2 = v0 - c0, v1 - c1, v2 - c2
+    r = placement
+    return (
+        r[0, 0] * e0 + r[1, 0] * e1 + r[2, 0] * e2,
+        r[0, 1] * e0 + r[1, 1] * e1 + r[2, 1] * e2,
+        r[0, 2] * e0 + r[1, 2] * e1 + r[2, 2] * e2,
+        r[0, 0] * w0 + r[1, 0] * w1 + r[2, 0] * w2,
+        r[0, 1] * w0 + r[1, 1] * w1 + r[2, 1] * w2,
+        r[0, 2] * w0 + r[1, 2] * w1 + r[2, 2] * w2,
+    )
+
+
+@compiled(borrows_only=True)
+def motion_transform_into(rotation, p0, p1, p2, out):
+    """``X = [[R^T, -R^T [p]], [0, R^T]]`` into ``out`` (6, 6): the matrix of
+    :func:`motion_to_child` (Featherstone 2008, eq. (2.24)).
+
+    Args:
+        rotation: ``R`` (child to parent), indexable as ``rotation[i][j]`` (a 3x3 array or a tuple
+            of three rows).
+        p0, p1, p2: The child's origin ``p`` in the parent frame [m].
+        out: Output (6, 6).
+    """
+    for i in range(3):
+        r0, r1, r2 = rotation[0][i], rotation[1][i], rotation[2][i]  # row i of R^T
+        out[i, 0] = r0
+        out[i, 1] = r1
+        out[i, 2] = r2
+        out[i + 3, 3] = r0
+        out[i + 3, 4] = r1
+        out[i + 3, 5] = r2
+        out[i + 3, 0] = 0.0
+        out[i + 3, 1] = 0.0
+        out[i + 3, 2] = 0.0
+        c0, c1, c2 = cross3(r0, r1, r2, p0, p1, p2)  # row i of R^T [p] is (R^T row i) x p
+        out[i, 3] = -c0
+        out[i, 4] = -c1
+        out[i, 5] = -c2
+
+
+# ---------------------------------------------------------------------- batched (NumPy)
 def skew(vector: np.ndarray) -> np.ndarray:
     """Cross-product matrix ``S(a)`` with ``S(a) b = a x b`` (Fossen 2021, eq. (2.10))."""
     x, y, z = np.asarray(vector, dtype=float)
@@ -16,10 +95,12 @@ def skew(vector: np.ndarray) -> np.ndarray:
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross product over the last axis (written out: ``np.cross`` costs ~10x more on small arrays)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
+    """Cross product over the last axis (:func:`cross3` on arrays: ``np.cross`` costs ~10x more on
+    small arrays)."""
+    return np.stack(
+        interpreted(cross3)(a[..., 0], a[..., 1], a[..., 2], b[..., 0], b[..., 1], b[..., 2]),
+        axis=-1,
+    )
 
 
 def spatial_cross_wrench(twist: np.ndarray, wrench: np.ndarray) -> np.ndarray:
@@ -50,11 +131,9 @@ def motion_transform(rotation: np.ndarray, translation: np.ndarray) -> np.ndarra
         translation: Origin ``p`` of frame B in frame A [m].
 
     Returns:
-        ``X`` (6x6) with ``nu_B = X nu_A``.
+        ``X`` (6x6) with ``nu_B = X nu_A`` (:func:`motion_transform_into`).
     """
-    rotation_t = np.asarray(rotation, dtype=float).T
-    transform = np.zeros((6, 6))
-    transform[:3, :3] = rotation_t
-    transform[:3, 3:] = -rotation_t @ skew(translation)  # v_B = R^T (v - p x w)
-    transform[3:, 3:] = rotation_t
+    p0, p1, p2 = (float(x) for x in np.asarray(translation, dtype=float))
+    transform = np.empty((6, 6))
+    interpreted(motion_transform_into)(np.asarray(rotation, dtype=float), p0, p1, p2, transform)
     return transform
