@@ -21,7 +21,8 @@ def test_our_packages_import_under_their_own_names():
     assert Path(aiauv_control.__file__).resolve().parent == ROOT / "control"
     for clash in ("hydro", "control"):
         spec = importlib.util.find_spec(clash)
-        assert spec is None or not str(spec.origin or "").startswith(str(ROOT)), (
+        found = Path(spec.origin).resolve().parent if spec is not None and spec.origin else None
+        assert found != ROOT / clash, (
             f"'import {clash}' finds this checkout's folder: the test command must not put the "
             "repository root on sys.path (run .venv/bin/pytest, not python -m pytest)"
         )

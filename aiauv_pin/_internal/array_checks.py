@@ -20,8 +20,8 @@ no copy is possible, so it must already be a C-contiguous, writeable float64 arr
 :func:`positive_seconds` (``dt``), :func:`step_count`, :func:`method_name`, :func:`frame_index`,
 :func:`optional_current` (a velocity or a checked :class:`aiauv_hydro.currents.Current`); the
 records a controller gives the compiled loop are checked by
-:func:`aiauv_pin.controllers.compiled_controller.check_compiled_controller`. The hottest calls (``acceleration`` and ``step`` in still water) check
-their state inside the compiled call instead (:func:`aiauv_pin.kernels.handle.state_verdict`), which
+:func:`aiauv_pin.controllers.compiled_controller.check_compiled_controller`. The hottest calls
+(``acceleration`` and ``step`` in still water) check their state inside the compiled call instead (:func:`aiauv_pin.kernels.handle.state_verdict`), which
 costs far less than these Python checks (``benchmarks/entry_checks.py``).
 """
 
