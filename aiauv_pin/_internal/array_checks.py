@@ -21,8 +21,9 @@ no copy is possible, so it must already be a C-contiguous, writeable float64 arr
 :func:`optional_current` (a velocity or a checked :class:`aiauv_hydro.currents.Current`); the
 records a controller gives the compiled loop are checked by
 :func:`aiauv_pin.controllers.compiled_controller.check_compiled_controller`. The hottest calls
-(``acceleration`` and ``step`` in still water) check their state inside the compiled call instead (:func:`aiauv_pin.kernels.handle.state_verdict`), which
-costs far less than these Python checks (``benchmarks/entry_checks.py``).
+(``acceleration`` and ``step`` in still water) check their state inside the compiled call instead
+(:func:`aiauv_pin.kernels.handle.state_verdict`), which costs far less than these Python checks
+(``benchmarks/entry_checks.py``).
 """
 
 from __future__ import annotations
