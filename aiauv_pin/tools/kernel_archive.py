@@ -44,7 +44,7 @@ WORKLOADS = (
     ("rollout",),
 )
 
-_ROOT = Path(__file__).resolve().parent.parent
+_ROOT = Path(__file__).resolve().parents[2]  # the checkout (this file: aiauv_pin/tools/)
 
 
 def compiled_folders() -> list[str]:
