@@ -198,7 +198,7 @@ FUZZ_SCRIPT = textwrap.dedent(
     for name, call in {
         "fast.acceleration": lambda: fast.acceleration(q0, v0, tau0, mutated),
         "Vehicle.acceleration": lambda: vehicle.acceleration(q0, v0, tau0, mutated),
-        "rollout": lambda: aiauv_pin.simulation.rollout(vehicle, q0, v0, 0.02, 0.01, current=mutated),
+        "rollout": lambda: aiauv_pin.rollout(vehicle, q0, v0, 0.02, 0.01, current=mutated),
     }.items():
         case(f"current mutated to NaN via {name}", call)
     object.__setattr__(mutated, "parameters", np.zeros(1))
@@ -242,11 +242,11 @@ FUZZ_SCRIPT = textwrap.dedent(
         case(f"simulate {name}",
              lambda: aiauv_pin.simulate(vehicle, q0, np.zeros(nv), 0.05, 0.01, controller))
         case(f"rollout {name}",
-             lambda: aiauv_pin.simulation.rollout(vehicle, q0, np.zeros(nv), 0.05, 0.01,
+             lambda: aiauv_pin.rollout(vehicle, q0, np.zeros(nv), 0.05, 0.01,
                                        [controller, controller]))
     case("simulate honest", lambda: aiauv_pin.simulate(
         vehicle, q0, np.zeros(nv), 0.05, 0.01, honest), must_fail=False)
-    case("rollout honest", lambda: aiauv_pin.simulation.rollout(
+    case("rollout honest", lambda: aiauv_pin.rollout(
         vehicle, q0, np.zeros(nv), 0.05, 0.01, honest), must_fail=False)
 
     summary = collections.Counter()

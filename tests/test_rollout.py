@@ -1,4 +1,4 @@
-"""Batch rollouts (:func:`aiauv_pin.simulation.rollout`): each run is bit-identical to
+"""Batch rollouts (:func:`aiauv_pin.rollout`): each run is bit-identical to
 :func:`aiauv_pin.simulate`,
 whatever the number of threads; bad shapes get one-line errors before anything runs."""
 
@@ -42,7 +42,7 @@ def test_every_run_equals_simulate_bit_for_bit_with_any_thread_count(vehicle, me
     q0, v0 = _starts(vehicle, offsets)
     laws = [_controller(vehicle, k) for k in gains]
     batches = [
-        aiauv_pin.simulation.rollout(vehicle, q0, v0, DURATION, DT, laws, method=method, threads=threads)
+        aiauv_pin.rollout(vehicle, q0, v0, DURATION, DT, laws, method=method, threads=threads)
         for threads in (1, 3)
     ]
     for i, k_e in enumerate(gains):
@@ -65,7 +65,7 @@ def test_every_run_equals_simulate_bit_for_bit_with_any_thread_count(vehicle, me
 def test_one_controller_shared_by_many_starts_gets_a_private_state_per_run(vehicle):
     q0, v0 = _starts(vehicle, [(2.0, 2.0), (2.0, 2.0)])
     law = _controller(vehicle, 0.05)
-    batch = aiauv_pin.simulation.rollout(vehicle, q0, v0, DURATION, DT, law, log_every=10, threads=2)
+    batch = aiauv_pin.rollout(vehicle, q0, v0, DURATION, DT, law, log_every=10, threads=2)
     assert batch.q.shape == (2, 11, vehicle.nq) and batch.t.shape == (11,)
     np.testing.assert_array_equal(batch.q[0], batch.q[1])  # same start, same law: same run
 
@@ -74,7 +74,7 @@ def test_a_diverging_run_stops_alone(vehicle):
     q0 = np.stack([vehicle.neutral_configuration()] * 2)
     v0 = np.zeros((2, vehicle.nv))
     v0[1, 0] = 1e200  # overflows at once
-    batch = aiauv_pin.simulation.rollout(vehicle, q0, v0, 0.1, DT)
+    batch = aiauv_pin.rollout(vehicle, q0, v0, 0.1, DT)
     assert list(batch.status) == ["complete", "diverged"]
     assert batch.steps[0] == 10 and batch.steps[1] < 10
     assert np.isnan(batch.q[1, -1]).all()
@@ -108,7 +108,7 @@ def test_bad_arguments_get_one_line_errors(vehicle, change, message):
     }
     arguments.update(change)
     with pytest.raises(ArgumentError, match=message) as error:
-        aiauv_pin.simulation.rollout(vehicle, **arguments)
+        aiauv_pin.rollout(vehicle, **arguments)
     assert "\n" not in str(error.value)
 
 
@@ -117,6 +117,6 @@ def test_controllers_logging_different_diagnostics_are_refused(vehicle):
 
     laws = [CompiledController.passive(), _controller(vehicle, 0.05)]
     with pytest.raises(ArgumentError, match="must log the same diagnostics"):
-        aiauv_pin.simulation.rollout(
+        aiauv_pin.rollout(
             vehicle, vehicle.neutral_configuration(), np.zeros(vehicle.nv), 0.1, DT, laws
         )

@@ -13,7 +13,7 @@ expected shape:
   normalised (on a copy); a zero, far-from-unit or non-finite quaternion is refused.
 
 The compiled entry points (:class:`aiauv_pin.kernels.evaluation.FastModel`, the derivatives, transition
-Jacobians and linear models, :func:`aiauv_pin.simulation.rollout`) take their arguments through the same
+Jacobians and linear models, :func:`aiauv_pin.rollout`) take their arguments through the same
 functions, one per kind of argument: :func:`float_array` (any array of numbers),
 :func:`configuration` (``q``), :func:`in_place_array` (an array compiled code advances in place:
 no copy is possible, so it must already be a C-contiguous, writeable float64 array),

@@ -138,7 +138,7 @@ class Vehicle:
 
     Thread safety: the methods may be called from several threads at once on either backend; each
     thread evaluates on its own Pinocchio data and compiled workspace, and gets bit for bit what
-    the same calls give serially (see the module docstring). :func:`aiauv_pin.simulation.rollout` runs its
+    the same calls give serially (see the module docstring). :func:`aiauv_pin.rollout` runs its
     runs on threads with a workspace of their own.
 
     Every method checks its arguments before Pinocchio or compiled code sees them

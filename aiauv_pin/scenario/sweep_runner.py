@@ -4,7 +4,7 @@
 output folder, and runs the others on Dask: by default a ``LocalCluster`` of one worker process on
 this machine with one thread per usable core (each run's simulation is the compiled loop of
 :func:`aiauv_pin.simulate`, which releases the GIL, so the threads of one process use every core,
-as :func:`aiauv_pin.simulation.rollout` does; one process loads the compiled code and the vehicle once instead
+as :func:`aiauv_pin.rollout` does; one process loads the compiled code and the vehicle once instead
 of once per core, and each thread keeps its own copy of the vehicle), or an existing cluster given
 by its scheduler address. The output folder holds
 

@@ -85,7 +85,7 @@ MAX_LOG_BYTES = 8 * 2**30
 
 def check_log_size(n_steps: int, log_every: int, nq: int, nv: int, runs: int = 1) -> None:
     """Refuse runs whose logs of ``(t, q, v, tau)`` would exceed :data:`MAX_LOG_BYTES` together
-    (``runs`` of them: :func:`aiauv_pin.simulation.rollout` allocates one per run).
+    (``runs`` of them: :func:`aiauv_pin.rollout` allocates one per run).
 
     Raises:
         ArgumentError: One line, with the size and the way out.

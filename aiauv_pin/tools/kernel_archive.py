@@ -71,10 +71,10 @@ def _rollout_workload() -> None:
         ).compiled()
         for k in (0.05, 0.1)
     ]
-    aiauv_pin.simulation.rollout(
+    aiauv_pin.rollout(
         vehicle, q0, v0, scenario.duration, scenario.dt, laws, method=scenario.method, log_every=10
     )
-    aiauv_pin.simulation.rollout(vehicle, q0, v0, scenario.duration, 0.02, laws, method="midpoint")
+    aiauv_pin.rollout(vehicle, q0, v0, scenario.duration, 0.02, laws, method="midpoint")
 
 
 def _run_workloads(out: Path) -> None:

@@ -3,7 +3,7 @@
 * :func:`throughput`: runs per minute of the 300 s paper scenario on this machine, interleaved in
   rounds: a sweep on the Dask cluster of earlier versions (one single-threaded worker process per
   core), the local sweep of this version (one worker process, one thread per core, see
-  :mod:`aiauv_pin.scenario.sweep_runner`) and :func:`aiauv_pin.simulation.rollout` in this process
+  :mod:`aiauv_pin.scenario.sweep_runner`) and :func:`aiauv_pin.rollout` in this process
   (arrays only, no summary);
   both clusters are started and warmed up before the first round.
 * :func:`end_to_end`: wall time of fresh ``aiauv simulate`` processes (warm numba cache), with and
@@ -70,7 +70,7 @@ def throughput(
     case: str = "uniform", duration: float = 300.0, runs: int = 8, rounds: int = 3, cores: int = 2
 ) -> dict:
     """Runs per minute of ``runs`` paper-scenario runs (cross-track gain varied): the sweep in
-    processes and in threads, and :func:`aiauv_pin.simulation.rollout` logging every step (its default) and
+    processes and in threads, and :func:`aiauv_pin.rollout` logging every step (its default) and
     every :data:`ROLLOUT_SPARSE_LOG` th step (the CSV's 0.04 s at the default step); and the same
     rollouts with the midpoint method at :data:`ROLLOUT_MIDPOINT_DT` (not the default: see the
     README's accuracy per cost)."""
