@@ -253,7 +253,7 @@ def test_parent_death_helper_ends_the_child(how):
     # the watchdog is what runs where prctl is unavailable: forced here by turning prctl off
     code = (
         "import os, time\n"
-        "from aiauv_pin import parent_death\n"
+        "from aiauv_pin._internal import parent_death\n"
         f"if {how == 'watchdog'}:\n"
         "    parent_death._prctl_death_signal = lambda signum: False\n"
         "parent = os.getpid()\n"

@@ -18,17 +18,20 @@ else:  # pragma: no cover
 
 ROOT = Path(__file__).resolve().parents[1]
 
+#: Source folder -> the import name it installs as (``package-dir`` in pyproject.toml).
+FOLDERS = {"aiauv_pin": "aiauv_pin", "hydro": "aiauv_hydro", "control": "aiauv_control"}
+
 
 def test_every_source_package_is_listed_in_pyproject():
     config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
     listed = set(config["packages"])
     mapped = {name: ROOT / folder for name, folder in config.get("package-dir", {}).items()}
     found = set()
-    for top in ("aiauv_pin", "hydro", "control"):
-        for init in (ROOT / top).rglob("__init__.py"):
+    for folder, name in FOLDERS.items():
+        for init in (ROOT / folder).rglob("__init__.py"):
             if "__pycache__" in init.parts:
                 continue
-            found.add(".".join(init.parent.relative_to(ROOT).parts))
+            found.add(".".join((name, *init.parent.relative_to(ROOT / folder).parts)))
     found |= set(mapped)
     assert found == listed
     for folder in mapped.values():
@@ -36,7 +39,7 @@ def test_every_source_package_is_listed_in_pyproject():
 
 
 #: The import packages the distribution installs (their folders in site-packages).
-INSTALLED_PACKAGES = ("aiauv_pin", "hydro", "control")
+INSTALLED_PACKAGES = tuple(FOLDERS.values())
 
 
 def _files_under(site: Path) -> set[str]:
@@ -86,10 +89,12 @@ def test_a_run_writes_nothing_into_the_installation_and_an_uninstall_leaves_noth
 
     install = ("-m", "pip", "install", "-q", "--no-deps", "--no-build-isolation", str(ROOT))
     run(*install)
-    found = run("-c", "import aiauv_pin, hydro, control; print(aiauv_pin.__file__)").stdout
+    found = run(
+        "-c", "import aiauv_pin, aiauv_hydro, aiauv_control; print(aiauv_pin.__file__)"
+    ).stdout
     assert Path(found.strip()).is_relative_to(site)  # the installed copy, not the checkout
     before = _files_under(site)
-    assert "aiauv_pin/cli.py" in before and "hydro/jit.py" in before
+    assert "aiauv_pin/app/cli.py" in before and "aiauv_hydro/numerics/jit.py" in before
     out = tmp_path / "out"
     run("-m", "aiauv_pin", "simulate", "--duration", "0.2", "--no-html", "--out", str(out))
     assert (out / "summary.json").is_file()
