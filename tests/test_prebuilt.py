@@ -69,7 +69,8 @@ def test_shipped_archive_is_current(tag):
     assert manifest.python_tag == tag
     assert manifest.cpu_name == prebuilt.PORTABLE_CPU_NAME
     assert Version(manifest.numba) in numba_requirement().specifier  # an installable numba
-    assert any(n.startswith("aiauv_pin/fast/loop.run_chunk-") and n.endswith(".nbi") for n in names)
+    loop = "aiauv_pin/simulation/compiled_loop.run_chunk-"
+    assert any(n.startswith(loop) and n.endswith(".nbi") for n in names)
 
 
 def _synthetic_archive(tmp_path: Path, stamp: str) -> prebuilt.Archive:

@@ -1,7 +1,7 @@
 """Build the compiled kernels shipped with the package (``aiauv_pin/kernels/shipped/<python tag>.zip``).
 
-Run after any change to a compiled source (``hydro``, ``control``, ``aiauv_pin/fast``,
-``aiauv_pin/disturbances.py``; ``tests/test_prebuilt.py`` fails until then)::
+Run after any change to a compiled source (the packages and modules declared in the entry-point
+group ``aiauv.compiled_sources`` of ``pyproject.toml``; ``tests/test_prebuilt.py`` fails until then)::
 
     python -m aiauv_pin.tools.kernel_archive                 # for this Python
     python -m aiauv_pin.tools.kernel_archive --python /path/to/python3.10 /path/to/python3.12 ...
@@ -103,7 +103,7 @@ def pack(cache_dir: Path, archive: Path) -> int:
     Runs in the build's child process, whose ``NUMBA_CACHE_DIR`` is ``cache_dir``: the project's
     functions are in its folder :func:`aiauv_hydro.numerics.jit.cache_folder`, each at its source
     folder's project
-    path (e.g. ``aiauv_pin/fast``); the archive keeps those paths, so that they can be unpacked into
+    path (e.g. ``aiauv_pin/kernels``); the archive keeps those paths, so that they can be unpacked into
     the cache folder of any installation of the same sources.
     """
     import llvmlite.binding as llvm
