@@ -281,7 +281,7 @@ import sys
 import numba
 numba.__version__ = "0.0+other"  # read by the manifest check and by numba's own cache index
 from aiauv_pin.app.cli import main
-from aiauv_hydro import prebuilt
+from aiauv_hydro.numerics import kernel_cache as prebuilt
 code = main(sys.argv[1:])
 print("shipped kernels:", prebuilt.status(), file=sys.stderr)
 sys.exit(code)

@@ -24,9 +24,18 @@ except ModuleNotFoundError:  # Python 3.10
 ROOT = Path(__file__).resolve().parents[1]
 
 #: Folders and files of a working checkout that are not sources of the distribution.
-_NOT_SOURCES = shutil.ignore_patterns(
-    ".git", ".venv", "__pycache__", "build", "dist", "*.egg-info", "results", "_build", "_generated"
+_SKIPPED = shutil.ignore_patterns(
+    ".git", ".venv", "__pycache__", "build", "dist", "*.egg-info", "_build", "_generated"
 )
+
+
+def _NOT_SOURCES(folder: str, names: list[str]) -> set[str]:
+    """What the copy leaves out: build leftovers anywhere, and the results of runs at the top
+    (``aiauv_pin/results/`` is a package)."""
+    skipped = set(_SKIPPED(folder, names))
+    if Path(folder).resolve() == ROOT and "results" in names:
+        skipped.add("results")
+    return skipped
 
 
 @pytest.mark.slow  # an isolated build environment: about a minute on 2 cores
