@@ -332,4 +332,5 @@ def test_another_numba_compiles_once_into_the_user_cache_and_every_later_run_reu
         assert not compiled, f"the second {name} run compiled: {stderr}"
     cache = tmp_path / "cache" / "aiauv-pin"
     assert [p.name for p in cache.iterdir()] == [cache_key()]
-    assert list((cache / cache_key() / "aiauv_pin" / "fast").glob("loop.run_chunk-*.nbi"))
+    loop_folder = cache / cache_key() / "aiauv_pin" / "simulation"
+    assert list(loop_folder.glob("compiled_loop.run_chunk-*.nbi"))
