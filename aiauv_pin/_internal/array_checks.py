@@ -33,7 +33,16 @@ import numbers
 
 import numpy as np
 
+from aiauv_hydro.numerics.jit import interpreted
+from aiauv_hydro.numerics.spatial import (
+    QUATERNION_NORMALISE,
+    QUATERNION_NOT_UNIT,
+    unit_quaternion_check,
+)
 from aiauv_pin.errors import ArgumentError, RecordSizeError
+
+#: The unit-quaternion rule, run interpreted (cheaper than a compiled call from Python here).
+_unit_quaternion_check = interpreted(unit_quaternion_check)
 
 #: Largest accepted ``| |quaternion| - 1 |`` of the base orientation in ``q``; smaller deviations
 #: (round-off of an integrator, a hand-typed ``0.7071``) are normalised away.
@@ -101,10 +110,10 @@ def configuration(value, nq: int, name: str = "q") -> np.ndarray:
         ArgumentError: See the module docstring.
     """
     q = float_array(value, name, (nq,))
-    deviation = unit_quaternion(q, name)
-    if deviation > EXACT_QUATERNION_DEVIATION:
+    verdict, norm = _quaternion_verdict(q, name)
+    if verdict == QUATERNION_NORMALISE:
         q = q.copy()
-        q[3:7] /= math.sqrt(float(q[3] ** 2 + q[4] ** 2 + q[5] ** 2 + q[6] ** 2))
+        q[3:7] /= norm
     return q
 
 
@@ -139,20 +148,35 @@ def in_place_array(value, name: str, shape: tuple[int, ...]) -> np.ndarray:
     return value
 
 
-def unit_quaternion(q: np.ndarray, name: str = "q") -> float:
-    """The deviation ``| |q[3:7]| - 1 |`` of a finite configuration's base quaternion.
+def _quaternion_verdict(q: np.ndarray, name: str) -> tuple[int, float]:
+    """``(verdict, norm)`` of a finite configuration's base quaternion ``q[3:7]`` by
+    :func:`aiauv_hydro.numerics.spatial.unit_quaternion_check` (the rule the compiled checks apply
+    too), with :data:`QUATERNION_TOLERANCE` and :data:`EXACT_QUATERNION_DEVIATION`.
 
     Raises:
         ArgumentError: Beyond :data:`QUATERNION_TOLERANCE`.
     """
-    norm = math.sqrt(float(q[3] ** 2 + q[4] ** 2 + q[5] ** 2 + q[6] ** 2))
-    deviation = abs(norm - 1.0)
-    if deviation > QUATERNION_TOLERANCE:
+    x, y, z, w = q[3:7].tolist()
+    verdict, norm = _unit_quaternion_check(
+        x, y, z, w, QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION
+    )
+    if verdict == QUATERNION_NOT_UNIT:
         raise ArgumentError(
             f"{name}[3:7] (base quaternion x, y, z, w) must have unit norm (within "
             f"{QUATERNION_TOLERANCE:g}), got norm {norm:.6g}"
         )
-    return deviation
+    return verdict, norm
+
+
+def unit_quaternion(q: np.ndarray, name: str = "q") -> int:
+    """Refuse a finite configuration whose base quaternion ``q[3:7]`` is not of unit norm within
+    :data:`QUATERNION_TOLERANCE`; return the verdict of
+    :func:`aiauv_hydro.numerics.spatial.unit_quaternion_check` (unit, or to be normalised).
+
+    Raises:
+        ArgumentError: Beyond :data:`QUATERNION_TOLERANCE`.
+    """
+    return _quaternion_verdict(q, name)[0]
 
 
 def configurations(value, nq: int, name: str = "configurations") -> np.ndarray:

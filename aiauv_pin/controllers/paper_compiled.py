@@ -26,8 +26,10 @@ from aiauv_control.laws.paper_laws import (
     GuidanceState,
     PaperGains,
     SurgeState,
+    finite_difference_acceleration,
     path_following_command,
     restoring_moment_in_frame,
+    thruster_power,
 )
 from aiauv_hydro.numerics.jit import compiled
 from aiauv_pin.kernels.articulated_body import (
@@ -85,19 +87,11 @@ def measure_end_effector(t, q, v, model, W, body, rotation, translation, out):
     kinematics(model.bodies, q, v, W)
     R, twist, history = out.rotation, out.twist, out.history
     frame_of_body_into(W, body, rotation, translation, R, out.position, twist)
-    velocity, acceleration, omega = out.velocity, out.acceleration, out.omega
+    velocity, omega = out.velocity, out.omega
     for i in range(3):
         velocity[i] = R[i, 0] * twist[0] + R[i, 1] * twist[1] + R[i, 2] * twist[2]
         omega[i] = twist[3 + i]
-        acceleration[i] = 0.0
-    if history[0] != 0.0 and t > history[1]:
-        h = t - history[1]
-        for i in range(3):
-            acceleration[i] = (velocity[i] - history[2 + i]) / h
-    history[0] = 1.0
-    history[1] = t
-    for i in range(3):
-        history[2 + i] = velocity[i]
+    finite_difference_acceleration(t, velocity, history, out.acceleration)
     restoring_into(model, W, W.restoring)
 
 
@@ -114,7 +108,7 @@ def thruster_power_into(model, W, thrusts, info, offset):
         speed = 0.0
         for i in range(6):
             speed += W.twist[b, i] * th.unit_wrench[k, i]
-        info[offset + k] = speed * thrusts[k]
+        info[offset + k] = thruster_power(speed, thrusts[k])
 
 
 class PaperParameters(NamedTuple):

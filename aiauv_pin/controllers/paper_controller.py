@@ -12,10 +12,12 @@ import numpy as np
 import pinocchio as pin
 
 from aiauv_control.laws.paper_laws import (
+    finite_difference_acceleration,
     new_command_buffers,
     new_guidance_state,
     new_surge_state,
     restoring_moment_in_frame,
+    thruster_power,
 )
 from aiauv_control.path_following import (
     PathFollowingController,
@@ -24,6 +26,7 @@ from aiauv_control.path_following import (
 )
 from aiauv_control.paths import Path
 from aiauv_control.surge import SurgePIController
+from aiauv_hydro.numerics.jit import interpreted
 from aiauv_pin.controllers.compiled_controller import CompiledController
 from aiauv_pin.controllers.paper_compiled import (
     PaperParameters,
@@ -37,6 +40,11 @@ from aiauv_pin.errors import ArgumentError
 from aiauv_pin.model.vehicle import Vehicle
 
 END_EFFECTOR = "end_effector"
+
+#: The compiled controller's measurement and power laws, run interpreted on the Python side (one
+#: implementation of each, :mod:`aiauv_control.laws.paper_laws`).
+_finite_difference_acceleration = interpreted(finite_difference_acceleration)
+_thruster_power = interpreted(thruster_power)
 
 _AXIS_OF_JOINT_TYPE = {"JointModelRX": "x", "JointModelRY": "y", "JointModelRZ": "z"}
 
@@ -155,7 +163,8 @@ class VehiclePathFollowing:
     def reset(self) -> None:
         """Clear the surge integrator and the velocity history."""
         self.controller.reset()
-        self._previous: tuple[float, np.ndarray] | None = None
+        # the previous sample of the measured acceleration (finite_difference_acceleration)
+        self._history = np.zeros(5)
         self.joint_servo.references[:] = 0.0
 
     def servo(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -166,11 +175,8 @@ class VehiclePathFollowing:
         """What the controller needs, from the simulator state."""
         rotation, position, twist = self.vehicle.frame_motion(q, v, self.frame)
         velocity_in_world = rotation @ twist[:3]
-        if self._previous is None or t <= self._previous[0]:
-            acceleration = np.zeros(3)
-        else:
-            acceleration = (velocity_in_world - self._previous[1]) / (t - self._previous[0])
-        self._previous = (t, velocity_in_world)
+        acceleration = np.empty(3)
+        _finite_difference_acceleration(float(t), velocity_in_world, self._history, acceleration)
         restoring = self.vehicle.restoring_forces(q)
         base_rotation = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
         return PathFollowingMeasurement(
@@ -207,7 +213,7 @@ class VehiclePathFollowing:
             "pointing": command.pointing_direction,
             "thrust": command.thrusts,
             # mechanical power of each thruster: thrust times the speed of its point along its axis
-            "thruster_power": (v @ thrust_matrix) * command.thrusts,
+            "thruster_power": _thruster_power(v @ thrust_matrix, command.thrusts),
             "joint_torque": command.joint_torques,
             "cross_track": command.cross_track_error,
             "path_s": command.path_parameter,

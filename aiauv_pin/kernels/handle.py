@@ -20,6 +20,11 @@ from numba import types
 from numba.experimental import structref
 
 from aiauv_hydro.numerics.jit import compiled
+from aiauv_hydro.numerics.spatial import (
+    QUATERNION_NOT_UNIT,
+    QUATERNION_UNIT,
+    unit_quaternion_check,
+)
 from aiauv_pin.kernels import articulated_body as kernels
 
 
@@ -64,8 +69,9 @@ def state_verdict(t, q, v, tau, tolerance, exact_below, q_unit):
     any element is read (cheaper than ``flags`` in Python); the caller checks dtype and shape,
     which the unboxing needs right (a 2-D array would overflow a 1-D record).
 
-    Not ``fastmath``: the norm is summed in the order :func:`aiauv_pin._internal.array_checks.configuration`
-    uses, so that a normalised quaternion is bit-identical to the one it makes.
+    The quaternion's rule is :func:`aiauv_hydro.numerics.spatial.unit_quaternion_check`, the one
+    :func:`aiauv_pin._internal.array_checks.configuration` applies (not ``fastmath``: a normalised
+    quaternion is bit-identical to the one it makes).
 
     Args:
         t: Time [s].
@@ -90,11 +96,10 @@ def state_verdict(t, q, v, tau, tolerance, exact_below, q_unit):
     for i in range(tau.shape[0]):
         if not math.isfinite(tau[i]):
             return STATE_TAU_NOT_FINITE, False
-    norm = math.sqrt(q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6])
-    deviation = abs(norm - 1.0)
-    if deviation > tolerance:
+    verdict, norm = unit_quaternion_check(q[3], q[4], q[5], q[6], tolerance, exact_below)
+    if verdict == QUATERNION_NOT_UNIT:
         return STATE_QUATERNION_NOT_UNIT, False
-    if deviation <= exact_below:
+    if verdict == QUATERNION_UNIT:
         return STATE_OK, False
     for i in range(q.shape[0]):
         q_unit[i] = q[i]

@@ -14,7 +14,8 @@ interpreted when numba is missing.
   :func:`integral_los_bias` - its integral form against currents (Borhaug et al. 2008), with the
   integrator turning with the curvature direction on a twisted path
   (:func:`normal_plane_turn_rate`); :func:`restoring_moment_in_frame` - the restoring moment used by
-  the hydrostatic compensation;
+  the hydrostatic compensation; :func:`finite_difference_acceleration` - the measured acceleration
+  of the end-effector; :func:`thruster_power` - a thruster's mechanical power (a diagnostic);
 * :func:`reduced_attitude_law` - the reduced-attitude law of eq. (9) (and eq. 23 for ``J = I``,
   ``m = 0``) with the ``"paper"`` or ``"exact"`` feedforward (findings 1 and 2 of PAPER_DATA.md);
 * :func:`joint_reference` - eq. (22); :func:`joint_pd_torque` - eq. (24) (and
@@ -343,6 +344,36 @@ def _ilos_axis(state, i, e, e_dot, lookahead, sigma, turn):
     z_ddot = lookahead * (e_dot * den - 2.0 * e * g * (e_dot + sigma * z_dot)) / (den * den)
     state.rate[i] = z_dot
     return sigma * z, sigma * z_dot, sigma * z_ddot
+
+
+@compiled(borrows_only=True)
+def finite_difference_acceleration(t, velocity, history, acceleration):
+    """The measured acceleration of a frame [m/s^2] into ``acceleration`` (3,): the difference of its
+    world velocity ``velocity`` (3,) [m/s] with the previous sample's over the elapsed time, zero
+    at the first sample or when ``t`` [s] does not advance (the paper's controller needs ``p_ddot``
+    for the feed-forward of eq. 9; the simulator gives it no acceleration sensor).
+
+    ``history`` (5,) holds the previous sample (has one (1.0) or not (0.0), its time [s], its
+    velocity (3) [m/s]) and is updated to this one.
+    """
+    for i in range(3):
+        acceleration[i] = 0.0
+    if history[0] != 0.0 and t > history[1]:
+        h = t - history[1]
+        for i in range(3):
+            acceleration[i] = (velocity[i] - history[2 + i]) / h
+    history[0] = 1.0
+    history[1] = t
+    for i in range(3):
+        history[2 + i] = velocity[i]
+
+
+@compiled
+def thruster_power(axis_speed, thrust):
+    """Mechanical power of a thruster [W]: its thrust [N] times the speed [m/s] of its point along
+    its axis (the thruster's entry of ``v^T B(q)``, eq. 20's thrust matrix). Works on scalars
+    (compiled) and, interpreted, on arrays of thrusters."""
+    return axis_speed * thrust
 
 
 @compiled(borrows_only=True)

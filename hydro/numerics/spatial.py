@@ -7,9 +7,15 @@ The products are written once, on scalars, and compiled
 (:func:`aiauv_hydro.numerics.jit.compiled`): the compiled
 kernels call them from compiled code, where LLVM inlines them (so they cost what the unrolled
 formulas cost), and the batched NumPy helpers below call their interpreted form on arrays.
+
+The rule a base-orientation quaternion must pass, :func:`unit_quaternion_check`, is here too: the
+Python argument checks (:func:`aiauv_pin._internal.array_checks.configuration`) and the compiled
+ones (:func:`aiauv_pin.kernels.handle.state_verdict`) both call it.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -85,6 +91,33 @@ def motion_transform_into(rotation, p0, p1, p2, out):
         out[i, 3] = -c0
         out[i, 4] = -c1
         out[i, 5] = -c2
+
+
+#: Verdicts of :func:`unit_quaternion_check`: unit norm (use as is), near unit (divide by the
+#: norm), or too far from unit (refuse).
+QUATERNION_UNIT, QUATERNION_NORMALISE, QUATERNION_NOT_UNIT = 0, 1, 2
+
+
+@compiled
+def unit_quaternion_check(x, y, z, w, tolerance, exact_below):
+    """The rule for a quaternion ``(x, y, z, w)`` that should have unit norm.
+
+    The deviation ``| |q| - 1 |`` (the norm summed in the order ``x, y, z, w``, not fast-math, so
+    that compiled and interpreted callers divide by the same bits): above ``tolerance`` the
+    quaternion is refused, up to ``exact_below`` it is used as it is, in between it is divided by
+    its norm. A non-finite quaternion has a non-finite deviation and is refused.
+
+    Returns:
+        ``(verdict, norm)``: one of :data:`QUATERNION_UNIT`, :data:`QUATERNION_NORMALISE`,
+        :data:`QUATERNION_NOT_UNIT`, and the norm to divide by.
+    """
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    deviation = abs(norm - 1.0)
+    if not deviation <= tolerance:
+        return QUATERNION_NOT_UNIT, norm
+    if deviation <= exact_below:
+        return QUATERNION_UNIT, norm
+    return QUATERNION_NORMALISE, norm
 
 
 # ---------------------------------------------------------------------- batched (NumPy)
