@@ -11,10 +11,10 @@ The main entry points::
 
 from typing import TYPE_CHECKING
 
-from aiauv_pin.dynamics.integrators import midpoint_step, rk4_step, semi_implicit_euler_step
 from aiauv_pin.errors import AiauvError, SimulationDiverged, VehicleLoadError
 from aiauv_pin.model.loading import BUNDLED_CASES, bundled_urdf, load_vehicle
 from aiauv_pin.model.vehicle import Vehicle
+from aiauv_pin.reference.integrators import midpoint_step, rk4_step, semi_implicit_euler_step
 from aiauv_pin.simulation.fixed_step import Trajectory, simulate
 from aiauv_pin.simulation.rollout import Rollout, rollout
 

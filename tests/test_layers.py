@@ -34,7 +34,7 @@ FLOORS = [
     ["aiauv_pin.kernels"],
     ["aiauv_pin.model"],
     ["aiauv_pin.builders"],
-    ["aiauv_pin.dynamics"],
+    ["aiauv_pin.dynamics", "aiauv_pin.reference"],
     ["aiauv_pin.controllers"],
     ["aiauv_pin.simulation"],
     ["aiauv_pin.scenario"],

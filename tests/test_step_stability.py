@@ -84,7 +84,7 @@ def test_amplification_is_one_step_of_each_method():
     assert amplification(inverse_mass, stiffness, damping, "rk4", h) @ x == pytest.approx(rk4)
 
     # the midpoint method: both stages take the servo-implicit acceleration of a step h
-    # (aiauv_pin.dynamics.integrators.midpoint_step with the dynamics aiauv_pin.simulate gives it)
+    # (aiauv_pin.reference.integrators.midpoint_step with the dynamics aiauv_pin.simulate gives it)
     def implicit_acceleration(q, qd):
         return np.linalg.solve(lhs, joint_mass @ acceleration(q, qd) - h * stiffness * qd)
 

@@ -51,9 +51,9 @@ import pinocchio as pin
 
 from aiauv_pin._internal.text import signed
 from aiauv_pin.checks.vehicle_check import BUOYANCY_TOLERANCE
-from aiauv_pin.dynamics.integrators import rk4_step
 from aiauv_pin.errors import SimulationDiverged
 from aiauv_pin.model.vehicle import Vehicle
+from aiauv_pin.reference.integrators import rk4_step
 from aiauv_pin.simulation.fixed_step import Trajectory, simulate
 
 #: Seed of the random states (any fixed seed gives reproducible checks).

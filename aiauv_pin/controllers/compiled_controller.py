@@ -40,8 +40,17 @@ from typing import Any
 
 import numpy as np
 
-from aiauv_pin.controllers.paper_compiled import passive
+from aiauv_pin.controllers.paper_compiled import (
+    paper_info_shapes,
+    paper_path_following,
+    passive,
+)
+from aiauv_pin.controllers.turning_compiled import thruster_turning, turning_info_shapes
 from aiauv_pin.errors import ArgumentError, RecordSizeError
+
+#: The built-in compiled controllers: given to the compiled loop as ``None``, which chooses them by
+#: their parameters' type (:func:`aiauv_pin.simulation.compiled_loop.run_controller`).
+BUILTIN_CONTROLLERS = (passive, paper_path_following, thruster_turning)
 
 _BOUNDS_CHECKED: dict = {}
 
@@ -104,9 +113,6 @@ def bounds_checked(function, _seen: dict | None = None):
 
 def _sizes_of_builtin(function, n_joints: int, n_thrusters: int):
     """``(info width, {parameter field: expected length})`` of a built-in controller, or ``None``."""
-    from aiauv_pin.controllers.paper_compiled import paper_info_shapes, paper_path_following
-    from aiauv_pin.controllers.turning_compiled import thruster_turning, turning_info_shapes
-
     if function is passive:
         return 0, {}
     if function is paper_path_following:
@@ -158,8 +164,6 @@ class CompiledController:
         """What the compiled loop is given: ``None`` for a built-in controller (chosen there by its
         parameters, so that the cached loop's signature holds no function), else the user's
         function compiled bounds-checked (:func:`bounds_checked`)."""
-        from aiauv_pin.controllers.dispatch import BUILTIN_CONTROLLERS
-
         if self.function in BUILTIN_CONTROLLERS:
             return None
         return bounds_checked(self.function)

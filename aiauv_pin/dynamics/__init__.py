@@ -1,4 +1,4 @@
-"""Time stepping and analysis of a vehicle: integrators, the joint servo, transitions, linear models.
+"""Time stepping and analysis of a vehicle: the joint servo, transitions, linear models, lagged mass.
 
 May import :mod:`aiauv_pin.model` and the floors below it.
 """

@@ -1,6 +1,6 @@
 """Transition Jacobians of one integrator step in the tangent space, for linear analysis and MPC.
 
-For the step ``(q', v') = step(q, v, u)`` of :mod:`aiauv_pin.dynamics.integrators` (RK4 Munthe-Kaas or
+For the step ``(q', v') = step(q, v, u)`` of :mod:`aiauv_pin.reference.integrators` (RK4 Munthe-Kaas or
 semi-implicit Euler) with the input ``u = (thrusts [N], joint torques [N m])`` held over the step as
 the simulator holds a controller's output (``tau = tau_0 + B(q) thrusts + S joint_torques``
 evaluated at the step's start):

@@ -1010,7 +1010,7 @@ def tangent_rate(xi, vel, out):
 # ---------------------------------------------------------------------- integrators
 @compiled(fastmath=True, borrows_only=True)
 def rk4_into(model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
-    """One Runge-Kutta-Munthe-Kaas step of order 4 (as :func:`aiauv_pin.dynamics.integrators.rk4_step`).
+    """One Runge-Kutta-Munthe-Kaas step of order 4 (as :func:`aiauv_pin.reference.integrators.rk4_step`).
 
     Stages at ``t``, ``t + dt/2`` (twice) and ``t + dt`` see the current and disturbance at their time.
     """

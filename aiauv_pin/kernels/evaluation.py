@@ -418,7 +418,7 @@ class FastModel:
         disturbance=None,
     ):
         """One integrator step from time ``t``; returns new ``(q, v)`` (as
-        :mod:`aiauv_pin.dynamics.integrators`).
+        :mod:`aiauv_pin.reference.integrators`).
 
         Raises:
             ArgumentError: A bad argument (see the module docstring), before anything runs.

@@ -130,7 +130,9 @@ class Scenario:
                 f"unknown controller '{self.controller}' (expected {' or '.join(CONTROLLERS)})"
             )
         if self.path is not None and not isinstance(self.path, Path):
-            raise ValueError(f"path must be a aiauv_control.paths.Path, got {type(self.path).__name__}")
+            raise ValueError(
+                f"path must be a aiauv_control.paths.Path, got {type(self.path).__name__}"
+            )
         for name in ("start_position", "heading"):
             value = getattr(self, name)
             if value is not None:
@@ -451,7 +453,7 @@ def add_path_errors(vehicle: Vehicle, scenario: Scenario, trajectory: Trajectory
     follows no path: it gets ``p`` only.
     """
     from aiauv_control.laws.paper_laws import path_errors_of_positions
-    from aiauv_pin.dynamics.integrators import SAMPLES_INSIDE_STEP
+    from aiauv_pin.reference.integrators import SAMPLES_INSIDE_STEP
 
     info = trajectory.info
     n = len(trajectory.t)

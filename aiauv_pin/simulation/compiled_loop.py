@@ -13,16 +13,38 @@ completed by :func:`complete_step`). Its output is held over the step it is cent
 sampling costs second-order error instead of the first-order lag that holding it from the start of
 each step costs (issue 15's accuracy per cost). A row at ``t`` holds, as for the other methods, the
 output applied from ``t`` to ``t + dt``, with the diagnostics of its sample at ``t + dt/2``. When
-the loop samples, logs and stops is :func:`aiauv_pin.simulation.schedule.step_actions`, shared with the
-interpreted loop.
+the loop samples, logs and stops is :func:`step_actions`, shared with the interpreted loop.
+
+The loop schedule, written once (:func:`step_actions`), what happens at step ``k`` of a fixed-step
+run, for both loops (this one and the interpreted one of :func:`aiauv_pin.simulate` with a Python
+controller):
+
+* the controller is sampled at ``t = k dt`` every ``steps_per_control`` steps, and its output is
+  held over the steps up to the next sample (zero-order hold);
+* with a method that samples inside the step (the midpoint method), the controller runs at every
+  step's stage ``t + dt/2`` instead, and once more at the end of the run (for the last row's
+  diagnostics); there is no sample at ``t = 0``: the first stage runs with no input (``tau = 0``),
+  since a sample there would be held by a controller's integrators as if it applied over
+  ``[0, dt/2]`` (5 mm along the path at 0.02 s on the paper's surge integral, measured in issue 15);
+* a row is logged every ``log_every`` steps and at the last step, after the sample of that step.
+
+Which compiled controller the loop runs (:func:`run_controller`): a user's function, or a built-in
+one chosen by type. numba's on-disk cache cannot key a compiled function on an argument that is
+itself a function (:func:`aiauv_hydro.numerics.jit.user_or_builtin`), so the cached loop is given
+``controller = None`` for the built-in controllers
+(:data:`aiauv_pin.controllers.compiled_controller.BUILTIN_CONTROLLERS`) and :func:`run_controller`
+chooses among them at compile time by the type of their parameters. A new built-in controller is
+its module plus one branch there.
 """
 
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import NamedTuple
 
 from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled, is_project_function
-from aiauv_pin.controllers.dispatch import run_controller
+from aiauv_pin.controllers.paper_compiled import PaperParameters, paper_path_following, passive
+from aiauv_pin.controllers.turning_compiled import TurningParameters, thruster_turning
 from aiauv_pin.kernels.articulated_body import (
     MIDPOINT,
     MidpointMethod,
@@ -31,9 +53,99 @@ from aiauv_pin.kernels.articulated_body import (
     midpoint_final_into,
     midpoint_stage_into,
 )
-from aiauv_pin.simulation.schedule import step_actions
 
 
+# ------------------------------------------------------------------ the schedule
+class StepActions(NamedTuple):
+    """What the loop does at step ``k``, in this order.
+
+    Attributes:
+        sample: Run the controller at ``t = k dt``.
+        sample_at_stage: Run the controller at the step's stage ``t + dt/2`` (midpoint method).
+        log: Log the row of ``t = k dt`` (after the sample).
+        last: ``k`` is the last step: stop after logging (no integration).
+    """
+
+    sample: bool
+    sample_at_stage: bool
+    log: bool
+    last: bool
+
+
+@compiled
+def step_actions(k, n_total, steps_per_control, log_every, inside):
+    """The :class:`StepActions` of step ``k`` of a run of ``n_total`` steps.
+
+    Args:
+        k: Step index, ``0 <= k <= n_total``.
+        n_total: Steps of the run.
+        steps_per_control: Steps between two controller samples (1 with ``inside``).
+        log_every: Steps between two logged rows.
+        inside: The method samples the controller inside each step (the midpoint method).
+    """
+    last = k == n_total
+    sample = k % steps_per_control == 0 and (not inside or last)
+    return StepActions(sample, inside and not sample, k % log_every == 0 or last, last)
+
+
+@compiled
+def steps_to_next_event(k, n_total, steps_per_control, log_every):
+    """Steps the loop may take from ``k`` without a sample, a row or the end in between: the
+    interpreted loop integrates that many in one call."""
+    to_sample = steps_per_control - k % steps_per_control
+    to_log = log_every - k % log_every
+    return min(to_sample, to_log, n_total - k)
+
+
+# ------------------------------------------------------------------ the controller
+def run_controller(user, t, q, v, model, workspace, parameters, state, tau, info):
+    """``user(...)``, or with ``user = None`` the built-in controller ``parameters`` select:
+    :class:`PaperParameters` the paper's, :class:`TurningParameters` thruster turning, anything else
+    passive. Compiled, the choice is made at compile time (an overload)."""
+    if user is not None:
+        return user(t, q, v, model, workspace, parameters, state, tau, info)
+    if isinstance(parameters, PaperParameters):
+        return paper_path_following(t, q, v, model, workspace, parameters, state, tau, info)
+    if isinstance(parameters, TurningParameters):
+        return thruster_turning(t, q, v, model, workspace, parameters, state, tau, info)
+    return passive(t, q, v, model, workspace, parameters, state, tau, info)
+
+
+if NUMBA_AVAILABLE:
+    from numba import types
+    from numba.extending import overload
+
+    def _is(parameters, record) -> bool:
+        return isinstance(parameters, types.BaseNamedTuple) and parameters.instance_class is record
+
+    @overload(run_controller)
+    def _run_controller(user, t, q, v, model, workspace, parameters, state, tau, info):
+        if not isinstance(user, (types.NoneType, types.Omitted)):
+
+            def call_user(user, t, q, v, model, workspace, parameters, state, tau, info):
+                user(t, q, v, model, workspace, parameters, state, tau, info)
+
+            return call_user
+        if _is(parameters, PaperParameters):
+
+            def call_paper(user, t, q, v, model, workspace, parameters, state, tau, info):
+                paper_path_following(t, q, v, model, workspace, parameters, state, tau, info)
+
+            return call_paper
+        if _is(parameters, TurningParameters):
+
+            def call_turning(user, t, q, v, model, workspace, parameters, state, tau, info):
+                thruster_turning(t, q, v, model, workspace, parameters, state, tau, info)
+
+            return call_turning
+
+        def call_passive(user, t, q, v, model, workspace, parameters, state, tau, info):
+            passive(t, q, v, model, workspace, parameters, state, tau, info)
+
+        return call_passive
+
+
+# ------------------------------------------------------------------ the step
 def samples_inside_step(method) -> bool:
     """Whether the loop samples the controller inside each step of ``method`` (a marker or a code
     of :mod:`aiauv_pin.kernels.articulated_body`): the midpoint method."""
@@ -91,7 +203,7 @@ def run_chunk(
     """Steps ``k_start .. k_stop - 1`` (controller, logging, integration), plus the final sample.
 
     ``controller`` is a user's compiled controller, or ``None`` for the built-in one that
-    ``parameters`` select (:func:`aiauv_pin.controllers.dispatch.run_controller`).
+    ``parameters`` select (:func:`run_controller`).
 
     ``method`` is a :class:`aiauv_pin.kernels.articulated_body.EulerMethod` or ``RK4Method`` (the loop is
     compiled for that integrator alone) or a method code.

@@ -3,7 +3,7 @@
 On the compiled backend (``vehicle.active_backend == "numba"``) the steps between two controller calls
 (or log points) run in one compiled call, with a :class:`JointServo` evaluated inside the kernel at every
 integrator stage, so no Python runs per step; a servo given as a Python callable is still supported but
-then every step goes through Python. On Pinocchio every step calls :mod:`aiauv_pin.dynamics.integrators`.
+then every step goes through Python. On Pinocchio every step calls :mod:`aiauv_pin.reference.integrators`.
 """
 
 from __future__ import annotations
@@ -25,18 +25,18 @@ from aiauv_pin._internal.array_checks import (
     positive_seconds,
 )
 from aiauv_pin.controllers.compiled_controller import CompiledController, check_compiled_controller
-from aiauv_pin.dynamics.integrators import (
-    INTEGRATORS,
-    SAMPLES_INSIDE_STEP,
-    midpoint_final,
-    midpoint_stage,
-)
 from aiauv_pin.dynamics.joint_servo import JointServo
 from aiauv_pin.dynamics.lagged_added_mass import LaggedAddedMass, check_filter, check_scheme
 from aiauv_pin.errors import ArgumentError, SimulationDiverged, bounds_checked_call
 from aiauv_pin.kernels.disturbances import Disturbance
 from aiauv_pin.model.vehicle import Vehicle
-from aiauv_pin.simulation.schedule import step_actions, steps_to_next_event
+from aiauv_pin.reference.integrators import (
+    INTEGRATORS,
+    SAMPLES_INSIDE_STEP,
+    midpoint_final,
+    midpoint_stage,
+)
+from aiauv_pin.simulation.compiled_loop import step_actions, steps_to_next_event
 from aiauv_pin.simulation.step_stability import warn_if_step_near_limit
 
 #: ``controller(t, q, v) -> tau`` or ``-> (tau, info)``, with ``tau`` the generalised force (nv,) held
@@ -194,7 +194,7 @@ def simulate(
             progress bar and ``on_log`` run), or ``None`` (no input).
         method: ``"rk4"`` (Runge-Kutta-Munthe-Kaas, order 4), ``"euler"`` (semi-implicit, order 1;
             a :class:`JointServo` is implicit in it, so the servo bounds no step) or
-            ``"midpoint"`` (:func:`aiauv_pin.dynamics.integrators.midpoint_step`, two evaluations, the
+            ``"midpoint"`` (:func:`aiauv_pin.reference.integrators.midpoint_step`, two evaluations, the
             servo implicit in both, the controller called at the middle of each step: its
             sampling then costs second-order error instead of a lag of ``dt / 2``; needs
             ``control_period = dt``; the sampled controller loop bounds its step, see the

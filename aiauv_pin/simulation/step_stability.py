@@ -23,7 +23,7 @@ equations II", Sec. IV.2):
   q_dot'``): implicit Euler, ``G = (I - h A)^-1``, stable at every step when the servo is (Hairer
   and Wanner 1996, Sec. IV.3: A-stability);
 * RK4: ``G = I + hA + (hA)^2/2 + (hA)^3/6 + (hA)^4/24``;
-* the midpoint method (:func:`aiauv_pin.dynamics.integrators.midpoint_step`), both stages with the
+* the midpoint method (:func:`aiauv_pin.reference.integrators.midpoint_step`), both stages with the
   servo-implicit acceleration of a step ``h``, ``a(x) = E_v ((I - hA)^-1 - I) x / h``: ``v_1 = v +
   h/2 a(x)``, ``q_1 = q + h/2 v_1``, then ``v' = v + h a(q_1, v_1)``, ``q' = q + h v_1``.
 

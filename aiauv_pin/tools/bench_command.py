@@ -130,7 +130,7 @@ def _random_state(model, rng):
 
 def dynamics_timings(vehicle, quick: bool = False) -> dict:
     """Microseconds per dynamics evaluation and per integrator step on each backend."""
-    from aiauv_pin.dynamics.integrators import rk4_step, semi_implicit_euler_step
+    from aiauv_pin.reference.integrators import rk4_step, semi_implicit_euler_step
 
     rng = np.random.default_rng(5)
     q, v = _random_state(vehicle.model, rng)

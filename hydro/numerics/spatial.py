@@ -8,9 +8,8 @@ The products are written once, on scalars, and compiled
 kernels call them from compiled code, where LLVM inlines them (so they cost what the unrolled
 formulas cost), and the batched NumPy helpers below call their interpreted form on arrays.
 
-The rule a base-orientation quaternion must pass, :func:`unit_quaternion_check`, is here too: the
-Python argument checks (:func:`aiauv_pin._internal.array_checks.configuration`) and the compiled
-ones (:func:`aiauv_pin.kernels.handle.state_verdict`) both call it.
+The rule a base-orientation quaternion must pass, :func:`unit_quaternion_check`, is here too, written
+once for the argument checks made in Python and those made in compiled code.
 """
 
 from __future__ import annotations
