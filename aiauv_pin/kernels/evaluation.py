@@ -1,8 +1,10 @@
 """Compiled evaluation of one vehicle from Python: thin wrappers around
 :mod:`aiauv_pin.kernels.articulated_body`.
 
-:class:`FastModel` holds the vehicle's packed records (:meth:`aiauv_pin.Vehicle.packed_model`),
-a reusable workspace per thread and the default environment (still water, no disturbance).
+:class:`FastModel` holds a vehicle's packed records (:class:`~aiauv_pin.kernels.records.Model`), its
+frames, a reusable workspace per thread and the default environment (still water, no disturbance).
+It is built from the vehicle's description by :func:`aiauv_pin.model.assembly.compiled_model` and
+knows nothing of the :class:`aiauv_pin.Vehicle` that holds it (``Vehicle.fast``).
 
 Every public method checks its arguments before any compiled code runs (the kernels do not check
 indices: a ``v`` one entry too long, a short record or a non-contiguous array would be read or
@@ -147,26 +149,25 @@ class FastModel:
     several threads at once (a workspace per thread).
 
     Args:
-        vehicle: The vehicle (its ``added_mass``, ``damping`` and ``restoring`` switches are
-            honoured; they are read once, here).
-
-    Raises:
-        ValueError: The model is not supported (see :func:`aiauv_pin.kernels.records.unsupported_reason`).
+        records: The vehicle's packed records (:func:`aiauv_pin.model.assembly.packed_records`: its
+            ``added_mass``, ``damping`` and ``restoring`` switches are already in them).
+        nq, nv: Sizes of its configuration and velocity.
+        frames: ``(body, rotation (3, 3), translation (3,) [m])`` of each of its frames, by frame
+            index (:func:`aiauv_pin.model.assembly.frame_records`).
     """
 
-    def __init__(self, vehicle) -> None:
-        self.model = vehicle.packed_model()
-        self.nq, self.nv = vehicle.nq, vehicle.nv
+    def __init__(self, records, nq: int, nv: int, frames) -> None:
+        self.model = records
+        self.nq, self.nv = int(nq), int(nv)
         self.n_bodies = self.model.bodies.parent.shape[0]
         self.n_thrusters = self.model.thrusters.body.shape[0]
         self.still_water = environment()
         self.no_servo = no_servo()
-        self._frames: dict[int, tuple[int, np.ndarray, np.ndarray]] = {}
+        self._frames: tuple[tuple[int, np.ndarray, np.ndarray], ...] = tuple(frames)
         self._entries: dict = {}
         self._local = _PerThread()
         self._checked_acceleration_entry = self._checked_step_entry = None
         self._q_shape, self._v_shape = (self.nq,), (self.nv,)
-        self._pin_model = vehicle.model
         self._local.workspace = kernels.new_workspace(self.model, self.nq, self.nv)
 
     @property
@@ -366,15 +367,7 @@ class FastModel:
 
     def frame(self, frame_id: int) -> tuple[int, np.ndarray, np.ndarray]:
         """``(body, rotation, translation)`` of a Pinocchio frame, for the kernels."""
-        frame_id = frame_index(frame_id, len(self._pin_model.frames))
-        if frame_id not in self._frames:
-            frame = self._pin_model.frames[frame_id]
-            self._frames[frame_id] = (
-                int(frame.parentJoint) - 1,
-                np.ascontiguousarray(frame.placement.rotation),
-                np.ascontiguousarray(frame.placement.translation),
-            )
-        return self._frames[frame_id]
+        return self._frames[frame_index(frame_id, len(self._frames))]
 
     @project_errors("FastModel.frame_positions")
     def frame_positions(self, configurations_, frame_id: int) -> np.ndarray:
@@ -392,7 +385,7 @@ class FastModel:
         """World rotation, world position and twist in its own axes of a Pinocchio frame."""
         q = configuration(q, self.nq)
         v = float_array(v, "v", (self.nv,))
-        return self.frame_motion_unchecked(q, v, frame_index(frame_id, len(self._pin_model.frames)))
+        return self.frame_motion_unchecked(q, v, frame_index(frame_id, len(self._frames)))
 
     @project_errors("FastModel.frame_motion")
     def frame_motion_unchecked(self, q, v, frame_id: int):

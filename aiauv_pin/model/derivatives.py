@@ -41,6 +41,7 @@ from aiauv_pin._internal.array_checks import (
     optional_current,
 )
 from aiauv_pin.errors import ArgumentError, project_errors
+from aiauv_pin.model.assembly import compiled_model
 
 _LOCAL = pin.ReferenceFrame.LOCAL
 
@@ -255,9 +256,7 @@ def compiled_derivatives(vehicle) -> CompiledDerivatives:
     fast = vehicle.fast
     if fast is None:
         try:
-            from aiauv_pin.kernels import load_fast_model
-
-            fast = load_fast_model()(vehicle)
+            fast = compiled_model(vehicle.model, vehicle._assembly)
         except (ImportError, ValueError) as exc:
             raise ArgumentError(f"numba backend unavailable: {exc}") from None
     derivatives = CompiledDerivatives(fast)

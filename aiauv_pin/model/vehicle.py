@@ -45,10 +45,8 @@ import numpy as np
 import pinocchio as pin
 
 from aiauv_hydro.currents import Current, as_current
-from aiauv_hydro.laws.crossflow import gauss_legendre_unit
-from aiauv_hydro.laws.fluid_terms import CROSSFLOW_NODES, FluidModel, add_body_fluid_bias
+from aiauv_hydro.laws.fluid_terms import FluidModel, add_body_fluid_bias
 from aiauv_hydro.laws.kirchhoff import momentum_in_world
-from aiauv_hydro.numerics.spatial import motion_transform
 from aiauv_hydro.spec import HydroSpec
 from aiauv_pin._internal.array_checks import (
     EXACT_QUATERNION_DEVIATION,
@@ -60,7 +58,8 @@ from aiauv_pin._internal.array_checks import (
     optional_current,
 )
 from aiauv_pin.errors import ArgumentError, project_errors
-from aiauv_pin.kernels.records import Model, Thrusters, rigid_bodies, unsupported_reason
+from aiauv_pin.kernels.records import Model
+from aiauv_pin.model.assembly import assemble, compiled_model, packed_records
 
 _LOCAL = pin.ReferenceFrame.LOCAL
 
@@ -170,155 +169,17 @@ class Vehicle:
         self._pinocchio = _PinocchioScratch()
         self._pinocchio.data = model.createData()
         self._packed: Model | None = None
-        self._setup_fluid()
-        self._setup_thrusters()
+        # the description packed once (aiauv_pin.model.assembly): both backends evaluate it
+        self._assembly = parts = assemble(
+            model, hydro, added_mass=self.added_mass, damping=self.damping, restoring=restoring
+        )
+        self._fluid_net, self._fluid_reference = parts.fluid_net, parts.fluid_reference
+        self._thrusters = parts.thrusters
+        self._buoyancy_model, self._has_buoyancy = parts.buoyancy_model, parts.has_buoyancy
+        self._has_fluid, self._inertia_in_body = parts.has_fluid, parts.inertia_in_body
         self._fast = None
         self._fast_reason: str | None = None
         self.backend = os.environ.get("AIAUV_BACKEND", "auto") if backend is None else backend
-
-    # ------------------------------------------------------------------ set-up
-    def _link_placement(self, link: str) -> tuple[int, pin.SE3]:
-        frame_id = self.model.getFrameId(link, pin.FrameType.BODY)
-        if frame_id >= len(self.model.frames):
-            raise ValueError(f"unknown link '{link}'")
-        frame = self.model.frames[frame_id]
-        return int(frame.parentJoint), frame.placement
-
-    def _body_of(self, link: str) -> tuple[int, pin.SE3]:
-        """Index of the body (Pinocchio joint - 1) that carries ``link``, and its placement there."""
-        joint, placement = self._link_placement(link)
-        if joint < 1:
-            raise ValueError(f"link '{link}' is fixed to the world, not to the vehicle")
-        return joint - 1, placement
-
-    def _setup_fluid(self) -> None:
-        """Per-body and per-link fluid data, packed once as
-        :class:`aiauv_hydro.laws.fluid_terms.FluidModel` records."""
-        model, hydro = self.model, self.hydro
-        nb = model.njoints - 1
-        gravity = hydro.gravity if self.restoring else 0.0
-        rho = hydro.fluid_density
-        added = np.zeros((nb, 6, 6))
-        buoyancy = np.zeros((nb, 4))  # (B, B c_B) per body [N, N m]
-        probe_moment = np.zeros((nb, 3))
-        probe_volume = np.zeros(nb)
-        link_body, link_from_body = [], []
-        for link in hydro.links:
-            b, placement = self._body_of(link.link)
-            x = motion_transform(placement.rotation, placement.translation)  # nu_link = X nu_body
-            link_body.append(b)
-            link_from_body.append(x)
-            if self.added_mass:
-                added[b] += x.T @ link.added_mass @ x  # M_A moves as X^T M_A X
-            if link.volume > 0.0:
-                centre = placement.act(np.asarray(link.center_of_buoyancy, dtype=float))
-                force = rho * link.volume * gravity  # Archimedes (Fossen 2021, eq. (4.5))
-                buoyancy[b, 0] += force
-                buoyancy[b, 1:] += force * centre
-                probe_moment[b] += link.volume * centre
-                probe_volume[b] += link.volume
-        weight = np.zeros((nb, 4))  # (W, W c_G) per body
-        for b in range(nb):
-            inertia = model.inertias[b + 1]
-            weight[b, 0] = inertia.mass * gravity
-            weight[b, 1:] = inertia.mass * gravity * inertia.lever
-        probe = np.zeros((nb, 3))
-        has_volume = probe_volume > 0.0
-        probe[has_volume] = probe_moment[has_volume] / probe_volume[has_volume, None]
-        links = hydro.links if self.damping else ()
-        nl = len(links)
-        identity = np.eye(6)
-        linear = np.array([link.linear_damping for link in links]).reshape(nl, 6, 6)
-        quadratic = np.array([link.quadratic_damping for link in links]).reshape(nl, 6, 6)
-        forward = np.array([link.forward_speed_damping for link in links]).reshape(nl, 6, 6)
-        cylinder = np.tile(identity, (nl, 1, 1))
-        length = np.zeros(nl)
-        strip = np.zeros(nl)
-        has_crossflow = np.zeros(nl, dtype=np.int64)
-        for k, link in enumerate(links):
-            if link.crossflow:
-                c = link.crossflow
-                cylinder[k] = motion_transform(c.rotation, c.translation)
-                length[k], strip[k] = c.length, c.strip_coefficient
-                has_crossflow[k] = 1
-        link_from = np.array(link_from_body[:nl]).reshape(nl, 6, 6)
-        nodes, weights = gauss_legendre_unit(CROSSFLOW_NODES)
-
-        def pack(hydrostatics: np.ndarray) -> FluidModel:
-            return FluidModel(
-                added_mass=np.ascontiguousarray(added),
-                hydrostatics=np.ascontiguousarray(hydrostatics),
-                current_probe=probe,
-                link_body=np.array(link_body[:nl], dtype=np.int64),
-                link_from_body=np.ascontiguousarray(link_from),
-                link_is_body=np.array(
-                    [np.array_equal(x, identity) for x in link_from], dtype=np.int64
-                ),
-                linear_damping=np.ascontiguousarray(linear),
-                quadratic_damping=np.ascontiguousarray(quadratic),
-                quadratic_is_diagonal=np.array(
-                    [np.count_nonzero(d - np.diag(np.diag(d))) == 0 for d in quadratic],
-                    dtype=np.int64,
-                ),
-                forward_speed_damping=np.ascontiguousarray(forward),
-                has_forward_speed_damping=np.array(
-                    [np.any(d != 0.0) for d in forward], dtype=np.int64
-                ),
-                has_crossflow=has_crossflow,
-                cylinder_from_link=np.ascontiguousarray(cylinder),
-                cylinder_is_link=np.array(
-                    [np.array_equal(x, identity) for x in cylinder], dtype=np.int64
-                ),
-                cylinder_length=length,
-                strip_coefficient=strip,
-                gauss_nodes=np.ascontiguousarray(nodes),
-                gauss_weights=np.ascontiguousarray(weights),
-            )
-
-        # The kernels take weight and buoyancy through
-        # aiauv_hydro.laws.fluid_terms.hydrostatic_wrench. The Pinocchio
-        # reference computes both independently, as Pinocchio's generalised gravity of the rigid
-        # model and of a copy carrying each body's displaced mass rho V at its centre of buoyancy
-        # (Fossen 2021, eq. (4.6)), so its fluid model has no hydrostatics.
-        self._fluid_reference = pack(np.zeros((nb, 4)))
-        self._fluid_net = pack(buoyancy - weight)
-        self._setup_buoyancy_model()
-        self._has_fluid = bool(added.any() or nl)
-        # generalised inertia per Pinocchio body (rigid plus added), for the momentum
-        self._inertia_in_body = (
-            np.array([model.inertias[b + 1].matrix() for b in range(nb)]) + added
-        )
-
-    def _setup_buoyancy_model(self) -> None:
-        model = self.model
-        buoyancy_model = pin.Model(model)
-        for joint in range(model.njoints):
-            buoyancy_model.inertias[joint] = pin.Inertia.Zero()
-        rho = self.hydro.fluid_density
-        for link in self.hydro.links:
-            if link.volume == 0.0:
-                continue
-            joint, placement = self._link_placement(link.link)
-            displaced = pin.Inertia(
-                rho * link.volume, placement.act(link.center_of_buoyancy), np.zeros((3, 3))
-            )
-            buoyancy_model.inertias[joint] = buoyancy_model.inertias[joint] + displaced
-        buoyancy_model.gravity = model.gravity
-        self._buoyancy_model = buoyancy_model
-        self._pinocchio.buoyancy_data = buoyancy_model.createData()
-        self._has_buoyancy = any(link.volume != 0.0 for link in self.hydro.links)
-
-    def _setup_thrusters(self) -> None:
-        body, wrenches = [], []
-        for thruster in self.hydro.thrusters:
-            b, placement = self._body_of(thruster.link)
-            direction = placement.rotation @ thruster.direction
-            position = placement.act(thruster.position)
-            body.append(b)
-            wrenches.append(np.concatenate((direction, np.cross(position, direction))))
-        self._thrusters = Thrusters(
-            body=np.array(body, dtype=np.int64), unit_wrench=np.array(wrenches).reshape(-1, 6)
-        )
 
     def fluid_model(self, include_hydrostatics: bool = True) -> FluidModel:
         """The packed per-body and per-link fluid parameters the laws of
@@ -331,22 +192,19 @@ class Vehicle:
         return self._fluid_net if include_hydrostatics else self._fluid_reference
 
     def packed_model(self) -> Model:
-        """The vehicle as the flat records of :mod:`aiauv_pin.kernels.articulated_body` (a :class:`Model`).
-
-        Rigid data come from the Pinocchio model (joint placements, axes and inertias), fluid data
-        from :meth:`fluid_model`; both backends therefore describe one set of equations.
+        """The vehicle as the flat records of :mod:`aiauv_pin.kernels.articulated_body` (a :class:`Model`),
+        built by :func:`aiauv_pin.model.assembly.packed_records` (those of :attr:`fast` when the
+        vehicle runs compiled).
 
         Raises:
-            ValueError: A joint the kernels do not support (see :func:`unsupported_reason`).
+            ValueError: A joint the kernels do not support (see
+                :func:`aiauv_pin.kernels.records.unsupported_reason`).
         """
         if self._packed is None:
-            reason = unsupported_reason(self.model)
-            if reason is not None:
-                raise ValueError(f"fast backend: {reason}")
-            self._packed = Model(
-                bodies=rigid_bodies(self.model, self._fluid_net.added_mass),
-                fluid=self._fluid_net,
-                thrusters=self._thrusters,
+            self._packed = (
+                self._fast.model
+                if self._fast is not None
+                else packed_records(self.model, self._assembly)
             )
         return self._packed
 
@@ -413,14 +271,10 @@ class Vehicle:
             self._fast_reason = "numba is disabled (NUMBA_DISABLE_JIT)"
             return None
         try:
-            from aiauv_pin.kernels import load_fast_model
-
-            fast_model = load_fast_model()
+            return compiled_model(self.model, self._assembly, self._packed)
         except ImportError as exc:
             self._fast_reason = f"numba cannot be imported ({exc.__class__.__name__})"
             return None
-        try:
-            return fast_model(self)
         except ValueError as exc:
             self._fast_reason = str(exc)
             return None

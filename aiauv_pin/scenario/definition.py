@@ -36,7 +36,6 @@ leaves open, documented here and in the README:
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections.abc import Callable
@@ -329,7 +328,8 @@ def run_scenario(
     controller: VehiclePathFollowing | None = None,
     compiled: bool | None = None,
     after_first_chunk: Callable[[], None] | None = None,
-) -> ScenarioResult:
+    compile_only: bool = False,
+) -> ScenarioResult | None:
     """Simulate a scenario on a vehicle.
 
     ``on_log(t, q, info)`` is called at every logged sample (see :func:`aiauv_pin.simulate`).
@@ -352,6 +352,9 @@ def run_scenario(
         controller: The controller callback; ``None`` builds the paper's for ``scenario``.
         compiled: ``True`` requires the compiled path, ``False`` forbids it, ``None`` (default)
             uses it when :func:`compiled_path_following_reason` allows.
+        compile_only: Build the controller and load (or compile) the compiled loop for the run,
+            then return ``None`` without simulating (:func:`aiauv_pin.simulate`'s
+            ``compile_only``; :func:`warm_up`).
 
     Raises:
         SimulationDiverged: With the partial trajectory, if the state became non-finite.
@@ -419,8 +422,11 @@ def run_scenario(
         law,
         servo=servo,
         after_first_chunk=after_first_chunk if use_compiled else None,
+        compile_only=compile_only,
         **options,
     )
+    if compile_only:
+        return None
     wall_time = time.perf_counter() - start
     add_path_errors(vehicle, scenario, trajectory)
     if not passive:  # rows logged once per controller sample
@@ -657,25 +663,20 @@ def summary(result: ScenarioResult) -> dict:
 
 
 def warm_up(vehicle, scenario) -> None:
-    """Run two controller samples of ``scenario`` so that its compiled code is built or loaded.
+    """Load (or compile) the compiled loop of ``scenario``'s run on ``vehicle`` without simulating.
 
-    Does nothing on the Pinocchio backend (nothing to compile).
+    The controller is built and the arguments checked as for the run, and the loop is called with
+    no step to take (:func:`run_scenario` with ``compile_only``), so numba loads or compiles the
+    loop's specialisation for exactly the run's argument types and no physics runs. Does nothing
+    on the Pinocchio backend (nothing to compile).
 
     Args:
         vehicle: The :class:`~aiauv_pin.Vehicle` of the run.
-        scenario: The :class:`~aiauv_pin.scenario.definition.PaperScenario` about to run.
+        scenario: The :class:`~aiauv_pin.scenario.definition.Scenario` about to run.
+
+    Raises:
+        ValueError: A scenario the run would refuse (the same one line, before the run).
     """
     if vehicle.active_backend != "numba":
         return
-    from aiauv_pin._internal.array_checks import check_timing
-    from aiauv_pin.errors import SimulationDiverged
-
-    check_timing(scenario.duration, scenario.dt)  # the whole run's error before the short one runs
-
-    short = dataclasses.replace(
-        scenario, duration=min(scenario.duration, 2 * scenario.steps_per_control * scenario.dt)
-    )
-    try:
-        run_paper_scenario(vehicle, short, progress=False)
-    except SimulationDiverged:
-        pass  # the compiled code is built all the same; the timed run reports the divergence
+    run_scenario(vehicle, scenario, compile_only=True)

@@ -170,7 +170,8 @@ def simulate(
     after_first_chunk: Callable[[], None] | None = None,
     added_mass: str = "exact",
     lagged_filter: float = UUV_SIMULATOR_FILTER,
-) -> Trajectory:
+    compile_only: bool = False,
+) -> Trajectory | None:
     """Integrate the vehicle's dynamics with a fixed step.
 
     The controller is called at the start of every control period (default: every step); its output is
@@ -225,9 +226,13 @@ def simulate(
             step; a Python controller or none, with the dynamics on either backend).
         lagged_filter: The lagged scheme's filter coefficient ``alpha`` in ``(0, 1]``: 0.3 is UUV
             Simulator's (default), 1 gz-sim's (no filter).
+        compile_only: Check the arguments and load (or compile) the compiled loop's
+            specialisation for their types, then return ``None`` without taking a step: the
+            loop is called with no step to take (``k_start == k_stop``). With a Python
+            controller there is no loop to compile: ``None`` once the arguments are checked.
 
     Returns:
-        The trajectory.
+        The trajectory (``None`` with ``compile_only``).
 
     Raises:
         ValueError: Bad arguments (one line).
@@ -283,7 +288,10 @@ def simulate(
             on_log=on_log,
             chunk_seconds=chunk_seconds,
             after_first_chunk=after_first_chunk,
+            compile_only=compile_only,
         )
+    if compile_only:
+        return None
     step = INTEGRATORS[method]
     q, v = q0, v0
     current = as_current(current)
@@ -487,8 +495,10 @@ def _simulate_compiled(
     on_log,
     chunk_seconds: float | None,
     after_first_chunk,
-) -> Trajectory:
-    """:func:`simulate` with a compiled controller: the whole loop in compiled code."""
+    compile_only: bool = False,
+) -> Trajectory | None:
+    """:func:`simulate` with a compiled controller: the whole loop in compiled code (only loaded
+    or compiled with ``compile_only``)."""
     from aiauv_pin.kernels.evaluation import METHOD_MARKERS
     from aiauv_pin.simulation.compiled_loop import loop_for
 
@@ -516,13 +526,43 @@ def _simulate_compiled(
     environment = fast.environment(as_current(current), disturbance)
     servo_record = servo.packed() if servo is not None else fast.no_servo
     log_every = int(log_every)
-    n_logs = n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
+    n_logs = 1 if compile_only else n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
     width = controller.info_width
     log = np.empty((n_logs, 1 + nq + 2 * nv + width))
     tau = np.zeros(nv)
     info = np.full(width, np.nan)
     workspace = fast.workspace
-    run_chunk = loop_for(environment, controller.loop_function, controller.parameters)
+    loop = loop_for(environment, controller.loop_function, controller.parameters)
+
+    def run_chunk(k: int, stop: int, logged: int) -> tuple[int, int]:
+        """Steps ``k .. stop - 1`` of the run (:func:`aiauv_pin.simulation.compiled_loop.run_chunk`)."""
+        with bounds_checked_call("simulate"):
+            return loop(
+                fast.model,
+                environment,
+                servo_record,
+                controller.loop_function,
+                controller.parameters,
+                controller.state,
+                q,
+                v,
+                tau,
+                info,
+                float(dt),
+                METHOD_MARKERS[method],
+                k,
+                stop,
+                n_steps,
+                steps_per_control,
+                log_every,
+                log,
+                logged,
+                workspace,
+            )
+
+    if compile_only:  # no step to take: the call only loads or compiles the loop for these types
+        run_chunk(0, 0, 0)
+        return None
     # nothing to run between chunks (no bar, no callback, no viewer thread): one compiled call,
     # with no yield to the scheduler between chunks (a sweep's runs on a loaded machine lost
     # whole time slices there); the steps and their results are the same
@@ -545,29 +585,7 @@ def _simulate_compiled(
         while True:
             stop = min(k + chunk, n_steps)
             start_log = logged
-            with bounds_checked_call("simulate"):
-                logged, done = run_chunk(
-                    fast.model,
-                    environment,
-                    servo_record,
-                    controller.loop_function,
-                    controller.parameters,
-                    controller.state,
-                    q,
-                    v,
-                    tau,
-                    info,
-                    float(dt),
-                    METHOD_MARKERS[method],
-                    k,
-                    stop,
-                    n_steps,
-                    steps_per_control,
-                    log_every,
-                    log,
-                    logged,
-                    workspace,
-                )
+            logged, done = run_chunk(k, stop, logged)
             if on_log is not None:
                 for row in log[start_log:logged]:
                     on_log(
