@@ -168,6 +168,33 @@ def test_after_first_chunk_runs_once_and_changes_nothing(numba_vehicle):
     _same_trajectory(with_callback.trajectory, plain.trajectory, dict(rtol=0, atol=0))
 
 
+@pytest.mark.parametrize("method", ["rk4", "midpoint"])
+def test_compile_only_loads_the_runs_loop_and_takes_no_step(numba_vehicle, method):
+    """The warm-up of ``aiauv simulate`` (:func:`aiauv_pin.scenario.definition.warm_up`): the loop
+    is called with no step to take, for exactly the types the run then uses (the run compiles no
+    other specialisation), and no controller sample or step runs."""
+    from aiauv_pin.scenario.definition import warm_up
+    from aiauv_pin.simulation.compiled_loop import run_chunk
+
+    scenario = PaperScenario(duration=1.0, method=method)
+    controller = VehiclePathFollowing(numba_vehicle, PathFollowingGains.stabilised())
+    law = controller.compiled()
+    q0, v0 = numba_vehicle.neutral_configuration(), np.zeros(numba_vehicle.nv)
+    v0[0] = 0.3
+    before = [array.copy() for record in law.state for array in record]
+    assert (
+        aiauv_pin.simulate(numba_vehicle, q0, v0, 1.0, 0.01, law, method=method, compile_only=True)
+        is None
+    )
+    after = [array for record in law.state for array in record]
+    assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(before, after, strict=True))
+    assert v0[0] == 0.3  # the initial state is copied, and no step took it anywhere
+    warm_up(numba_vehicle, scenario)
+    signatures = set(run_chunk.signatures)
+    run_paper_scenario(numba_vehicle, scenario)
+    assert set(run_chunk.signatures) == signatures
+
+
 def test_on_log_sees_every_logged_sample(numba_vehicle):
     scenario = PaperScenario(duration=2.5, control_period=0.02)
     seen = {True: [], False: []}

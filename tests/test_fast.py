@@ -321,3 +321,51 @@ def test_frame_positions_of_a_run_match_the_pinocchio_frame(paper_vehicle, rng):
         np.testing.assert_allclose(p, expected, rtol=0, atol=1e-12)
     with pytest.raises(ValueError, match="configurations must have shape"):
         paper_vehicle.fast.frame_positions(np.zeros((3, 4)), frame)
+
+
+# ---------------------------------------------------------------- one builder, one state rule
+def test_the_compiled_model_is_built_from_the_description_alone(paper_vehicle, rng):
+    """:func:`aiauv_pin.model.assembly.compiled_model` builds ``Vehicle.fast`` from the Pinocchio
+    model and the packed description: no Vehicle is needed, and the result is the vehicle's."""
+    from aiauv_pin.model.assembly import assemble, compiled_model
+
+    vehicle = paper_vehicle
+    parts = assemble(vehicle.model, vehicle.hydro, added_mass=True, damping=True, restoring=True)
+    fast = compiled_model(vehicle.model, parts)
+    assert vehicle.fast is not None and vehicle.packed_model() is vehicle.fast.model
+    q, v = random_state(vehicle.model, rng)
+    tau = rng.normal(size=vehicle.nv)
+    assert np.array_equal(fast.acceleration(q, v, tau), vehicle.fast.acceleration(q, v, tau))
+    frame = vehicle.frame_id("end_effector")
+    for got, expected in zip(fast.frame(frame), vehicle.fast.frame(frame), strict=True):
+        assert np.array_equal(got, expected)
+
+
+@pytest.mark.parametrize("scale", [1.0, 1.0 + 1e-15, 1.0 + 1e-12, 1.0 + 5e-7, 1.0 + 2e-6])
+def test_python_and_compiled_state_checks_apply_one_quaternion_rule(paper_vehicle, scale):
+    """:func:`aiauv_pin._internal.array_checks.configuration` and
+    :func:`aiauv_pin.kernels.handle.state_verdict` (both through
+    :func:`aiauv_hydro.numerics.spatial.unit_quaternion_check`): same verdict, same bits."""
+    from aiauv_pin._internal.array_checks import (
+        EXACT_QUATERNION_DEVIATION,
+        QUATERNION_TOLERANCE,
+        configuration,
+    )
+    from aiauv_pin.errors import ArgumentError
+    from aiauv_pin.kernels.handle import STATE_OK, STATE_QUATERNION_NOT_UNIT, state_verdict
+
+    nq, nv = paper_vehicle.nq, paper_vehicle.nv
+    q = paper_vehicle.neutral_configuration()
+    q[3:7] = np.array([0.1, 0.2, 0.3, 0.9]) / np.linalg.norm([0.1, 0.2, 0.3, 0.9]) * scale
+    q_unit = np.full(nq, np.nan)
+    verdict, normalised = state_verdict(
+        0.0, q, np.zeros(nv), np.zeros(nv), QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION, q_unit
+    )
+    try:
+        checked = configuration(q, nq)
+    except ArgumentError:
+        assert verdict == STATE_QUATERNION_NOT_UNIT
+        return
+    assert verdict == STATE_OK
+    assert np.array_equal(q_unit if normalised else q, checked)
+    assert normalised == (checked is not q)

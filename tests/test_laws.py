@@ -258,3 +258,60 @@ def test_forward_speed_damping_closed_form_and_power(rng):
         np.testing.assert_allclose(wrench, -twist[0] * forward @ twist, rtol=1e-12, atol=1e-12)
         power = float(wrench @ twist)
         assert np.sign(power) == -np.sign(twist[0]) or abs(power) < 1e-12
+
+
+# ---------------------------------------------------------------------- measurement and checks
+def test_finite_difference_acceleration_compiled_equals_interpreted(rng):
+    """One measurement for both controllers: zero at the first sample and when ``t`` does not
+    advance, else the velocity difference over the elapsed time."""
+    functions = (
+        control_laws.finite_difference_acceleration,
+        interpreted(control_laws.finite_difference_acceleration),
+    )
+    histories = [np.zeros(5), np.zeros(5)]
+    previous = None
+    for t in (0.0, 0.1, 0.1, 0.35, 0.3, 0.6):
+        velocity = rng.normal(size=3)
+        outs = [np.full(3, np.nan), np.full(3, np.nan)]
+        for f, history, out in zip(functions, histories, outs, strict=True):
+            f(t, velocity, history, out)
+        assert np.array_equal(outs[0], outs[1])
+        assert np.array_equal(histories[0], histories[1])
+        if previous is None or t <= previous[0]:
+            assert np.array_equal(outs[0], np.zeros(3))
+        else:
+            np.testing.assert_allclose(outs[0], (velocity - previous[1]) / (t - previous[0]))
+        previous = (t, velocity)
+
+
+def test_thruster_power_on_scalars_and_arrays(rng):
+    speeds, thrusts = rng.normal(size=5), rng.normal(size=5)
+    expected = speeds * thrusts
+    compiled = [control_laws.thruster_power(s, f) for s, f in zip(speeds, thrusts, strict=True)]
+    assert np.array_equal(np.array(compiled), expected)
+    assert np.array_equal(interpreted(control_laws.thruster_power)(speeds, thrusts), expected)
+
+
+def test_unit_quaternion_rule_compiled_equals_interpreted():
+    from aiauv_hydro.numerics import spatial
+
+    tolerance, exact = 1e-6, 1e-14
+    unit = np.array([0.1, 0.2, 0.3, 0.9]) / np.linalg.norm([0.1, 0.2, 0.3, 0.9])
+    expected = {
+        0.0: spatial.QUATERNION_UNIT,
+        1e-15: spatial.QUATERNION_UNIT,
+        1e-12: spatial.QUATERNION_NORMALISE,
+        0.5e-6: spatial.QUATERNION_NORMALISE,
+        2e-6: spatial.QUATERNION_NOT_UNIT,
+        -0.5: spatial.QUATERNION_NOT_UNIT,
+        math.inf: spatial.QUATERNION_NOT_UNIT,
+        math.nan: spatial.QUATERNION_NOT_UNIT,
+    }
+    for scale, verdict in expected.items():
+        x, y, z, w = (unit * (1.0 + scale)).tolist()
+        got = [
+            f(x, y, z, w, tolerance, exact)
+            for f in (spatial.unit_quaternion_check, interpreted(spatial.unit_quaternion_check))
+        ]
+        assert got[0][0] == got[1][0] == verdict, scale
+        assert got[0][1] == got[1][1] or math.isnan(got[0][1])

@@ -181,7 +181,9 @@ def test_floor_finder_places_modules():
     assert floor_of("aiauv_hydro.spec", packages) == 1
     assert floor_of("aiauv_hydro.laws.damping", packages) == 2
     assert floor_of("aiauv_hydro", packages) == 4
-    assert floor_of("aiauv_pin.model.vehicle", packages) > floor_of("aiauv_pin.kernels.records", packages)
+    assert floor_of("aiauv_pin.model.vehicle", packages) > floor_of(
+        "aiauv_pin.kernels.records", packages
+    )
 
 
 def test_hydro_and_control_never_import_aiauv_pin_or_pinocchio():
@@ -222,7 +224,9 @@ def test_at_most_ten_modules_per_package_and_unique_file_names():
         for package in [ROOT / folder, *(ROOT / folder).rglob("*")]:
             if not (package / "__init__.py").is_file():
                 continue
-            modules = [p for p in package.glob("*.py") if p.name not in ("__init__.py", "__main__.py")]
+            modules = [
+                p for p in package.glob("*.py") if p.name not in ("__init__.py", "__main__.py")
+            ]
             if len(modules) > 10:
                 crowded.append(f"{package.relative_to(ROOT)}: {len(modules)}")
             names.update(p.name for p in modules)
@@ -273,3 +277,40 @@ def test_a_vehicle_load_reads_each_link_once(monkeypatch):
     vehicle = aiauv_pin.load_vehicle(backend="pinocchio")
     assert sorted(read) == sorted(vehicle.urdf_structure.links)  # each link read exactly once
     assert len(vehicle.hydro.links) == 9
+
+
+#: One step of ``aiauv simulate`` (docs/source/architecture.md), as calls ``(caller, callee)``:
+#: the command loads and warms, then the run goes down to the fluid laws, and the results are
+#: written once the run returned.
+WALK = [
+    ("aiauv_pin.app.cli", "aiauv_pin.scenario.definition"),  # run_scenario
+    ("aiauv_pin.scenario.definition", "aiauv_pin.simulation.fixed_step"),  # simulate
+    ("aiauv_pin.simulation.fixed_step", "aiauv_pin.simulation.compiled_loop"),  # run_chunk
+    ("aiauv_pin.simulation.compiled_loop", "aiauv_pin.controllers.paper_compiled"),  # sample
+    ("aiauv_pin.controllers.paper_compiled", "aiauv_control.laws.paper_laws"),  # the laws
+    ("aiauv_pin.controllers.paper_compiled", "aiauv_pin.kernels.articulated_body"),  # measure, act
+    ("aiauv_pin.simulation.compiled_loop", "aiauv_pin.kernels.articulated_body"),  # the step
+    ("aiauv_pin.kernels.articulated_body", "aiauv_hydro.laws.fluid_terms"),  # the fluid terms
+    ("aiauv_hydro.laws.fluid_terms", "aiauv_hydro.numerics.spatial"),  # cross products
+    ("aiauv_control.laws.paper_laws", "aiauv_hydro.numerics.spatial"),
+    ("aiauv_pin.app.cli", "aiauv_pin.results.outputs"),  # the files, after the run returned
+]
+
+
+def test_the_walk_of_one_step_goes_down_through_ten_files():
+    """Every call of the walk is an import of the caller and goes down the floors (or stays on
+    one); the walk's files are those listed in docs/source/architecture.md."""
+    graph, _ = _import_graph()
+    packages = {name for name, (_, is_package) in _modules().items() if is_package}
+    for caller, callee in WALK:
+        assert callee in graph[caller], f"{caller} does not import {callee}"
+        assert floor_of(callee, packages) <= floor_of(caller, packages), (caller, callee)
+    files = {module for edge in WALK for module in edge}
+    assert len(files) == 10
+    text = (ROOT / "docs" / "source" / "architecture.md").read_text()
+    walk = text[text.index("## One step of `aiauv simulate`") :]
+    walk = walk[: walk.index("\n## ", 1)]
+    for module in files:
+        folder, _, rest = module.partition(".")
+        folder = {v: k for k, v in PACKAGES.items()}[folder]
+        assert f"`{folder}/{rest.replace('.', '/')}.py`" in walk, module
