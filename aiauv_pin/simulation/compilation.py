@@ -9,9 +9,9 @@ compiled. Otherwise they are compiled once (about a minute of CPU time on a 2-co
 Whether a run compiled is not guessed from files: :class:`CompilationWatch` listens to numba's
 ``numba:compile`` event, which numba sends only when it compiles a function (not when it loads one
 from the cache), prints :data:`COMPILE_NOTICE` at the first and counts them. The command line also
-runs a few steps of the scenario before the timed run
-(:func:`aiauv_pin.scenario.definition.warm_up`), so that the real-time
-factor in ``summary.json`` measures the simulation and not the compilation.
+loads (or compiles) the run's compiled loop before the timed run, without taking a step
+(:func:`aiauv_pin.scenario.definition.warm_up`), so that the real-time factor in ``summary.json``
+measures the simulation and not the compilation.
 """
 
 from __future__ import annotations
