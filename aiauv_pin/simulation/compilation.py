@@ -95,5 +95,3 @@ class CompilationWatch:
 
             event.unregister("numba:compile", self._listener)
             self._listener = None
-
-
