@@ -402,7 +402,7 @@ def _rotate_full(
     )
 
 
-@compiled(fastmath=True, borrows_only=True)
+@compiled(fastmath=True, borrows_only=True, inline=True)
 def _add_child_inertia(xform, art, child, parent):
     """``art[parent] += X^T I^a X`` for the symmetric ``I^a = art[child] = [[A, B], [B^T, C]]``.
 

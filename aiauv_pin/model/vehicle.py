@@ -51,8 +51,6 @@ from aiauv_hydro.laws.kirchhoff import momentum_in_world
 from aiauv_hydro.numerics.spatial import motion_transform
 from aiauv_hydro.spec import HydroSpec
 from aiauv_pin._internal.array_checks import (
-    EXACT_QUATERNION_DEVIATION,
-    QUATERNION_TOLERANCE,
     configuration,
     finite_time,
     float_array,
@@ -573,9 +571,7 @@ class Vehicle:
         if self._fast is not None and current is None:
             # the arguments checked in the compiled call itself (the checks below cost more than
             # an evaluation); anything it does not take goes on to the checks, which name it
-            out = self._fast.checked_acceleration(
-                q, v, tau, t, QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION
-            )
+            out = self._fast.checked_acceleration(q, v, tau, t)
             if out is not None:
                 return out
         q, v, tau = self._q(q), self._v(v), self._v(tau, "tau")

@@ -192,7 +192,7 @@ def current_acceleration_wrench(added_mass, omega0, omega1, omega2, vc0, vc1, vc
     )
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, inline=True)
 def damping_wrench(linear, quadratic, quadratic_is_diagonal, twist):
     """Linear and quadratic damping ``-D_L nu_r - D_Q (|nu_r| * nu_r)`` (Fossen 2021, eq. (6.60)-(6.62)).
 
@@ -235,7 +235,7 @@ def damping_wrench(linear, quadratic, quadratic_is_diagonal, twist):
     )
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, inline=True)
 def forward_speed_damping_wrench(forward, twist):
     """Linear damping proportional to the surge speed, ``-u_r D_F nu_r``.
 
@@ -264,7 +264,7 @@ def forward_speed_damping_wrench(forward, twist):
     )
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, inline=True)
 def crossflow_wrench(velocity, length, coefficient, nodes, weights):
     """Strip-theory crossflow drag of a slender cylinder, about its rear end, cylinder axes.
 
