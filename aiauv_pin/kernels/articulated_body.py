@@ -2,7 +2,7 @@
 
 These kernels are the compiled counterpart of Pinocchio's algorithms for the models the toolkit
 simulates (a free-flyer root with 1-DOF revolute or prismatic joints), tested against Pinocchio
-(tests/test_fast.py). Every fluid term comes from :mod:`aiauv_hydro.laws.fluid_terms`, the same functions the
+(tests/kernels/test_fast.py). Every fluid term comes from :mod:`aiauv_hydro.laws.fluid_terms`, the same functions the
 Pinocchio path calls; nothing here re-implements a fluid law.
 
 The model is a :class:`Model` record (:class:`RigidBodies`, :class:`aiauv_hydro.laws.fluid_terms.FluidModel`,

@@ -29,7 +29,7 @@ evaluation overwrites is per thread: Pinocchio's ``Data`` (of the vehicle and of
 water) and the fluid scratch arrays (``threading.local``, made by ``model.createData()`` on a
 thread's first call), and the compiled workspace (:class:`aiauv_pin.kernels.evaluation.FastModel`); the
 model and the fluid parameters are only read. Results are bit-identical to the same calls made
-serially (``tests/test_fuzz_entry_points.py``). Changing ``backend`` while other threads evaluate
+serially (``tests/model/test_fuzz_entry_points.py``). Changing ``backend`` while other threads evaluate
 is not supported.
 """
 

@@ -276,7 +276,7 @@ def crossflow_wrench(velocity, length, coefficient, nodes, weights):
     ``|v_n| v_n`` loses smoothness only where ``|v_n|`` is smallest (``v_n`` is affine in ``x``), so
     ``[0, L]`` is split there and each part integrated with an ``n``-node Gauss-Legendre rule
     (16 nodes per part agree with a 200 000-point rule to better than 1e-7 relative;
-    tests/test_slender_cylinder.py).
+    tests/hydro/test_slender_cylinder.py).
 
     Args:
         velocity: Twist of the cylinder frame relative to the water, cylinder axes (6,).
@@ -471,7 +471,7 @@ def add_lagged_added_mass_bias(added_mass, relative, previous_relative, filtered
 # ---------------------------------------------------------------------- derivatives of the laws
 # One law, one place: the derivative of each law above sits here, in the same module, and is
 # called by every backend's derivative code (aiauv_pin.kernels.tangent_rnea and the Pinocchio path of
-# aiauv_pin.model.derivatives). Each is the exact derivative of what its law computes (tests/test_laws.py
+# aiauv_pin.model.derivatives). Each is the exact derivative of what its law computes (tests/hydro/test_laws.py
 # checks each against central differences of the law).
 @compiled(fastmath=True, borrows_only=True)
 def coriolis_wrench_jacobian(inertia, twist, out):
