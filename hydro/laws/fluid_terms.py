@@ -470,9 +470,9 @@ def add_lagged_added_mass_bias(added_mass, relative, previous_relative, filtered
 
 # ---------------------------------------------------------------------- derivatives of the laws
 # One law, one place: the derivative of each law above sits here, in the same module, and is
-# called by every backend's derivative code (aiauv_pin.kernels.tangent_rnea and the Pinocchio path of
-# aiauv_pin.model.derivatives). Each is the exact derivative of what its law computes (tests/hydro/test_laws.py
-# checks each against central differences of the law).
+# called by every backend's derivative code (aiauv_pin.kernels.tangent_rnea and the Pinocchio path
+# of aiauv_pin.model.derivatives). Each is the exact derivative of what its law computes
+# (tests/hydro/test_laws.py checks each against central differences of the law).
 @compiled(fastmath=True, borrows_only=True)
 def coriolis_wrench_jacobian(inertia, twist, out):
     """``d/dnu [nu x* (M nu)]`` (6, 6) into ``out``: the derivative of :func:`coriolis_wrench`.
