@@ -27,7 +27,8 @@ fatal), 42 kills of ``simulate`` in fresh folders and 12 in a reused one, sweeps
 About 20 min on a shared 2-core machine (19 min on 2026-11-23); ``--quick`` (a twentieth of the
 files, a tenth of the API calls, 3 kills, one sweep kill-and-resume) 95 s once the
 kernels are compiled. Not part of the test suite (CI time); the tests hold a short version of each
-claim (``tests/test_fuzz.py``, ``test_hostile_input.py``, ``test_kill.py``, ``test_reliability.py``).
+claim (``tests/description/test_fuzz.py``, ``tests/app/test_hostile_input.py``,
+``tests/results/test_kill.py``, ``tests/test_reliability.py``).
 """
 
 from __future__ import annotations
@@ -1234,7 +1235,7 @@ def _compare_tables(reference: list[dict], resumed: list[dict]) -> list[str]:
                 problems.append(f"{a['run_id']} {key}: {value!r} vs {other!r}")
                 continue
             # numba compiles a caller differently when its callees come from the disk cache: the
-            # last digit or two may differ between processes (tests/test_kill.py)
+            # last digit or two may differ between processes (tests/results/test_kill.py)
             if not abs(x - y) <= 1e-12 * max(abs(x), abs(y)) + 1e-15:
                 problems.append(f"{a['run_id']} {key}: {value} vs {other}")
     return problems

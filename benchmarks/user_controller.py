@@ -16,7 +16,7 @@ speed, cross-track errors, path parameter).
 ``aiauv bench`` times it against the built-in
 :func:`aiauv_pin.controllers.paper_compiled.paper_path_following`
 on the 300 s paper scenario (issue 12: a user's compiled controller within 1.5x of the built-in's
-speed); tests/test_bench.py checks that both give the same trajectory.
+speed); tests/tools/test_bench.py checks that both give the same trajectory.
 """
 
 from __future__ import annotations

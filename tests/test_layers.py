@@ -314,3 +314,42 @@ def test_the_walk_of_one_step_goes_down_through_ten_files():
         folder, _, rest = module.partition(".")
         folder = {v: k for k, v in PACKAGES.items()}[folder]
         assert f"`{folder}/{rest.replace('.', '/')}.py`" in walk, module
+
+
+#: Tests of the project as a whole (install, packaging, layout, README, notebooks, robustness
+#: across every layer) stay at the top of ``tests/``; every other test lives in the folder of the
+#: package it tests.
+PROJECT_WIDE_TESTS = {
+    "test_install_names",
+    "test_layers",
+    "test_notebooks_clean",
+    "test_packaging",
+    "test_readme",
+    "test_reliability",
+    "test_toolkit",
+    "test_wheel_metadata",
+}
+
+
+def _test_folders() -> set[str]:
+    """The folders of ``tests/`` that mirror a package: ``hydro``, ``control`` and each
+    subpackage of ``aiauv_pin`` (``_internal`` as ``internal``)."""
+    folders = {"hydro", "control"}
+    for path in (ROOT / "aiauv_pin").iterdir():
+        if (path / "__init__.py").is_file():
+            folders.add(path.name.lstrip("_"))
+    return folders
+
+
+def test_tests_mirror_the_packages():
+    folders = _test_folders()
+    misplaced = []
+    for path in sorted((ROOT / "tests").rglob("test_*.py")):
+        parts = path.relative_to(ROOT / "tests").parts
+        if len(parts) == 1:
+            if path.stem not in PROJECT_WIDE_TESTS:
+                misplaced.append(f"{path.name} (top level, not a project-wide test)")
+        elif len(parts) != 2 or parts[0] not in folders:
+            misplaced.append(f"{'/'.join(parts)} (no package {parts[0]!r})")
+    assert not misplaced, "tests not in their package's folder: " + ", ".join(misplaced)
+    assert folders - {"data"} >= {"hydro", "control", "kernels", "model", "simulation"}

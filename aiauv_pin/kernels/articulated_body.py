@@ -2,8 +2,8 @@
 
 These kernels are the compiled counterpart of Pinocchio's algorithms for the models the toolkit
 simulates (a free-flyer root with 1-DOF revolute or prismatic joints), tested against Pinocchio
-(tests/test_fast.py). Every fluid term comes from :mod:`aiauv_hydro.laws.fluid_terms`, the same functions the
-Pinocchio path calls; nothing here re-implements a fluid law.
+(tests/kernels/test_fast.py). Every fluid term comes from :mod:`aiauv_hydro.laws.fluid_terms`, the
+same functions the Pinocchio path calls; nothing here re-implements a fluid law.
 
 The model is a :class:`Model` record (:class:`RigidBodies`, :class:`aiauv_hydro.laws.fluid_terms.FluidModel`,
 :class:`Thrusters`), built by :meth:`aiauv_pin.Vehicle.packed_model`. Spatial vectors are
@@ -402,7 +402,7 @@ def _rotate_full(
     )
 
 
-@compiled(fastmath=True, borrows_only=True)
+@compiled(fastmath=True, borrows_only=True, inline=True)
 def _add_child_inertia(xform, art, child, parent):
     """``art[parent] += X^T I^a X`` for the symmetric ``I^a = art[child] = [[A, B], [B^T, C]]``.
 
@@ -816,8 +816,8 @@ def thrust_into(model, W, thrusts, out):
 def workspace(nb: int, nq: int, nv: int) -> Workspace:
     """Scratch arrays of one evaluation for ``nb`` bodies (allocate once, reuse in every step).
 
-    Built in Python: it is only called from Python, and compiling it cost 2.2 s of the first run
-    (34 array allocations, issue 15).
+    Built in Python: it is only called from Python, and compiling its 34 array allocations would
+    lengthen every first run (issue 15).
     """
     return Workspace(
         np.empty((nb, 3, 3)),
@@ -1142,8 +1142,8 @@ class MidpointMethod(NamedTuple):
 def integrator_step(method, model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
     """One step of ``method`` into ``q_out, v_out``: an :class:`EulerMethod`, :class:`RK4Method` or
     :class:`MidpointMethod` (compiled, the integrator is chosen by its type when the caller is
-    compiled, so a loop compiled for one method does not compile the others: 7 s of a first Euler
-    run, issue 15), or a code (:data:`RK4`, :data:`EULER`, :data:`MIDPOINT`) chosen at run time by
+    compiled, so a loop compiled for one method does not compile the others' code, issue 15), or
+    a code (:data:`RK4`, :data:`EULER`, :data:`MIDPOINT`) chosen at run time by
     :func:`step_into`."""
     code = method if isinstance(method, int) else method.code
     step_into(model, env, servo, t, q, v, tau, dt, code, W, q_out, v_out)

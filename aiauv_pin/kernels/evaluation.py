@@ -29,8 +29,6 @@ import numpy as np
 
 from aiauv_hydro.currents import Current, as_current
 from aiauv_pin._internal.array_checks import (
-    EXACT_QUATERNION_DEVIATION,
-    QUATERNION_TOLERANCE,
     configuration,
     configurations,
     finite_time,
@@ -104,6 +102,11 @@ _FLOAT64 = np.dtype(np.float64)
 
 #: Largest step count of :meth:`FastModel.run` (a step count beyond it is not exact in a float).
 MAX_RUN_STEPS = 2**53
+
+#: Largest integer time the fast paths convert to a float themselves (exact in a float64).
+MAX_EXACT_INT = 2**53
+
+_INFINITY = math.inf
 
 
 def _plain(array, size: int) -> bool:
@@ -263,9 +266,7 @@ class FastModel:
             ArgumentError: A bad argument (see the module docstring), before anything runs.
         """
         if current is None and servo is None and disturbance is None:
-            out = self.checked_acceleration(
-                q, v, tau, t, QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION
-            )
+            out = self.checked_acceleration(q, v, tau, t)
             if out is not None:
                 return out
         q = configuration(q, self.nq)
@@ -288,42 +289,30 @@ class FastModel:
             )
         return out
 
-    def _state_arrays(self, q, v, tau) -> bool:
-        """Whether ``q, v, tau`` have the dtype (float64, native order) and the shapes that a
-        state checked in compiled code needs (:func:`aiauv_pin.kernels.handle.state_verdict` checks
-        the rest). Not an ndarray: no ``.dtype`` (AttributeError), or refused by numba's unboxing
-        (TypeError, from its ``PyArray_Check``); the shape check keeps a 2-D array out of a 1-D
-        record, which the unboxing would overflow."""
+    def checked_acceleration(self, q, v, tau, t) -> np.ndarray | None:
+        """``dv`` in still water, the state checked in the same compiled call, or ``None``.
+
+        The fast path of :meth:`aiauv_pin.Vehicle.acceleration`: only 1-D float64 arrays and a
+        float or integer ``t`` take it; their sizes, contiguity, finiteness and quaternion are
+        checked in the compiled call (:func:`aiauv_pin.kernels.handle.state_verdict`). ``None``
+        means "not taken": the arguments were of another kind or the compiled check refused them,
+        and the caller's own checks then name the problem.
+        """
+        # the hottest entry point (benchmarks/entry_checks.py): no helper calls, no tuples
         try:
-            return (
+            if not (
                 q.dtype is _FLOAT64
                 and v.dtype is _FLOAT64
                 and tau.dtype is _FLOAT64
-                and q.shape == self._q_shape
-                and v.shape == self._v_shape
-                and tau.shape == self._v_shape
-            )
-        except AttributeError:
-            return False
-
-    def checked_acceleration(
-        self, q, v, tau, t, tolerance: float, exact_below: float
-    ) -> np.ndarray | None:
-        """``dv`` in still water, the state checked in the same compiled call, or ``None``.
-
-        The fast path of :meth:`aiauv_pin.Vehicle.acceleration`: only plain arrays (float64,
-        C-contiguous, aligned, writeable, of the right shapes) and a float or integer ``t`` take
-        it. ``None`` means "not taken": the arguments were of another kind or the compiled check
-        (:func:`aiauv_pin.kernels.handle.state_verdict`) refused them, and the caller's own checks
-        then name the problem.
-        """
-        # not through _plain / _fast_call / handle: each Python call costs about 0.1 us, and
-        # this is the hottest entry point (benchmarks/entry_checks.py); contiguity is checked
-        # from the strides in the compiled call (state_verdict)
-        if not self._state_arrays(q, v, tau):
+                and q.ndim == 1
+                and v.ndim == 1
+                and tau.ndim == 1
+            ):
+                return None
+        except AttributeError:  # not an array
             return None
         if type(t) is not float:
-            if type(t) is not int:
+            if type(t) is not int or not -MAX_EXACT_INT <= t <= MAX_EXACT_INT:
                 return None
             t = float(t)
         handle = self._local.handle
@@ -332,13 +321,11 @@ class FastModel:
         if handle is None or entry is None:  # the first call of this thread or model
             if not (_plain(q, self.nq) and _plain(v, self.nv) and _plain(tau, self.nv)):
                 return None  # (the dispatcher would compile for another layout)
-            verdict = self._fast_call(
-                checked_acceleration_of, (self.handle, t, q, v, tau, tolerance, exact_below, out)
-            )
+            verdict = self._fast_call(checked_acceleration_of, (self.handle, t, q, v, tau, out))
             self._checked_acceleration_entry = self._entries[checked_acceleration_of]
             return out if verdict == STATE_OK else None
         try:
-            verdict = entry(handle, t, q, v, tau, tolerance, exact_below, out)
+            verdict = entry(handle, t, q, v, tau, out)
         except TypeError:  # an object that only looks like an array
             return None
         return out if verdict == STATE_OK else None
@@ -416,53 +403,70 @@ class FastModel:
         Raises:
             ArgumentError: A bad argument (see the module docstring), before anything runs.
         """
-        nq, nv = self.nq, self.nv
-        code = METHOD_CODES.get(method) if type(method) is str else None
+        # the fast path (benchmarks/entry_checks.py): a still-water step of 1-D float64 arrays,
+        # their sizes, contiguity, finiteness and quaternion checked in the compiled call
+        # (aiauv_pin.kernels.handle.checked_step_of); anything else goes to the checks below
         if (
-            code is not None
-            and current is None
+            current is None
             and servo is None
             and disturbance is None
             and type(dt) is float
-            and 0.0 < dt < math.inf
-            and type(t) in (float, int)
+            and 0.0 < dt < _INFINITY
+            and (type(t) is float or (type(t) is int and -MAX_EXACT_INT <= t <= MAX_EXACT_INT))
         ):
-            out = self._checked_step(q, v, tau, dt, code, float(t))
-            if out is not None:
-                return out
+            code = METHOD_CODES.get(method) if type(method) is str else None
+            try:
+                plain = (
+                    code is not None
+                    and q.dtype is _FLOAT64
+                    and v.dtype is _FLOAT64
+                    and tau.dtype is _FLOAT64
+                    and q.ndim == 1
+                    and v.ndim == 1
+                    and tau.ndim == 1
+                )
+            except AttributeError:  # not an array
+                plain = False
+            if plain:
+                local = self._local
+                handle, entry, q_unit = local.handle, self._checked_step_entry, local.q_unit
+                q_out, v_out = np.empty(self.nq), np.empty(self.nv)
+                t = float(t)
+                if handle is None or entry is None or q_unit is None:  # first call, this thread
+                    if _plain(q, self.nq) and _plain(v, self.nv) and _plain(tau, self.nv):
+                        args = (
+                            self.handle,
+                            t,
+                            q,
+                            v,
+                            tau,
+                            dt,
+                            code,
+                            self._scratch_q(),
+                            q_out,
+                            v_out,
+                        )
+                        verdict = self._fast_call(checked_step_of, args)
+                        self._checked_step_entry = self._entries[checked_step_of]
+                        if verdict == STATE_OK:
+                            return q_out, v_out
+                else:
+                    try:
+                        verdict = entry(handle, t, q, v, tau, dt, code, q_unit, q_out, v_out)
+                    except TypeError:  # an object that only looks like an array
+                        verdict = -1
+                    if verdict == STATE_OK:
+                        return q_out, v_out
         method = method_name(method, METHOD_CODES)
-        q = configuration(q, nq)
-        v = float_array(v, "v", (nv,))
-        tau = float_array(tau, "tau", (nv,))
+        q = configuration(q, self.nq)
+        v = float_array(v, "v", (self.nv,))
+        tau = float_array(tau, "tau", (self.nv,))
         dt = positive_seconds(dt, "dt")
         t = finite_time(t)
         env = self.environment(current, disturbance)
         return self._step_unchecked(
             q, v, tau, dt, METHOD_CODES[method], env, self.servo_record(servo), t
         )
-
-    def _checked_step(self, q, v, tau, dt: float, code: int, t: float):
-        """One still-water step with the state checked in the compiled call (as
-        :meth:`checked_acceleration`: dtype and shape here, contiguity, finiteness and the
-        quaternion in :func:`aiauv_pin.kernels.handle.checked_step_of`), or ``None``."""
-        local = self._local
-        if not self._state_arrays(q, v, tau):
-            return None
-        handle, entry, q_unit = local.handle, self._checked_step_entry, local.q_unit
-        q_out, v_out = np.empty(self.nq), np.empty(self.nv)
-        args = (handle, t, q, v, tau, dt, code, QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION)
-        if handle is None or entry is None or q_unit is None:  # first call of this thread
-            if not (_plain(q, self.nq) and _plain(v, self.nv) and _plain(tau, self.nv)):
-                return None  # (the dispatcher would compile for another layout)
-            args = (self.handle, *args[1:], self._scratch_q(), q_out, v_out)
-            verdict = self._fast_call(checked_step_of, args)
-            self._checked_step_entry = self._entries[checked_step_of]
-        else:
-            try:
-                verdict = entry(*args, q_unit, q_out, v_out)
-            except TypeError:  # an object that only looks like an array
-                return None
-        return (q_out, v_out) if verdict == STATE_OK else None
 
     @project_errors("FastModel.step")
     def _step_unchecked(self, q, v, tau, dt, code, env, servo, t):

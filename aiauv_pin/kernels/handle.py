@@ -25,6 +25,7 @@ from aiauv_hydro.numerics.spatial import (
     QUATERNION_UNIT,
     unit_quaternion_check,
 )
+from aiauv_pin._internal.array_checks import EXACT_QUATERNION_DEVIATION, QUATERNION_TOLERANCE
 from aiauv_pin.kernels import articulated_body as kernels
 
 
@@ -57,17 +58,20 @@ def new_handle(model, workspace, still_water, no_servo):
 #: :func:`checked_acceleration_of`'s verdicts: the state is usable, or which argument is not.
 STATE_OK, STATE_Q_NOT_FINITE, STATE_V_NOT_FINITE, STATE_TAU_NOT_FINITE = 0, 1, 2, 3
 STATE_QUATERNION_NOT_UNIT, STATE_T_NOT_FINITE, STATE_NOT_CONTIGUOUS = 4, 5, 6
+STATE_WRONG_SIZE = 7
 
 
 @compiled
-def state_verdict(t, q, v, tau, tolerance, exact_below, q_unit):
-    """Check a state as :mod:`aiauv_pin._internal.array_checks` does, in compiled code: contiguous,
-    all finite,
-    and the base quaternion ``q[3:7]`` of unit norm within ``tolerance``.
+def state_verdict(t, q, v, tau, nq, nv, q_unit):
+    """Check a state as :mod:`aiauv_pin._internal.array_checks` does, in compiled code: sizes
+    ``nq`` and ``nv``, contiguous, all finite, and the base quaternion ``q[3:7]`` of unit norm
+    within :data:`~aiauv_pin._internal.array_checks.QUATERNION_TOLERANCE` (normalised when it
+    deviates by more than :data:`~aiauv_pin._internal.array_checks.EXACT_QUATERNION_DEVIATION`).
 
-    Contiguity is checked here, from the strides numba's unboxing copied from the arrays, before
-    any element is read (cheaper than ``flags`` in Python); the caller checks dtype and shape,
-    which the unboxing needs right (a 2-D array would overflow a 1-D record).
+    Sizes and contiguity are checked here, from the shape and strides numba's unboxing copied
+    from the arrays, before any element is read (cheaper than ``shape`` and ``flags`` in Python);
+    the caller checks the dtype and that the arrays are 1-D, which the unboxing needs right (a 2-D
+    array would overflow a 1-D record). The two tolerances are compile-time constants.
 
     The quaternion's rule is :func:`aiauv_hydro.numerics.spatial.unit_quaternion_check`, the one
     :func:`aiauv_pin._internal.array_checks.configuration` applies (not ``fastmath``: a normalised
@@ -76,32 +80,35 @@ def state_verdict(t, q, v, tau, tolerance, exact_below, q_unit):
     Args:
         t: Time [s].
         q, v, tau: Configuration (nq,), velocity and generalised force (nv,).
-        tolerance: Largest accepted ``| |quaternion| - 1 |``.
-        exact_below: Deviations up to this are left as they are.
+        nq, nv: The vehicle's sizes.
         q_unit: Output (nq,): ``q`` with its quaternion normalised, written only when it needed it.
 
     Returns:
         ``(verdict, normalised)``: a ``STATE_*`` code, and whether ``q_unit`` holds the state.
     """
+    if q.shape[0] != nq or v.shape[0] != nv or tau.shape[0] != nv:
+        return STATE_WRONG_SIZE, False
     if q.strides[0] != 8 or v.strides[0] != 8 or tau.strides[0] != 8:
         return STATE_NOT_CONTIGUOUS, False
     if not math.isfinite(t):
         return STATE_T_NOT_FINITE, False
-    for i in range(q.shape[0]):
+    for i in range(nq):
         if not math.isfinite(q[i]):
             return STATE_Q_NOT_FINITE, False
-    for i in range(v.shape[0]):
+    for i in range(nv):
         if not math.isfinite(v[i]):
             return STATE_V_NOT_FINITE, False
-    for i in range(tau.shape[0]):
+    for i in range(nv):
         if not math.isfinite(tau[i]):
             return STATE_TAU_NOT_FINITE, False
-    verdict, norm = unit_quaternion_check(q[3], q[4], q[5], q[6], tolerance, exact_below)
+    verdict, norm = unit_quaternion_check(
+        q[3], q[4], q[5], q[6], QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION
+    )
     if verdict == QUATERNION_NOT_UNIT:
         return STATE_QUATERNION_NOT_UNIT, False
     if verdict == QUATERNION_UNIT:
         return STATE_OK, False
-    for i in range(q.shape[0]):
+    for i in range(nq):
         q_unit[i] = q[i]
     for i in range(3, 7):
         q_unit[i] = q[i] / norm
@@ -109,7 +116,7 @@ def state_verdict(t, q, v, tau, tolerance, exact_below, q_unit):
 
 
 @compiled(fastmath=True)
-def checked_acceleration_of(handle, t, q, v, tau, tolerance, exact_below, out):
+def checked_acceleration_of(handle, t, q, v, tau, out):
     """:func:`aiauv_pin.kernels.articulated_body.acceleration_into` in still water without servo, after
     :func:`state_verdict`; returns its verdict (``out`` is written only when it is ``STATE_OK``).
 
@@ -117,7 +124,10 @@ def checked_acceleration_of(handle, t, q, v, tau, tolerance, exact_below, out):
     from Python costs about what the unchecked one does (issue 15).
     """
     W = handle.workspace
-    verdict, normalised = state_verdict(t, q, v, tau, tolerance, exact_below, W.q_stage)
+    nq, nv = W.q_stage.shape[0], W.v_stage.shape[0]
+    if out.shape[0] != nv:
+        return STATE_WRONG_SIZE
+    verdict, normalised = state_verdict(t, q, v, tau, nq, nv, W.q_stage)
     if verdict != STATE_OK:
         return verdict
     state = W.q_stage if normalised else q
@@ -128,13 +138,16 @@ def checked_acceleration_of(handle, t, q, v, tau, tolerance, exact_below, out):
 
 
 @compiled(fastmath=True)
-def checked_step_of(handle, t, q, v, tau, dt, method, tolerance, exact_below, q_unit, q_out, v_out):
+def checked_step_of(handle, t, q, v, tau, dt, method, q_unit, q_out, v_out):
     """:func:`aiauv_pin.kernels.articulated_body.step_into` in still water without servo, after
     :func:`state_verdict` (``q_unit`` (nq,): scratch for the normalised ``q``); returns its
     verdict (``q_out, v_out`` are written only when it is ``STATE_OK``). ``dt`` and ``method``
     are checked by the caller."""
     W = handle.workspace
-    verdict, normalised = state_verdict(t, q, v, tau, tolerance, exact_below, q_unit)
+    nq, nv = W.q_stage.shape[0], W.v_stage.shape[0]
+    if q_unit.shape[0] != nq or q_out.shape[0] != nq or v_out.shape[0] != nv:
+        return STATE_WRONG_SIZE
+    verdict, normalised = state_verdict(t, q, v, tau, nq, nv, q_unit)
     if verdict != STATE_OK:
         return verdict
     state = q_unit if normalised else q

@@ -29,7 +29,7 @@ evaluation overwrites is per thread: Pinocchio's ``Data`` (of the vehicle and of
 water) and the fluid scratch arrays (``threading.local``, made by ``model.createData()`` on a
 thread's first call), and the compiled workspace (:class:`aiauv_pin.kernels.evaluation.FastModel`); the
 model and the fluid parameters are only read. Results are bit-identical to the same calls made
-serially (``tests/test_fuzz_entry_points.py``). Changing ``backend`` while other threads evaluate
+serially (``tests/model/test_fuzz_entry_points.py``). Changing ``backend`` while other threads evaluate
 is not supported.
 """
 
@@ -49,8 +49,6 @@ from aiauv_hydro.laws.fluid_terms import FluidModel, add_body_fluid_bias
 from aiauv_hydro.laws.kirchhoff import momentum_in_world
 from aiauv_hydro.spec import HydroSpec
 from aiauv_pin._internal.array_checks import (
-    EXACT_QUATERNION_DEVIATION,
-    QUATERNION_TOLERANCE,
     configuration,
     finite_time,
     float_array,
@@ -427,9 +425,7 @@ class Vehicle:
         if self._fast is not None and current is None:
             # the arguments checked in the compiled call itself (the checks below cost more than
             # an evaluation); anything it does not take goes on to the checks, which name it
-            out = self._fast.checked_acceleration(
-                q, v, tau, t, QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION
-            )
+            out = self._fast.checked_acceleration(q, v, tau, t)
             if out is not None:
                 return out
         q, v, tau = self._q(q), self._v(v), self._v(tau, "tau")

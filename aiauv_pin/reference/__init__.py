@@ -6,7 +6,7 @@ reference the kernels are tested against:
 
 * :mod:`aiauv_pin.reference.integrators`: the integrators (RK4 Munthe-Kaas, semi-implicit Euler,
   midpoint) on Pinocchio's Lie group, any joint Pinocchio knows. They step the Pinocchio backend;
-  ``tests/test_fast.py`` pins each method to its compiled twin in
+  ``tests/kernels/test_fast.py`` pins each method to its compiled twin in
   :mod:`aiauv_pin.kernels.articulated_body` (``rk4_into``, ``euler_into``,
   ``midpoint_stage_into``/``midpoint_final_into``) to 1e-9.
 

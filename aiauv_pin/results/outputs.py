@@ -801,8 +801,8 @@ def _die_with_parent(parent: int) -> None:
     die_with_parent(parent, signal.SIGKILL)
 
 
-#: The figures from the slowest to draw to the fastest (measured, 2026-11), the order in which
-#: :func:`_run_tasks` hands them out.
+#: The figures from the slowest to draw to the fastest (their drawing times are on the docs'
+#: performance page), the order in which :func:`_run_tasks` hands them out.
 _SLOWEST_FIRST = (
     "fig7_pointing.png",
     "fig2_cross_track.png",

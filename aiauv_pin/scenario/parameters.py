@@ -6,7 +6,7 @@ unit, plausible range and meaning. It is read off the pydantic model of scenario
 (:class:`aiauv_pin.scenario.file_schemas.ScenarioFile`), so the table, the JSON Schema (``aiauv schema
 scenario``) and the checks are one declaration; the path and current keys are those of the path
 and current tables (one per ``type``, the same keys as :data:`aiauv_control.paths.PATH_TYPES` and
-:data:`aiauv_hydro.currents.CURRENT_KEYS`; ``tests/test_schemas.py`` checks that they agree).
+:data:`aiauv_hydro.currents.CURRENT_KEYS`; ``tests/scenario/test_schemas.py`` checks that they agree).
 
 Sweep specs (:mod:`aiauv_pin.scenario.sweep_spec`) use the same names: a scalar key is a sweep parameter as
 it is (``path.radius``), a vector key either whole (``start.position = [x, y, z]``) or by component

@@ -25,7 +25,7 @@ controller):
   step's stage ``t + dt/2`` instead, and once more at the end of the run (for the last row's
   diagnostics); there is no sample at ``t = 0``: the first stage runs with no input (``tau = 0``),
   since a sample there would be held by a controller's integrators as if it applied over
-  ``[0, dt/2]`` (5 mm along the path at 0.02 s on the paper's surge integral, measured in issue 15);
+  ``[0, dt/2]`` (a visible offset along the path on the paper's surge integral, issue 15);
 * a row is logged every ``log_every`` steps and at the last step, after the sample of that step.
 
 Which compiled controller the loop runs (:func:`run_controller`): a user's function, or a built-in

@@ -34,7 +34,7 @@ left out: on the paper's vehicle the servo alone gives -188.4 1/s against the fu
 So is the controller: a sampled controller whose joint references feed back the joint rates (the
 paper's attitude law, through its gain ``k_d``) closes a discrete loop that this model does not
 see. For the midpoint method, whose servo alone is stable at every step, it is that loop which
-bounds the step (measured on the paper's scenario, 2026-11-23): on the uniform vehicle (``k_d =
+bounds the step (on the paper's scenario): on the uniform vehicle (``k_d =
 19``) the run converges at 0.025 s and oscillates at every step from 0.03 s; at 0.02 s it rings for
 the first second (0.003 rad/s half a second in), and the joints' work is 0.174 J instead of the
 converged 0.107 J (0.099 J at 0.01 s); with ``k_d = 25`` it oscillates at 0.02 s, with ``k_d =

@@ -1,6 +1,6 @@
 """Process trees read from ``/proc`` (Linux), for tests that kill a command and check what is left.
 
-Used by the kill tests (``tests/test_kill.py``) and the hostile-user campaign
+Used by the kill tests (``tests/results/test_kill.py``) and the hostile-user campaign
 (``benchmarks/hostile_campaign.py``): a killed ``aiauv simulate`` or sweep must leave no child
 process running.
 """

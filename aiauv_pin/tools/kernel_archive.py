@@ -1,7 +1,7 @@
 """Build the compiled kernels shipped with the package (``aiauv_pin/kernels/shipped/<python tag>.zip``).
 
 Run after any change to a compiled source (the packages and modules declared in the entry-point
-group ``aiauv.compiled_sources`` of ``pyproject.toml``; ``tests/test_prebuilt.py`` fails until then)::
+group ``aiauv.compiled_sources`` of ``pyproject.toml``; ``tests/tools/test_prebuilt.py`` fails until then)::
 
     python -m aiauv_pin.tools.kernel_archive                 # for this Python
     python -m aiauv_pin.tools.kernel_archive --python /path/to/python3.10 /path/to/python3.12 ...

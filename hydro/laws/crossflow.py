@@ -22,7 +22,7 @@ relative error). We therefore split ``[0, L]`` at the point ``x*`` where ``|v_n(
 Gauss-Legendre rule on each of ``[0, x*]`` and ``[x*, L]``. With the default ``nodes=16`` per part
 (32 evaluations per link) the result agrees with a 200 000-point midpoint rule to better than 1e-7
 relative over random states, including states whose kink lies exactly inside the cylinder and the
-nearly-singular ones where ``|v_n|`` almost vanishes (checked in tests/test_slender_cylinder.py;
+nearly-singular ones where ``|v_n|`` almost vanishes (checked in tests/hydro/test_slender_cylinder.py;
 8 nodes give about 4e-6, 12 nodes 4e-7).
 """
 

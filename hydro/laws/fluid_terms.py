@@ -192,7 +192,7 @@ def current_acceleration_wrench(added_mass, omega0, omega1, omega2, vc0, vc1, vc
     )
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, inline=True)
 def damping_wrench(linear, quadratic, quadratic_is_diagonal, twist):
     """Linear and quadratic damping ``-D_L nu_r - D_Q (|nu_r| * nu_r)`` (Fossen 2021, eq. (6.60)-(6.62)).
 
@@ -235,7 +235,7 @@ def damping_wrench(linear, quadratic, quadratic_is_diagonal, twist):
     )
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, inline=True)
 def forward_speed_damping_wrench(forward, twist):
     """Linear damping proportional to the surge speed, ``-u_r D_F nu_r``.
 
@@ -264,7 +264,7 @@ def forward_speed_damping_wrench(forward, twist):
     )
 
 
-@compiled(fastmath=True)
+@compiled(fastmath=True, inline=True)
 def crossflow_wrench(velocity, length, coefficient, nodes, weights):
     """Strip-theory crossflow drag of a slender cylinder, about its rear end, cylinder axes.
 
@@ -276,7 +276,7 @@ def crossflow_wrench(velocity, length, coefficient, nodes, weights):
     ``|v_n| v_n`` loses smoothness only where ``|v_n|`` is smallest (``v_n`` is affine in ``x``), so
     ``[0, L]`` is split there and each part integrated with an ``n``-node Gauss-Legendre rule
     (16 nodes per part agree with a 200 000-point rule to better than 1e-7 relative;
-    tests/test_slender_cylinder.py).
+    tests/hydro/test_slender_cylinder.py).
 
     Args:
         velocity: Twist of the cylinder frame relative to the water, cylinder axes (6,).
@@ -470,9 +470,9 @@ def add_lagged_added_mass_bias(added_mass, relative, previous_relative, filtered
 
 # ---------------------------------------------------------------------- derivatives of the laws
 # One law, one place: the derivative of each law above sits here, in the same module, and is
-# called by every backend's derivative code (aiauv_pin.kernels.tangent_rnea and the Pinocchio path of
-# aiauv_pin.model.derivatives). Each is the exact derivative of what its law computes (tests/test_laws.py
-# checks each against central differences of the law).
+# called by every backend's derivative code (aiauv_pin.kernels.tangent_rnea and the Pinocchio path
+# of aiauv_pin.model.derivatives). Each is the exact derivative of what its law computes
+# (tests/hydro/test_laws.py checks each against central differences of the law).
 @compiled(fastmath=True, borrows_only=True)
 def coriolis_wrench_jacobian(inertia, twist, out):
     """``d/dnu [nu x* (M nu)]`` (6, 6) into ``out``: the derivative of :func:`coriolis_wrench`.

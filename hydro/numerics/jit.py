@@ -272,7 +272,13 @@ if _caching is not None:
         _locators.insert(0, ProjectCacheLocator)
 
 
-def compiled(function: F | None = None, *, fastmath: bool = False, borrows_only: bool = False) -> F:
+def compiled(
+    function: F | None = None,
+    *,
+    fastmath: bool = False,
+    borrows_only: bool = False,
+    inline: bool = False,
+) -> F:
     """Compile ``function`` with numba (``nopython``, cached, ``nogil``), or return it unchanged.
 
     Args:
@@ -285,8 +291,13 @@ def compiled(function: F | None = None, *, fastmath: bool = False, borrows_only:
             none and returns none (scalars and tuples of scalars only). It is then compiled
             without numba's reference counting (``_nrt=False``): every field read from a record
             (a named tuple of arrays) otherwise increments and decrements the count of each array
-            in it atomically, which took 22 % of one evaluation of the paper vehicle (measured
-            with ``perf``, issue 15). numba refuses to compile such a function if it allocates.
+            in it atomically, a large share of one evaluation (issue 15). numba refuses to compile
+            such a function if it allocates.
+        inline: Inline the function into its compiled callers (numba's ``inline="always"``, at
+            numba's IR level, so the caller's ``fastmath`` applies to the inlined body). For the
+            small per-link helpers called tens of times per evaluation, where separate compiled
+            calls cost a noticeable share of one evaluation (issue 34). Called from Python, the
+            function is compiled on its own as usual.
     """
 
     def wrap(fn: F) -> F:
@@ -297,6 +308,8 @@ def compiled(function: F | None = None, *, fastmath: bool = False, borrows_only:
             options["fastmath"] = {"reassoc", "contract", "arcp", "nsz"}
         if borrows_only:
             options["_nrt"] = False
+        if inline:
+            options["inline"] = "always"
         return numba.njit(**options)(fn)
 
     return wrap if function is None else wrap(function)

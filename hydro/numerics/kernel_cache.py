@@ -27,9 +27,8 @@ The CPU name and features are the part a native build would tie to one machine: 
 the host's exact CPU by default. On an x86-64 host that has the x86-64-v3 level (AVX2, FMA, BMI2,
 MOVBE; Intel Haswell and AMD Excavator onwards; x86-64 psABI, "Micro-architecture levels"),
 :func:`choose_portable_target` therefore makes numba compile for that level, so that one shipped
-archive serves every such machine (measured on AMD Zen 3, numba 0.68.1: one evaluation 3.59-3.61
-us portable against 3.63-3.77 us native, the RK4 step 15.0-19.6 us against 15.3-16.4 us, i.e. the
-same within the machine's noise). It does so through numba's own settings
+archive serves every such machine (portable and native code run equally fast within a shared
+machine's noise; the docs' performance page has the figures). It does so through numba's own settings
 ``NUMBA_CPU_NAME``/``NUMBA_CPU_FEATURES``, and only when the user set neither; numba reads them
 for every compiled function of the process, the user's own included.
 

@@ -20,7 +20,7 @@ from aiauv_hydro import (
     slender_cylinder_link,
 )
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 
 LINKS = """
   <link name="hull"/>

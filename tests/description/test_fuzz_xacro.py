@@ -34,7 +34,7 @@ from aiauv_pin.description.xacro_safe_eval import UnsafeXacroExpression
 from aiauv_pin.errors import AiauvError, InputLimitError
 from aiauv_pin.interop.gz import MAX_SDF_BYTES, import_gz, read_gz_model
 
-PACKAGES = Path(__file__).parent / "data" / "uuv_packages"
+PACKAGES = Path(__file__).parents[1] / "data" / "uuv_packages"
 MINIROV = PACKAGES / "minirov_description" / "robots" / "minirov.urdf.xacro"
 HEAD = '<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">'
 LINK = '<link name="a"><inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>'  # noqa: E501

@@ -21,7 +21,7 @@ from aiauv_pin.checks import consistency
 
 pytest_plugins = ["pytester"]
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 N_CHECKS = len(consistency.CHECKS)
 
 

@@ -10,7 +10,7 @@ from aiauv_pin.app.cli import main
 
 pytest.importorskip("numba")
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "straight_stabilised.toml"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "straight_stabilised.toml"
 
 
 def test_prints_the_modes_of_the_stabilised_vehicle(capsys):

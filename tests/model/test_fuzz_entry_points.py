@@ -335,7 +335,7 @@ def test_simulate_on_threads_sharing_a_vehicle_matches_serial():
 
 
 # ---------------------------------------------------------------- plausibility ranges
-TWO_LINK = Path(__file__).parent / "data" / "two_link_hydro.urdf"
+TWO_LINK = Path(__file__).parents[1] / "data" / "two_link_hydro.urdf"
 
 
 def _mutated(tmp_path: Path, old: str, new: str) -> Path:

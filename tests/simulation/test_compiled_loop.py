@@ -1,7 +1,7 @@
 """The compiled simulation loop and the paper's controller in it, against the Python loop.
 
 The laws themselves are written once (:mod:`aiauv_control.laws.paper_laws`, tested in
-tests/test_laws.py); here the
+tests/hydro/test_laws.py); here the
 vehicle side is checked: the compiled controller's measurement and action against the Python
 adapter (:class:`aiauv_pin.controllers.paper_controller.VehiclePathFollowing`) on the same state,
 whole compiled
@@ -28,7 +28,7 @@ from aiauv_pin.errors import SimulationDiverged
 from aiauv_pin.scenario.definition import PaperScenario, run_paper_scenario
 
 TIGHT = dict(rtol=1e-12, atol=1e-12)
-REFERENCE = Path(__file__).parent / "data" / "paper_reference_60s.npz"
+REFERENCE = Path(__file__).parents[1] / "data" / "paper_reference_60s.npz"
 
 
 # ---------------------------------------------------------------- whole runs

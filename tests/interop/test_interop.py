@@ -17,7 +17,7 @@ from aiauv_pin.interop.gz import export_sdf, import_gz, read_gz_model
 from aiauv_pin.interop.interop_errors import InteropError
 from aiauv_pin.interop.mjcf import export_mjcf
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 VEHICLES = {
     "paper_uniform": bundled_urdf("uniform"),
     "paper_stabilised": bundled_urdf("stabilised"),

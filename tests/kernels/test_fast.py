@@ -346,11 +346,7 @@ def test_python_and_compiled_state_checks_apply_one_quaternion_rule(paper_vehicl
     """:func:`aiauv_pin._internal.array_checks.configuration` and
     :func:`aiauv_pin.kernels.handle.state_verdict` (both through
     :func:`aiauv_hydro.numerics.spatial.unit_quaternion_check`): same verdict, same bits."""
-    from aiauv_pin._internal.array_checks import (
-        EXACT_QUATERNION_DEVIATION,
-        QUATERNION_TOLERANCE,
-        configuration,
-    )
+    from aiauv_pin._internal.array_checks import configuration
     from aiauv_pin.errors import ArgumentError
     from aiauv_pin.kernels.handle import STATE_OK, STATE_QUATERNION_NOT_UNIT, state_verdict
 
@@ -358,9 +354,7 @@ def test_python_and_compiled_state_checks_apply_one_quaternion_rule(paper_vehicl
     q = paper_vehicle.neutral_configuration()
     q[3:7] = np.array([0.1, 0.2, 0.3, 0.9]) / np.linalg.norm([0.1, 0.2, 0.3, 0.9]) * scale
     q_unit = np.full(nq, np.nan)
-    verdict, normalised = state_verdict(
-        0.0, q, np.zeros(nv), np.zeros(nv), QUATERNION_TOLERANCE, EXACT_QUATERNION_DEVIATION, q_unit
-    )
+    verdict, normalised = state_verdict(0.0, q, np.zeros(nv), np.zeros(nv), nq, nv, q_unit)
     try:
         checked = configuration(q, nq)
     except ArgumentError:

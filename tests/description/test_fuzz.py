@@ -45,8 +45,8 @@ FUZZ = settings(
 TALLY: Counter = Counter()
 
 PAPER_URDF = aiauv_pin.bundled_urdf("uniform").read_text(encoding="utf-8")
-TWO_LINK = (Path(__file__).parent / "data" / "two_link_hydro.urdf").read_text(encoding="utf-8")
-PAPER_SPEC = (Path(__file__).parents[1] / "urdf" / "paper_uniform.toml").read_text(encoding="utf-8")
+TWO_LINK = (Path(__file__).parents[1] / "data" / "two_link_hydro.urdf").read_text(encoding="utf-8")
+PAPER_SPEC = (Path(__file__).parents[2] / "urdf" / "paper_uniform.toml").read_text(encoding="utf-8")
 SWEEP_SPEC = """case = "uniform"
 duration = 1.0
 dt = 0.01

@@ -12,7 +12,7 @@ from aiauv_hydro import FRD_TO_FLU, HydroError, convert_fossen_matrices, read_hy
 from aiauv_hydro.urdf.uuv_simulator import read_uuv_simulator
 from aiauv_hydro.urdf.xml_reading import parse_bool
 
-REXROV = Path(__file__).parent / "data" / "rexrov_uuv_simulator.urdf"
+REXROV = Path(__file__).parents[1] / "data" / "rexrov_uuv_simulator.urdf"
 
 # RexROV's added mass as shipped (forward-right-down axes), row-major.
 REXROV_ADDED_MASS = np.array(

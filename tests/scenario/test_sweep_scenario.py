@@ -301,7 +301,7 @@ def test_a_sweep_on_a_base_scenario_writes_the_path_metrics(tmp_path):
 
 
 def test_example_base_scenarios_load():
-    examples = Path(__file__).resolve().parents[1] / "examples"
+    examples = Path(__file__).resolve().parents[2] / "examples"
     for name in ("line_diagonal.toml", "helix.toml"):
         spec = sweep_spec_from_toml(f'base = "{name}"\nduration = 1.0', examples)
         (point,) = spec.points()

@@ -21,7 +21,7 @@ from aiauv_pin.app.cli import main
 from aiauv_pin.checks import consistency
 from aiauv_pin.model.vehicle import Vehicle
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 
 
 def test_every_check_is_in_the_pytest_suite():

@@ -19,7 +19,7 @@ from aiauv_hydro.numerics import kernel_cache as prebuilt
 from aiauv_hydro.numerics.jit import cache_key, source_hash
 from aiauv_pin.simulation.compilation import COMPILE_NOTICE, default_target_environment
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 #: The CPython versions archives are shipped for (README, Performance).
 SHIPPED = ("py310", "py311", "py312", "py313")
 

@@ -43,7 +43,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
 SWEEPS = sorted(EXAMPLES.glob("sweep_*.toml"))
 SCENARIOS = sorted(set(EXAMPLES.glob("*.toml")) - set(SWEEPS))

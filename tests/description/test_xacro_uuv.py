@@ -23,7 +23,7 @@ from aiauv_pin.app.cli import main
 from aiauv_pin.description.xacro_loading import expand_xacro
 from aiauv_pin.errors import VehicleLoadError
 
-PACKAGES = Path(__file__).parent / "data" / "uuv_packages"
+PACKAGES = Path(__file__).parents[1] / "data" / "uuv_packages"
 MINIROV = PACKAGES / "minirov_description" / "robots" / "minirov.urdf.xacro"
 RHO = 1028.0
 G = 9.81
@@ -293,7 +293,7 @@ def test_uuv_xacro_vehicle_annotate_check_simulate(tmp_path, capsys):
 
 def test_lauv_thruster_with_swapped_clamps_and_coupled_damping():
     """LAUV's file swaps clampMin/clampMax: the plugin drops the clamp, thrustMin/Max limit it."""
-    lauv = Path(__file__).parent / "data" / "lauv_uuv_simulator.urdf"
+    lauv = Path(__file__).parents[1] / "data" / "lauv_uuv_simulator.urdf"
     with pytest.warns(UserWarning, match="off-diagonal"):
         vehicle = aiauv_pin.load_vehicle(lauv)
     (thruster,) = vehicle.hydro.thrusters
@@ -317,7 +317,7 @@ def test_eca_a9_is_read_but_refused_for_its_inertia():
     from aiauv_hydro.urdf.block_reader import read_hydrodynamics
     from aiauv_pin.errors import PhysicalParameterError
 
-    eca = Path(__file__).parent / "data" / "eca_a9_uuv_simulator.urdf"
+    eca = Path(__file__).parents[1] / "data" / "eca_a9_uuv_simulator.urdf"
     with pytest.raises(PhysicalParameterError, match="triangle inequality") as error:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

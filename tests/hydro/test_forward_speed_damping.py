@@ -13,7 +13,7 @@ import pytest
 import aiauv_pin
 from aiauv_pin.errors import AiauvError
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 
 HULL = """<robot name="torpedo">
   <link name="hull">
