@@ -6,8 +6,9 @@ the signature names that function's dispatcher object, which numba pickles throu
 per-process ``_uuid`` (numba issue 6251): a later process never finds the entry and compiles again.
 The dispatcher's ``_uuid`` is however only a name: numba's ``Dispatcher._rebuild`` (pickling, used
 for the cache index) returns the live dispatcher registered under that uuid (``_MemoMixin._memo``),
-and numba lets it be set once, before first use (``_MemoMixin._set_uuid``; checked against numba
-0.68.1, the same code since numba 0.50). :func:`stable_uuid` therefore names a user's dispatcher by
+and numba lets it be set once, before first use (``_MemoMixin._set_uuid``; read in numba 0.68.1's
+source, and of the same form in much older releases; where the private attribute is missing
+:func:`stable_uuid` names nothing and the caller falls back). :func:`stable_uuid` therefore names a user's dispatcher by
 a digest of what numba compiles from it (:func:`content_identity`), so the same function in a new
 process has the same name and its cached specialisations are found again; a changed function gets
 a new name and is compiled again.
