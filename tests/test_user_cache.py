@@ -9,13 +9,19 @@ result; editing the function compiles again.
 from __future__ import annotations
 
 import json
+import pickle
 import subprocess
 import sys
 import textwrap
 
 import pytest
 
-from aiauv_hydro.numerics.function_identity import UUID_PREFIX, content_identity, stable_uuid
+from aiauv_hydro.numerics.function_identity import (
+    UUID_PREFIX,
+    content_identity,
+    saving_only_what_pickles,
+    stable_uuid,
+)
 from aiauv_pin.simulation.compilation import default_target_environment
 
 numba = pytest.importorskip("numba")
@@ -200,3 +206,23 @@ def test_a_stable_uuid_is_given_once_and_not_over_another_dispatcher(tmp_path):
     used = _module(tmp_path, "uuid_b", source).user
     assert used._uuid  # numba names it (as when it is pickled)
     assert stable_uuid(used) is None
+
+
+def test_a_signature_numba_cannot_pickle_is_not_saved_and_the_call_goes_on():
+    """numba pickles a user's function (and its globals) into the cache index: if that fails, the
+    loop is not kept on disk, and the run that compiled it is not failed."""
+    saved = []
+
+    class Cache:
+        def save_overload(self, sig, data):
+            if sig == "unpicklable":
+                raise pickle.PicklingError("cannot pickle a lock")
+            saved.append(sig)
+
+    class Dispatcher:
+        _cache = Cache()
+
+    dispatcher = saving_only_what_pickles(Dispatcher())
+    dispatcher._cache.save_overload("unpicklable", None)
+    dispatcher._cache.save_overload("fine", None)
+    assert saved == ["fine"]

@@ -214,33 +214,6 @@ def _run_chunk_uncached():
     return numba.njit(nogil=True, error_model="numpy")(run_chunk.py_func)
 
 
-@cache
-def _run_chunk_for(uuids: tuple[str, ...]):
-    """A copy of :func:`run_chunk` cached on disk for the user's functions named ``uuids``.
-
-    Its own name (``run_chunk_for_<digest of the uuids>``) gives it its own index file in the
-    cache, so that loading it never unpickles the entries of other user functions (numba unpickles
-    a whole index: an entry naming a module since deleted would fail to load).
-    """
-    import hashlib
-    import types as python_types
-
-    import numba
-
-    from aiauv_hydro.numerics.jit import disk_cache_usable
-
-    digest = hashlib.sha256("\0".join(uuids).encode()).hexdigest()[:16]
-    source = run_chunk.py_func
-    copy = python_types.FunctionType(
-        source.__code__, source.__globals__, f"run_chunk_for_{digest}", source.__defaults__
-    )
-    copy.__qualname__ = copy.__name__
-    copy.__module__ = source.__module__
-    copy.__doc__ = source.__doc__
-    # with reference counting: a user's function may allocate and return arrays of its own
-    return numba.njit(cache=disk_cache_usable(), nogil=True, error_model="numpy")(copy)
-
-
 def loop_for(*arguments):
     """The compiled loop to call with these arguments.
 
@@ -269,3 +242,33 @@ def loop_for(*arguments):
     if None in uuids:
         return _run_chunk_uncached()
     return _run_chunk_for(tuple(sorted(set(uuids))))
+
+
+@cache
+def _run_chunk_for(uuids: tuple[str, ...]):
+    """A copy of :func:`run_chunk` cached on disk for the user's functions named ``uuids``.
+
+    Its own name (``run_chunk_for_<digest of the uuids>``) gives it its own index file in the
+    cache, so that loading it never unpickles the entries of other user functions (numba unpickles
+    a whole index: an entry naming a module since deleted would fail to load). A signature numba
+    cannot pickle into the index is not saved (the loop is then compiled in every process).
+    """
+    import hashlib
+    import types as python_types
+
+    import numba
+
+    from aiauv_hydro.numerics.function_identity import saving_only_what_pickles
+    from aiauv_hydro.numerics.jit import disk_cache_usable
+
+    digest = hashlib.sha256("\0".join(uuids).encode()).hexdigest()[:16]
+    source = run_chunk.py_func
+    copy = python_types.FunctionType(
+        source.__code__, source.__globals__, f"run_chunk_for_{digest}", source.__defaults__
+    )
+    copy.__qualname__ = copy.__name__
+    copy.__module__ = source.__module__
+    copy.__doc__ = source.__doc__
+    # with reference counting: a user's function may allocate and return arrays of its own
+    loop = numba.njit(cache=disk_cache_usable(), nogil=True, error_model="numpy")(copy)
+    return saving_only_what_pickles(loop)

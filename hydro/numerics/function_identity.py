@@ -8,10 +8,10 @@ The dispatcher's ``_uuid`` is however only a name: numba's ``Dispatcher._rebuild
 for the cache index) returns the live dispatcher registered under that uuid (``_MemoMixin._memo``),
 and numba lets it be set once, before first use (``_MemoMixin._set_uuid``; read in numba 0.68.1's
 source, and of the same form in much older releases; where the private attribute is missing
-:func:`stable_uuid` names nothing and the caller falls back). :func:`stable_uuid` therefore names a user's dispatcher by
-a digest of what numba compiles from it (:func:`content_identity`), so the same function in a new
-process has the same name and its cached specialisations are found again; a changed function gets
-a new name and is compiled again.
+:func:`stable_uuid` names nothing and the caller falls back). :func:`stable_uuid` therefore names
+a user's dispatcher by a digest of what numba compiles from it (:func:`content_identity`), so the
+same function in a new process has the same name and its cached specialisations are found again; a
+changed function gets a new name and is compiled again.
 
 What the digest covers (numba freezes globals and closure variables at compile time, so their
 values are part of the compiled code):
@@ -40,6 +40,7 @@ import dis
 import enum
 import hashlib
 import inspect
+import pickle
 import sys
 import sysconfig
 import threading
@@ -287,3 +288,23 @@ def stable_uuid(function, is_project=is_project_function) -> str | None:
             return None
         function._set_uuid(wanted)
     return wanted
+
+
+def saving_only_what_pickles(dispatcher):
+    """``dispatcher`` (numba, cached on disk), made to skip saving a specialisation whose
+    signature numba cannot pickle into its cache index, instead of failing the call that compiled
+    it: numba pickles a user's function in the signature by value, with every global it names.
+    Returns ``dispatcher``."""
+    cache = getattr(dispatcher, "_cache", None)
+    save = getattr(cache, "save_overload", None)
+    if save is None:
+        return dispatcher
+
+    def save_overload(sig, data):
+        try:
+            save(sig, data)
+        except (pickle.PicklingError, TypeError, AttributeError, RecursionError):
+            pass  # not kept: compiled again by the next process, as without the cache
+
+    cache.save_overload = save_overload
+    return dispatcher
