@@ -17,9 +17,26 @@ speed, cross-track errors, path parameter).
 :func:`aiauv_pin.controllers.paper_compiled.paper_path_following`
 on the 300 s paper scenario (issue 12: a user's compiled controller within 1.5x of the built-in's
 speed); tests/tools/test_bench.py checks that both give the same trajectory.
+
+Run as a script, it measures what a user's second process pays before its first result (issues 28
+and 34): ``python benchmarks/user_controller.py --runs 5`` starts one process that compiles the loop
+for :func:`user_path_following` (if the cache does not hold it yet), then ``--runs`` fresh processes
+that each time their first 1 s run of the paper scenario with it (set-up: loading or compiling,
+plus the 1 s run) and count numba's compilations (:class:`aiauv_pin.simulation.compilation.CompilationWatch`).
+``--uncached`` runs the loop the way it ran before it was cached by content (the uncached copy,
+compiled in every process), for comparison. Prints and writes ``benchmarks/user_setup.json``
+(median and range, with the load average before and after).
 """
 
 from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import numba
 
@@ -115,3 +132,86 @@ def user_controller(built_in: CompiledController) -> CompiledController:
         built_in.servo,
         built_in.reset,
     )
+
+
+def _second_process(uncached: bool) -> dict:
+    """In this process: the set-up time [s] of a 1 s paper run with the user's controller, and the
+    functions numba compiled for it."""
+    from aiauv_pin.simulation.compilation import CompilationWatch
+
+    start = time.perf_counter()
+    from aiauv_pin.controllers.paper_controller import VehiclePathFollowing
+    from aiauv_pin.model import loading
+    from aiauv_pin.scenario.definition import Scenario, initial_state
+    from aiauv_pin.simulation import compiled_loop
+    from aiauv_pin.simulation.fixed_step import simulate
+
+    if uncached:  # the loop as it ran before: compiled in memory for a user's function
+        compiled_loop._run_chunk_for = lambda uuids: compiled_loop._run_chunk_uncached()
+    scenario = Scenario()
+    vehicle = loading.load_vehicle(loading.bundled_urdf(scenario.case))
+    q0, v0 = initial_state(vehicle, scenario)
+    adapter = VehiclePathFollowing(
+        vehicle,
+        scenario.controller_gains,
+        continuous_joints=scenario.continuous_joints,
+        path=scenario.path_to_follow,
+    )
+    controller = user_controller(adapter.compiled())
+    ready = time.perf_counter()
+    with CompilationWatch(notice=False) as watch:
+        simulate(
+            vehicle,
+            q0,
+            v0,
+            1.0,
+            scenario.dt,
+            controller,
+            method=scenario.method,
+            current=scenario.water,
+            control_period=scenario.control_period,
+            log_every=scenario.steps_per_control,
+        )
+    done = time.perf_counter()
+    return {"first_run_s": done - ready, "imports_and_vehicle_s": ready - start,
+            "compiled": len(watch.compiled)}  # fmt: skip
+
+
+def _measure(runs: int, uncached: bool) -> dict:
+    """``runs`` fresh processes after one that fills the cache (see the module docstring)."""
+    command = [sys.executable, __file__, "--child"] + (["--uncached"] if uncached else [])
+
+    def child() -> dict:
+        done = subprocess.run(command, capture_output=True, text=True, check=True)
+        return json.loads(done.stdout.strip().splitlines()[-1])
+
+    warm = child()
+    load_before = os.getloadavg()
+    samples = [child() for _ in range(runs)]
+    load_after = os.getloadavg()
+    first = [s["first_run_s"] for s in samples]
+    return {
+        "loop": "uncached copy (before)" if uncached else "cached by content",
+        "runs": runs,
+        "warm_up_process": warm,
+        "first_run_s_median": statistics.median(first),
+        "first_run_s_range": [min(first), max(first)],
+        "compiled_per_process": [s["compiled"] for s in samples],
+        "imports_and_vehicle_s_median": statistics.median(
+            s["imports_and_vehicle_s"] for s in samples
+        ),
+        "load_average_before_after": [load_before, load_after],
+    }
+
+
+if __name__ == "__main__":
+    if "--child" in sys.argv:
+        print(json.dumps(_second_process("--uncached" in sys.argv)))
+    else:
+        runs = int(sys.argv[sys.argv.index("--runs") + 1]) if "--runs" in sys.argv else 3
+        result = _measure(runs, "--uncached" in sys.argv)
+        print(json.dumps(result, indent=2))
+        out = Path(__file__).with_name("user_setup.json")
+        previous = json.loads(out.read_text()) if out.is_file() else {}
+        previous[result["loop"]] = result
+        out.write_text(json.dumps(previous, indent=2) + "\n")

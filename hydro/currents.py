@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from aiauv_hydro.numerics.function_identity import stable_uuid
 from aiauv_hydro.numerics.jit import compiled, user_or_builtin
 from aiauv_hydro.spec import HydroError
 
@@ -133,6 +134,9 @@ class Current:
             ) from None
         object.__setattr__(self, "parameters", parameters)
         self.check()
+        # named by content before any compiled call, so that the compiled code taking it is found
+        # again by later processes (aiauv_hydro.numerics.function_identity)
+        stable_uuid(self.function)
 
     def check(self) -> None:
         """Refuse parameters the compiled code would read past or compute NaN from.

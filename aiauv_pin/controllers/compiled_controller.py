@@ -67,16 +67,21 @@ def bounds_checked(function, _seen: dict | None = None):
     a guard zone after ``info`` would catch only writes that land in it, and a first sample only
     the branches that sample takes. A write out of bounds raises ``IndexError`` inside the loop,
     which :func:`aiauv_pin.errors.as_project_error` turns into a
-    :class:`~aiauv_pin.errors.RecordSizeError`. Compiled in memory (the loop for a user's function
-    is compiled per process anyway, :func:`aiauv_pin.simulation.compiled_loop.loop_for`): numba's
-    disk cache does
-    not key on ``boundscheck``, so a cached copy could load the unchecked code.
+    :class:`~aiauv_pin.errors.RecordSizeError`.
+
+    The copy is not cached on its own (numba's disk cache does not key on ``boundscheck``, so a
+    cached copy could load the unchecked code); it is named by its content instead
+    (:func:`aiauv_hydro.numerics.function_identity.stable_uuid`: source, globals, options
+    including ``boundscheck``), so that the compiled loop that calls it is cached across processes
+    (:func:`aiauv_pin.simulation.compiled_loop.loop_for`). A function without readable source
+    (defined in a REPL) gets no such name, and the loop calling it is compiled in every process.
     """
     checked = _BOUNDS_CHECKED.get(function)
     if checked is not None:
         return checked
     import numba
 
+    from aiauv_hydro.numerics.function_identity import stable_uuid
     from aiauv_hydro.numerics.jit import is_project_function
 
     seen = {} if _seen is None else _seen
@@ -107,6 +112,7 @@ def bounds_checked(function, _seen: dict | None = None):
         if key in ("fastmath", "error_model", "nogil")
     }
     checked = numba.njit(boundscheck=True, cache=False, **options)(copy)
+    stable_uuid(checked)  # before anything pickles it (numba's cache index)
     _BOUNDS_CHECKED[function] = checked
     return checked
 

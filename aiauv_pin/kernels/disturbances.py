@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from aiauv_hydro.numerics.function_identity import stable_uuid
 from aiauv_hydro.numerics.jit import compiled, user_or_builtin
 from aiauv_pin.errors import AiauvError
 from aiauv_pin.kernels.rotations import quaternion_rotation
@@ -91,6 +92,10 @@ class Disturbance:
         if not np.all(np.isfinite(parameters)):
             raise AiauvError("disturbance parameters must be finite")
         object.__setattr__(self, "parameters", parameters)
+        if self.kind_code < 0 and hasattr(self.function, "py_func"):
+            # named by content before any compiled call, so that the compiled code taking it is
+            # found again by later processes (aiauv_hydro.numerics.function_identity)
+            stable_uuid(self.function)
 
     @classmethod
     def none(cls) -> Disturbance:

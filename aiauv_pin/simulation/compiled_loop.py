@@ -39,7 +39,7 @@ its module plus one branch there.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache, lru_cache
 from typing import NamedTuple
 
 from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled, is_project_function
@@ -329,15 +329,58 @@ def _run_chunk_uncached():
 def loop_for(*arguments):
     """The compiled loop to call with these arguments.
 
-    numba's on-disk cache stores each specialisation's signature, which names the first-class
-    functions it was compiled for; a user's own function (a controller, path, current or
-    disturbance defined outside the project) cannot be found again by a later process, so its
-    specialisations are compiled in memory, once per process, by an uncached copy of the same loop
-    (:func:`run_chunk`'s source). With only built-in functions the cached loop is used.
+    With only built-in functions it is :func:`run_chunk` (cached, shipped with the package). A
+    user's own function (a controller, path, current or disturbance defined outside the project)
+    appears in the loop's signature, and numba's on-disk cache names it by its dispatcher's uuid,
+    random in every process (numba issue 6251). Each such function is therefore named by its
+    content (:func:`aiauv_hydro.numerics.function_identity.stable_uuid`: source, globals, options,
+    recursively for the user's functions it calls), and the loop runs in a copy of
+    :func:`run_chunk` cached under a name of its own for that set of functions
+    (:func:`_run_chunk_for`): compiled once per installation and content, found again by later
+    processes, compiled again when a function's source or globals change.
+
+    A function that cannot be named by content (no readable source, e.g. defined in a REPL; a
+    global of a kind the digest does not describe) runs, as before, in an uncached copy of the loop
+    compiled once per process.
     """
     if not NUMBA_AVAILABLE:
         return run_chunk
     functions = _dispatchers(tuple(arguments), [])
     if all(is_project_function(function) for function in functions):
         return run_chunk
-    return _run_chunk_uncached()
+    from aiauv_hydro.numerics.function_identity import stable_uuid
+
+    uuids = [stable_uuid(function) for function in functions]
+    if None in uuids:
+        return _run_chunk_uncached()
+    return _run_chunk_for(tuple(sorted(set(uuids))))
+
+
+@cache
+def _run_chunk_for(uuids: tuple[str, ...]):
+    """A copy of :func:`run_chunk` cached on disk for the user's functions named ``uuids``.
+
+    Its own name (``run_chunk_for_<digest of the uuids>``) gives it its own index file in the
+    cache, so that loading it never unpickles the entries of other user functions (numba unpickles
+    a whole index: an entry naming a module since deleted would fail to load). A signature numba
+    cannot pickle into the index is not saved (the loop is then compiled in every process).
+    """
+    import hashlib
+    import types as python_types
+
+    import numba
+
+    from aiauv_hydro.numerics.function_identity import saving_only_what_pickles
+    from aiauv_hydro.numerics.jit import disk_cache_usable
+
+    digest = hashlib.sha256("\0".join(uuids).encode()).hexdigest()[:16]
+    source = run_chunk.py_func
+    copy = python_types.FunctionType(
+        source.__code__, source.__globals__, f"run_chunk_for_{digest}", source.__defaults__
+    )
+    copy.__qualname__ = copy.__name__
+    copy.__module__ = source.__module__
+    copy.__doc__ = source.__doc__
+    # with reference counting: a user's function may allocate and return arrays of its own
+    loop = numba.njit(cache=disk_cache_usable(), nogil=True, error_model="numpy")(copy)
+    return saving_only_what_pickles(loop)

@@ -322,7 +322,7 @@ def load_user_controller(path: Path = USER_CONTROLLER_FILE):
     """The module ``benchmarks/user_controller.py``, imported from its file (once per process).
 
     It is loaded under a name outside the project's packages, as a user's own module would be, so
-    the compiled loop runs its controller in the uncached copy
+    the compiled loop runs its controller in a copy cached by the function's content
     (:func:`aiauv_pin.simulation.compiled_loop.loop_for`).
     """
     import importlib.util
@@ -348,8 +348,9 @@ def controller_comparison(case: str, duration: float, repeats: int) -> dict:
     ``benchmarks/user_controller.py``; the built-in
     :func:`aiauv_pin.controllers.paper_compiled.paper_path_following`)
     with the same parameters, start state and servo, through :func:`aiauv_pin.simulate`'s compiled
-    loop. Each is run once for 1 s first, which compiles it (the user's function in the uncached
-    copy of the loop, :func:`aiauv_pin.simulation.compiled_loop.loop_for`), so compilation is excluded; then
+    loop. Each is run once for 1 s first, which compiles or loads it (the user's function in a copy of
+    the loop cached by its content, :func:`aiauv_pin.simulation.compiled_loop.loop_for`), so
+    compilation is excluded; then
     ``repeats`` runs of each, interleaved, timed in process CPU time and wall time. The ratio is
     the user's best time over the built-in's best time (and the same with the medians). The
     largest difference between the two trajectories' configurations is reported too: they run the
@@ -365,7 +366,7 @@ def controller_comparison(case: str, duration: float, repeats: int) -> dict:
     vehicle = loading.load_vehicle(loading.bundled_urdf(case))
     if vehicle.fast is None:
         return {"note": f"numba backend unavailable: {vehicle.fallback_reason}; skipped"}
-    from aiauv_pin.simulation.compiled_loop import loop_for, run_chunk
+    from aiauv_pin.simulation.compiled_loop import loop_for
 
     user_module = load_user_controller()
     scenario = Scenario(case=case, duration=duration)
@@ -414,7 +415,8 @@ def controller_comparison(case: str, duration: float, repeats: int) -> dict:
         "steps": steps,
         "repeats": repeats,
         "user_controller": f"benchmarks/{USER_CONTROLLER_FILE.name}::user_path_following",
-        "user_runs_in_uncached_loop": loop_for(controllers["user"].function) is not run_chunk,
+        # run_chunk_for_<digest>: cached by the content of the user's function (loop_for)
+        "user_loop": loop_for(controllers["user"].loop_function, built_in.parameters).__name__,
         "compilation_excluded": True,
     }
     for key in controllers:

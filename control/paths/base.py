@@ -14,6 +14,8 @@ from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
+from aiauv_hydro.numerics.function_identity import stable_uuid
+
 Vector3 = tuple[float, float, float]
 
 #: A direction whose horizontal part is shorter than this (unit vector) counts as vertical [-].
@@ -218,6 +220,9 @@ class UserPath(Path):
         if params.ndim != 1 or not np.isfinite(params).all():
             raise PathError("params", "expected a 1-D array of finite numbers")
         object.__setattr__(self, "params", params)
+        # named by content before any compiled call, so that the compiled code taking it is found
+        # again by later processes (aiauv_hydro.numerics.function_identity)
+        stable_uuid(self.function)
 
     def points_at(self, s) -> np.ndarray:
         s = np.asarray(s, dtype=float)

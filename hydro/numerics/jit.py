@@ -103,7 +103,7 @@ def package_roots() -> dict[str, Path]:
     """Import name -> folder of each package of :func:`compiled_sources` that can be imported
     (found as ``import`` would find it, without importing it)."""
     roots = {}
-    for name in sorted({source.partition('.')[0] for source in compiled_sources()}):
+    for name in sorted({source.partition(".")[0] for source in compiled_sources()}):
         module = sys.modules.get(name)
         spec = module.__spec__ if module is not None else importlib.util.find_spec(name)
         if spec is not None and spec.origin and spec.origin.endswith("__init__.py"):
@@ -325,13 +325,13 @@ def user_or_builtin(builtin: Callable) -> Callable:
     function and ``builtin(kind, *args)`` when it is ``None``, resolved at compile time.
 
     numba's on-disk cache keys a compiled function on its argument types, and the type of a
-    function passed as an argument carries that function's address, which differs in every process
-    (numba issue 6251): a cached loop that took its path, current or controller as a function
-    would be compiled again in every process (and numba's cache index eventually fails to save).
-    Built-in laws are therefore chosen by a number (``kind``) inside ``builtin`` and passed as
-    ``user = None``; only a user's own function is passed as an argument (and runs in an uncached
-    copy of the loop, see the compiled loop's ``loop_for``). Interpreted, the choice is made at
-    run time.
+    function passed as an argument names that function by a uuid random in every process (numba
+    issue 6251): a cached loop that took its path, current or controller as a function would be
+    compiled again in every process. Built-in laws are therefore chosen by a number (``kind``)
+    inside ``builtin`` and passed as ``user = None``; only a user's own function is passed as an
+    argument, named by its content (:mod:`aiauv_hydro.numerics.function_identity`) so that the code
+    compiled for it is found again (see the compiled loop's ``loop_for``). Interpreted, the choice
+    is made at run time.
     """
 
     def select(user, kind, *args):
