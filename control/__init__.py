@@ -16,6 +16,7 @@ Nothing here imports Pinocchio or the simulator.
 from aiauv_control.guidance import cross_track_gains, los_direction, los_reference
 from aiauv_control.joint_control import joint_torques
 from aiauv_control.joint_references import (
+    JointLayoutWarning,
     base_angles,
     check_joint_axes,
     joint_references,
@@ -51,6 +52,7 @@ __all__ = [
     "ANTIPODAL_TOLERANCE",
     "CASES",
     "FEEDFORWARD_OPTIONS",
+    "JointLayoutWarning",
     "PathFollowingCommand",
     "PathFollowingController",
     "PathFollowingGains",

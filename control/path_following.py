@@ -294,8 +294,9 @@ class PathFollowingController:
     """Path following by curving the body (paper, Section 3), on any path of :mod:`aiauv_control.paths`.
 
     Args:
-        joint_axes: Axis label (``"y"``/``"z"``) of each actuated joint, model order, tail to head;
-            equal numbers of each.
+        joint_axes: Axis label (``"y"``/``"z"``/``"x"``, optionally signed: ``"-z"``) of each
+            actuated joint, model order, tail to head; any numbers in any order
+            (:func:`aiauv_control.joint_references.check_joint_axes`).
         surge_thrusters: Indices (into the thrust vector) of the longitudinal thrusters.
         n_thrusters: Length of the thrust vector.
         max_thrust: Thrust limit [N], one value or one per thruster. All surge thrusters receive the

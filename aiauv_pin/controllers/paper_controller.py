@@ -46,14 +46,15 @@ END_EFFECTOR = "end_effector"
 _finite_difference_acceleration = interpreted(finite_difference_acceleration)
 _thruster_power = interpreted(thruster_power)
 
-_AXIS_OF_JOINT_TYPE = {"JointModelRX": "x", "JointModelRY": "y", "JointModelRZ": "z"}
+_AXIS_OF_JOINT_TYPE = {"JointModelRX": "+x", "JointModelRY": "+y", "JointModelRZ": "+z"}
 
 
 def joint_axis_labels(vehicle: Vehicle) -> tuple[str, ...]:
-    """Axis label (``"x"``, ``"y"`` or ``"z"``) of every actuated joint, in model order.
+    """Signed axis label (``"+x"``, ``"-y"``, ``"+z"``, ...) of every actuated joint, in model
+    order (:func:`aiauv_control.joint_references.check_joint_axes`).
 
     Raises:
-        ValueError: A joint that is not revolute about a link axis.
+        ValueError: A joint that is not revolute about a link axis (up to sign).
     """
     labels = []
     for joint in vehicle.model.joints[2:]:
@@ -66,7 +67,7 @@ def joint_axis_labels(vehicle: Vehicle) -> tuple[str, ...]:
             axis = np.asarray(axis, dtype=float)
             k = int(np.argmax(np.abs(axis)))
             if abs(abs(axis[k]) - 1.0) < 1e-9:
-                labels.append("xyz"[k])
+                labels.append(("+" if axis[k] > 0.0 else "-") + "xyz"[k])
                 continue
         raise ValueError(
             f"joint '{vehicle.model.names[joint.id]}' is not revolute about a link axis"

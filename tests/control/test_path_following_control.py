@@ -13,7 +13,12 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from aiauv_control.joint_control import joint_torques
-from aiauv_control.joint_references import base_angles, check_joint_axes, joint_references
+from aiauv_control.joint_references import (
+    JointLayoutWarning,
+    base_angles,
+    check_joint_axes,
+    joint_references,
+)
 from aiauv_control.path_following import (
     PathFollowingCommand,
     PathFollowingController,
@@ -67,12 +72,47 @@ def test_joint_references_saturate_the_base_angles_and_keep_the_shape():
     assert np.max(np.abs(q_ref)) == pytest.approx(q_max)
 
 
+def test_joint_references_for_unequal_signed_and_one_axis_layouts():
+    """Issue 31: any numbers of pitch and yaw joints in any order; a joint about a negative axis
+    gets the opposite sign, a joint about the body axis x is held straight; each axis's joints get
+    eq. (22)'s pattern counted from the tail."""
+    alpha, q0 = 0.4, np.array([0.15, -0.25])  # (q_y0, q_z0)
+    axes = ("z", "z", "y", "-z", "y", "x")  # three yaw (one negative), two pitch, one roll
+    q_ref = joint_references(q0, axes, alpha, q_max=1.0)
+    expected = [
+        -0.25,
+        -0.25 * np.exp(-alpha),
+        0.15,
+        0.25 * np.exp(-2 * alpha),
+        0.15 * np.exp(-alpha),
+        0.0,
+    ]
+    np.testing.assert_allclose(q_ref, expected, rtol=1e-15, atol=0.0)
+    assert check_joint_axes(axes) == ("+z", "+z", "+y", "-z", "+y", "+x")
+    with pytest.warns(JointLayoutWarning, match=r"yaw \(z\) only"):
+        planar = check_joint_axes(("z",) * 6)
+    np.testing.assert_allclose(
+        joint_references(q0, planar, alpha, 1.0), -0.25 * np.exp(-alpha * np.arange(6)), rtol=1e-15
+    )
+    with pytest.warns(JointLayoutWarning, match=r"pitch \(y\) only"):
+        check_joint_axes(("y", "x", "-y"))
+
+
+def test_the_paper_layout_gives_no_warning():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert check_joint_axes(PAPER_AXES) == tuple("+" + a for a in PAPER_AXES)
+
+
 @pytest.mark.parametrize(
     ("axes", "message"),
     [
-        (("z", "y", "z"), "equal"),
-        ((), "equal"),
-        (("z", "x"), "unknown"),
+        ((), "cannot be curved to steer: the vehicle has no joints"),
+        (("x", "-x"), "cannot be curved to steer: the vehicle has joints about the body axis x"),
+        (("z", "w"), "unknown"),
+        (("z", "--y"), "unknown"),
         ("zy", "string"),
     ],
 )
@@ -413,7 +453,7 @@ def test_feedforward_option_reaches_the_base_angles():
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"joint_axes": ("z", "y", "z")}, "equal"),
+        ({"joint_axes": ("x",)}, "cannot be curved"),
         ({"surge_thrusters": (2, 7)}, "surge_thrusters"),
         ({"surge_thrusters": (2, 2)}, "surge_thrusters"),
         ({"surge_thrusters": ()}, "surge_thrusters"),
