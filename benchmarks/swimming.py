@@ -6,9 +6,9 @@ Writes ``benchmarks/swimming.json`` and the figures of ``docs/source/swimming.md
 1. average forward speed of the Mamba-like snake (``urdf/mamba_like.toml``) against the gait's
    frequency, amplitude and phase offset, lateral undulation and eel-like motion (no steering);
 2. cost of transport on the paper's vehicle (uniform case) along the world x-axis at equal
-   average speed: swimming by lateral undulation (thrusters idle), by the thrusters with a
-   straight body (the thruster-turning baseline, surge PI at that speed) and combined (half the
-   amplitude, the X thrusters holding that speed);
+   average speed: swimming by lateral undulation (thrusters idle), by the X thrusters with the
+   body held straight (surge PI at that speed) and combined (half the amplitude, the X thrusters
+   holding that speed);
 3. cross-track errors of ``examples/gait_line.toml`` and ``examples/gait_waypoints.toml``.
 
     .venv/bin/python benchmarks/swimming.py
@@ -17,7 +17,9 @@ Cost of transport (Gabrielli and von Karman, "What price speed?", Mechanical Eng
 1950): ``CoT = E / (m g d)`` [-], electrical energy ``E`` [J] (the project's energy model,
 :mod:`aiauv_pin.simulation.energy`) over the distance ``d`` [m] the centre of mass advances along
 the path, per weight ``m g`` [N] of the (neutrally buoyant) vehicle; also ``E / d`` [J/m]. Both over
-whole gait periods after the start-up (the last ``WINDOW`` seconds).
+the last ``WINDOW`` seconds (120 s: 9.5 to 28.6 gait periods). Also the mechanical
+work delivered, ``max(tau q_dot, 0)`` per joint and ``max(T u_axis, 0)`` per thruster, per weight and
+distance: without the motors' copper losses and the propellers' losses.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ from aiauv_pin.model.loading import bundled_urdf
 from aiauv_pin.results.outputs import default_path_points
 from aiauv_pin.scenario.definition import Scenario, run_scenario
 from aiauv_pin.scenario.toml_file import load_scenario
-from aiauv_pin.simulation.energy import EnergyParameters, run_energy
+from aiauv_pin.simulation.energy import EnergyParameters, exact_sum, run_energy
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -51,7 +53,7 @@ MAMBA_BASE = dict(amplitude=math.radians(30.0), omega=2.0, delta=math.radians(40
 #: 30 N m/rad is set for slow body curving), and the gait of the energy comparison.
 PAPER_SERVO = dict(k_qp=300.0, k_qd=60.0)
 PAPER_GAIT = dict(amplitude=0.6, delta=0.7, k_theta=0.5, max_offset=0.2)
-PAPER_OMEGAS = (0.5, 1.0, 1.5)
+PAPER_OMEGAS = (0.5, 0.75, 1.0, 1.25, 1.5)
 DURATION, WINDOW, DT = 240.0, 120.0, 0.01
 
 
@@ -90,6 +92,13 @@ def window_energy(result, mass: float) -> dict:
         EnergyParameters(),
     )
     cross = np.hypot(info["cross_track"][k0:, 0], info["cross_track"][k0:, 1])
+    step = np.diff(t[k0:])
+    # mechanical work delivered: joints max(tau q_dot, 0), thrusters max(T u_axis, 0)
+    joint_mech = np.maximum(
+        np.asarray(info["joint_torque"])[k0:-1] * np.asarray(tr.v)[k0:-1, 6:], 0.0
+    )
+    thruster_mech = np.maximum(np.asarray(info["thruster_power"])[k0:-1], 0.0)
+    mechanical = exact_sum(joint_mech * step[:, None]) + exact_sum(thruster_mech * step[:, None])
     return {
         "speed": e.distance / (t[-1] - t[k0]),
         "thrusters_J": e.thrusters,
@@ -98,39 +107,39 @@ def window_energy(result, mass: float) -> dict:
         "distance_m": e.distance,
         "per_metre_J_per_m": e.per_metre,
         "cost_of_transport": e.total / (mass * 9.81 * e.distance),
+        "mechanical_J": mechanical,
+        "mechanical_cost_of_transport": mechanical / (mass * 9.81 * e.distance),
         "max_cross_track_m": float(cross.max()),
     }
 
 
 def paper_runs(vehicle) -> list[dict]:
-    """For each gait frequency: undulation alone, then thrusters alone and combined at its speed."""
+    """For each gait frequency: undulation alone, then the thrusters alone (straight body) and
+    combined (half the amplitude) at its average speed."""
     mass = sum(inertia.mass for inertia in list(vehicle.model.inertias)[1:])
     start = dict(start_position=(0.0, 0.0, 0.0), heading=(1.0, 0.0, 0.0), dt=DT)
     rows = []
     for omega in PAPER_OMEGAS:
         gait = Gait("lateral_undulation", omega=omega, **PAPER_GAIT)
-        base = Scenario(duration=DURATION, controller="gait", gait=gait, **start)
-        base = _with_gains(base, **PAPER_SERVO)
-        swim = window_energy(run_scenario(vehicle, base), mass)
-        u = swim["speed"]
-        thr = Scenario(duration=DURATION, controller="thruster_turning", **start)
-        thr = _with_gains(thr, u_d=u)
-        half = Gait(
-            "lateral_undulation",
-            omega=omega,
-            thrust="surge",
-            **{**PAPER_GAIT, "amplitude": PAPER_GAIT["amplitude"] / 2},
-        )
+        swim = Scenario(duration=DURATION, controller="gait", gait=gait, **start)
+        swim = _with_gains(swim, **PAPER_SERVO)
+        swam = window_energy(run_scenario(vehicle, swim), mass)
+        u = swam["speed"]
+        # the straight body pushed by the X thrusters: the gait with zero amplitude and no offset
+        # (on a straight line in still water from a start on it, nothing needs steering)
+        straight = Gait(amplitude=0.0, k_theta=0.0, max_offset=0.0, thrust="surge")
+        thrusters = Scenario(duration=DURATION, controller="gait", gait=straight, **start)
+        thrusters = _with_gains(thrusters, u_d=u, **PAPER_SERVO)
+        options = {**PAPER_GAIT, "amplitude": PAPER_GAIT["amplitude"] / 2}
+        half = Gait("lateral_undulation", omega=omega, thrust="surge", **options)
         both = Scenario(duration=DURATION, controller="gait", gait=half, **start)
         both = _with_gains(both, u_d=u, **PAPER_SERVO)
-        for mode, scenario in (("undulation", base), ("thrusters", thr), ("combined", both)):
-            row = (
-                swim
-                if mode == "undulation"
-                else window_energy(run_scenario(vehicle, scenario), mass)
-            )
+        for mode, scenario in (("thrusters", thrusters), ("combined", both)):
+            row = window_energy(run_scenario(vehicle, scenario), mass)
             rows.append({"omega": omega, "mode": mode, **row})
-            print(rows[-1])
+        rows.insert(len(rows) - 2, {"omega": omega, "mode": "undulation", **swam})
+        for row in rows[-3:]:
+            print({k: round(v, 4) if isinstance(v, float) else v for k, v in row.items()})
     return rows
 
 
