@@ -173,3 +173,29 @@ def test_gait_follows_the_example_paths(name, final, last):
     assert error[-1] < final
     assert error[t >= t[-1] - 30.0].max() < last
     assert result.trajectory.info["path_s"][-1] > 8.0
+
+
+def test_the_measured_centre_of_mass_is_pinocchios():
+    """The gait steers the centre of mass: its position and speed along the mean heading, measured
+    in the compiled controller, agree with Pinocchio's ``centerOfMass`` to 1e-9."""
+    import pinocchio as pin
+
+    vehicle = aiauv_pin.load_vehicle()
+    law = VehicleGait(vehicle, Gait(amplitude=0.6, omega=1.0), PathFollowingGains(k_qp=300.0))
+    trajectory = aiauv_pin.simulate(
+        vehicle,
+        vehicle.neutral_configuration(),
+        np.zeros(vehicle.nv),
+        5.0,
+        0.01,
+        law.compiled(),
+        servo=law.joint_servo,
+        method="euler",
+    )
+    q, v = np.asarray(trajectory.q)[-1], np.asarray(trajectory.v)[-1]
+    data = vehicle.model.createData()
+    centre = pin.centerOfMass(vehicle.model, data, q, v)
+    np.testing.assert_allclose(trajectory.info["centre"][-1], centre, rtol=0.0, atol=1e-9)
+    heading = trajectory.info["heading"][-1]
+    along = data.vcom[0][0] * math.cos(heading) + data.vcom[0][1] * math.sin(heading)
+    assert trajectory.info["speed"][-1] == pytest.approx(along, abs=1e-9)
