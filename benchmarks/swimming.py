@@ -9,7 +9,8 @@ Writes ``benchmarks/swimming.json`` and the figures of ``docs/source/swimming.md
    average speed: swimming by lateral undulation (thrusters idle), by the X thrusters with the
    body held straight (surge PI at that speed) and combined (half the amplitude, the X thrusters
    holding that speed);
-3. cross-track errors of ``examples/gait_line.toml`` and ``examples/gait_waypoints.toml``.
+3. cross-track errors of ``examples/gait_line.toml``, ``gait_waypoints.toml`` and
+   ``gait_circle.toml``.
 
     .venv/bin/python benchmarks/swimming.py
 
@@ -55,6 +56,8 @@ PAPER_SERVO = dict(k_qp=300.0, k_qd=60.0)
 PAPER_GAIT = dict(amplitude=0.6, delta=0.7, k_theta=0.5, max_offset=0.2)
 PAPER_OMEGAS = (0.5, 0.75, 1.0, 1.25, 1.5)
 DURATION, WINDOW, DT = 240.0, 120.0, 0.01
+#: The path-following examples whose cross-track errors are drawn.
+EXAMPLES = ("gait_line", "gait_waypoints", "gait_circle")
 
 
 def mamba_speed(vehicle, kind: str, duration: float = 60.0, **gait) -> float:
@@ -166,7 +169,7 @@ def mamba_sweeps(vehicle) -> dict:
 
 def cross_track_runs() -> dict:
     out = {}
-    for name in ("gait_line", "gait_waypoints"):
+    for name in EXAMPLES:
         scenario = load_scenario(ROOT / "examples" / f"{name}.toml")
         vehicle = aiauv_pin.load_vehicle(scenario.vehicle)
         result = run_scenario(vehicle, scenario)
@@ -232,8 +235,8 @@ def figures(data: dict) -> None:
     fig.savefig(FIGURES / "cost_of_transport.png", dpi=110)
     plt.close(fig)
 
-    fig, axes = plt.subplots(3, 1, figsize=(6, 8))
-    for ax, name in zip(axes, ("gait_line", "gait_waypoints"), strict=False):
+    fig, axes = plt.subplots(4, 1, figsize=(6, 10.5))
+    for ax, name in zip(axes, EXAMPLES, strict=False):
         run = data["cross_track"][name]
         ax.plot(run["t"], run["cross_track"])
         ax.axhline(0.0, color="k", lw=0.6)
@@ -244,10 +247,10 @@ def figures(data: dict) -> None:
         )
     run = data["cross_track"]["gait_waypoints"]
     path, centre = np.array(run["path"]), np.array(run["centre"])
-    axes[2].plot(path[:, 0], path[:, 1], "k--", lw=0.8, label="path")
-    axes[2].plot(centre[:, 0], centre[:, 1], label="centre of mass")
-    axes[2].set(xlabel="x [m]", ylabel="y [m]", aspect="equal", title="gait_waypoints: plan view")
-    axes[2].legend()
+    axes[3].plot(path[:, 0], path[:, 1], "k--", lw=0.8, label="path")
+    axes[3].plot(centre[:, 0], centre[:, 1], label="centre of mass")
+    axes[3].set(xlabel="x [m]", ylabel="y [m]", aspect="equal", title="gait_waypoints: plan view")
+    axes[3].legend()
     fig.tight_layout()
     fig.savefig(FIGURES / "gait_cross_track.png", dpi=110)
     plt.close(fig)
