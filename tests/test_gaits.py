@@ -220,3 +220,25 @@ def test_a_sweep_over_gait_keys_gives_distinct_runs():
     faster = dict(resolved, **{"gait.omega": 3.0})
     assert run_id(faster) != run_id(resolved)
     assert scenario_from_parameters(faster).gait.omega == 3.0
+
+
+def test_a_gait_built_for_another_vehicle_is_refused(mamba):
+    """The compiled loop checks the gait's records against the vehicle it runs (one line)."""
+    from aiauv_pin.dynamics.joint_servo import JointServo
+    from aiauv_pin.errors import RecordSizeError
+
+    law = VehicleGait(mamba, Gait(), SERVO)
+    paper = aiauv_pin.load_vehicle()
+    servo = JointServo.uniform(paper.nv - 6, 10.0, 0.3)  # the right size: the records are not
+    with pytest.raises(RecordSizeError) as caught:
+        aiauv_pin.simulate(
+            paper,
+            paper.neutral_configuration(),
+            np.zeros(paper.nv),
+            0.1,
+            0.01,
+            law.compiled(),
+            servo=servo,
+            method="euler",
+        )
+    assert "\n" not in str(caught.value)
