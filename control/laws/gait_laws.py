@@ -17,11 +17,13 @@ biologically inspired swimming snake robots", IEEE Robotics & Automation Magazin
   eel-like motion (amplitude growing from head to tail);
 * the directional (heading) controller (:func:`heading_offset`): the offset steers the snake,
   ``phi_0 = k_theta (theta_bar - theta_ref)`` saturated at ``phi_0_max``, with ``theta_bar`` the
-  snake's mean heading [rad] and ``theta_ref`` the LOS heading. This is the proportional
-  law of the type used in Kelasidi 2017's experiments (their model-based law adds terms in the
-  reference's derivatives that we do not use); the sign is theirs, for joint angles
-  ``phi_i = theta_i - theta_{i+1}`` (link ``i`` behind link ``i + 1``), so a positive offset turns
-  the snake towards smaller heading;
+  snake's mean heading [rad] and ``theta_ref`` the LOS heading: a proportional heading law on the
+  offset, of the form of Kelasidi 2017's directional controller (their model-based controller
+  adds feedforward terms in the reference's derivatives, not used here; we have not checked our
+  form against their equation numbers). Joint angles as we read their convention,
+  ``phi_i = theta_i - theta_{i+1}`` (link ``i`` behind link ``i + 1``): a positive offset turns the
+  snake towards smaller heading (the path-following tests check that the snake turns towards
+  ``theta_ref``);
 * the LOS and integral LOS heading reference (Kelasidi 2017, after Borhaug et al. 2008):
   ``theta_ref = -atan((p_y + sigma y_int) / Delta)`` on the x-axis, ``y_int_dot = Delta p_y /
   ((p_y + sigma y_int)^2 + Delta^2)``, with lookahead distance ``Delta`` [m]. On our paths (line,
@@ -99,8 +101,9 @@ def wrap_angle(angle):
 @compiled
 def heading_offset(heading, heading_ref, k_theta, max_offset):
     """Gait offset ``phi_0 = sat(k_theta (theta_bar - theta_ref))`` [rad], saturated at
-    ``+-max_offset`` (Kelasidi 2017's directional controller, proportional form; their sign
-    convention, see the module docstring). The heading error is wrapped into ``[-pi, pi)``.
+    ``+-max_offset`` (a proportional heading law of the form of Kelasidi 2017's directional
+    controller; sign convention in the module docstring). The heading error is wrapped into
+    ``[-pi, pi)``.
 
     Args:
         heading: Mean heading ``theta_bar`` [rad].
