@@ -83,10 +83,10 @@ def _add_simulate(subparsers) -> None:
     )
     parser.add_argument(
         "--controller",
-        choices=("paper", "none", "thruster_turning"),
+        choices=("paper", "none", "thruster_turning", "gait"),
         default=None,
-        help="the paper's path following, none (a passive run), or the thruster-turning "
-        "baseline (paper)",
+        help="the paper's path following, none (a passive run), the thruster-turning "
+        "baseline, or a serpentine gait (the file's [gait], else its defaults) (paper)",
     )
     parser.add_argument(
         "--added-mass",

@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from aiauv_pin.controllers.gait_compiled import gait_info_shapes, serpentine_gait
 from aiauv_pin.controllers.paper_compiled import (
     paper_info_shapes,
     paper_path_following,
@@ -50,7 +51,7 @@ from aiauv_pin.errors import ArgumentError, RecordSizeError
 
 #: The built-in compiled controllers: given to the compiled loop as ``None``, which chooses them by
 #: their parameters' type (:func:`aiauv_pin.simulation.compiled_loop.run_controller`).
-BUILTIN_CONTROLLERS = (passive, paper_path_following, thruster_turning)
+BUILTIN_CONTROLLERS = (passive, paper_path_following, thruster_turning, serpentine_gait)
 
 _BOUNDS_CHECKED: dict = {}
 
@@ -133,6 +134,14 @@ def _sizes_of_builtin(function, n_joints: int, n_thrusters: int):
         shapes = turning_info_shapes(n_joints, n_thrusters)
         fields = dict.fromkeys(("plane", "force_coeff", "moment_coeff", "surge_mask"), n_thrusters)
         fields.update(dict.fromkeys(("joint_stiffness", "joint_damping"), n_joints))
+    elif function is serpentine_gait:
+        shapes = gait_info_shapes(n_joints, n_thrusters)
+        fields = dict.fromkeys(
+            ("tail_index", "joint_sign", "servo_references", "joint_stiffness", "joint_damping"),
+            n_joints,
+        )
+        fields["surge_mask"] = n_thrusters
+        fields["link_mass"] = n_joints + 1
     else:
         return None
     return sum(int(np.prod(s, dtype=int)) for s in shapes.values()), fields

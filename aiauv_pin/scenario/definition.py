@@ -49,6 +49,7 @@ from aiauv_control.paths import LinePath, Path
 from aiauv_hydro.currents import Current, as_current
 from aiauv_hydro.laws.fluid_terms import UUV_SIMULATOR_FILTER
 from aiauv_pin.controllers.compiled_controller import CompiledController
+from aiauv_pin.controllers.gait_controller import Gait, VehicleGait
 from aiauv_pin.controllers.paper_controller import (
     END_EFFECTOR,
     VehiclePathFollowing,
@@ -63,8 +64,9 @@ from aiauv_pin.simulation.step_stability import warn_if_oscillating
 
 CASES = ("uniform", "stabilised")
 #: Controllers a scenario can name: the paper's path following (turning with the body), none
-#: (passive run), or the thruster-turning baseline (:mod:`aiauv_pin.controllers.turning_controller`).
-CONTROLLERS = ("paper", "none", "thruster_turning")
+#: (passive run), the thruster-turning baseline (:mod:`aiauv_pin.controllers.turning_controller`),
+#: or a serpentine gait (:mod:`aiauv_pin.controllers.gait_controller`).
+CONTROLLERS = ("paper", "none", "thruster_turning", "gait")
 
 
 @dataclass(frozen=True)
@@ -93,8 +95,11 @@ class Scenario:
         start_position: End-effector start in the world [m] (default ``(0, *initial_offset)``).
         heading: Direction the straight vehicle points at the start (default: the path's tangent
             at the point closest to the start).
-        controller: ``"paper"`` (path following), ``"none"`` (passive) or ``"thruster_turning"``
-            (straight body steered by the tunnel thrusters, compiled backend only).
+        controller: ``"paper"`` (path following), ``"none"`` (passive), ``"thruster_turning"``
+            (straight body steered by the tunnel thrusters, compiled backend only) or ``"gait"``
+            (a serpentine gait, :attr:`gait`, compiled backend only).
+        gait: The gait of ``controller = "gait"``
+            (:class:`aiauv_pin.controllers.gait_controller.Gait`; ``None``: its defaults).
         vehicle: URDF file of the vehicle (``None``: the bundled vehicle of ``case``).
         added_mass: ``"exact"`` or ``"lagged"`` (UUV Simulator's and gz-sim's scheme,
             :mod:`aiauv_pin.dynamics.lagged_added_mass`; runs the Python controller, not the compiled loop).
@@ -120,6 +125,7 @@ class Scenario:
     vehicle: str | None = None
     added_mass: str = "exact"
     lagged_filter: float = UUV_SIMULATOR_FILTER
+    gait: Gait | None = None
 
     def __post_init__(self) -> None:
         check_scheme(self.added_mass)
@@ -127,6 +133,11 @@ class Scenario:
         if self.controller not in CONTROLLERS:
             raise ValueError(
                 f"unknown controller '{self.controller}' (expected {' or '.join(CONTROLLERS)})"
+            )
+        if self.gait is not None and not isinstance(self.gait, Gait):
+            raise ValueError(
+                f"gait must be a aiauv_pin.controllers.gait_controller.Gait, got "
+                f"{type(self.gait).__name__:.40}"
             )
         if self.path is not None and not isinstance(self.path, Path):
             raise ValueError(
@@ -386,6 +397,16 @@ def run_scenario(
             )
         law = CompiledController.passive() if use_compiled else None
         servo = None
+    elif scenario.controller == "gait" and controller is None:
+        if compiled is False:
+            raise ValueError(
+                "gaits run in the compiled loop only"
+                + (" (not with added_mass = 'lagged')" if lagged else "")
+            )
+        gait = VehicleGait(
+            vehicle, scenario.gait, scenario.controller_gains, path=scenario.path_to_follow
+        )
+        law, servo, use_compiled = gait.compiled(), gait.joint_servo, True
     elif scenario.controller == "thruster_turning" and controller is None:
         from aiauv_pin.controllers.turning_controller import VehicleThrusterTurning
 
@@ -516,6 +537,8 @@ def _parameters(scenario: Scenario) -> dict:
         value = getattr(scenario, f.name)
         if f.name == "gains":
             continue
+        if f.name == "gait":
+            value = asdict(value) if value is not None else None
         if f.name == "path":
             value = scenario.path_to_follow.describe()
         elif f.name == "current":
@@ -634,8 +657,6 @@ def summary(result: ScenarioResult) -> dict:
     if "u" in info:
         gains = scenario.controller_gains
         u = info["u"]
-        thruster_power = np.abs(info["thruster_power"][:-1])
-        joint_power = np.abs(info["joint_torque"][:-1] * tr.v[:-1, 6:])
         final.update(
             {
                 "u": float(u[-1]),
@@ -647,6 +668,9 @@ def summary(result: ScenarioResult) -> dict:
         )
         settling["u_1cm_s"] = settling_time(t, u - gains.u_d, 0.01)
         settling["phi_tilde_0.02rad"] = settling_time(t, info["phi_tilde"], 0.02)
+    if "thruster_power" in info and "joint_torque" in info:
+        thruster_power = np.abs(info["thruster_power"][:-1])
+        joint_power = np.abs(info["joint_torque"][:-1] * tr.v[:-1, 6:])
         content["thruster_work"] = {
             name: exact_sum(thruster_power[:, k] * dt_log)
             for k, name in enumerate(result.thruster_names)

@@ -21,9 +21,11 @@ from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, Discriminator, Field, Tag
 
+from aiauv_control.laws.gait_laws import GAIT_KINDS
 from aiauv_control.path_following import CURRENT_COMPENSATION_OPTIONS, PathFollowingGains
 from aiauv_control.reduced_attitude import FEEDFORWARD_OPTIONS
 from aiauv_pin._internal.schema_validation import Direction, key, number, strict_config, vector
+from aiauv_pin.controllers.gait_controller import THRUST_MODES
 from aiauv_pin.dynamics.lagged_added_mass import ADDED_MASS_SCHEMES
 from aiauv_pin.scenario.definition import CASES, CONTROLLERS
 
@@ -180,7 +182,8 @@ class ControllerTable(BaseModel):
     type: key(
         Literal[CONTROLLERS],
         "-",
-        "paper (path following), none (passive: thrusters and joints idle) or thruster_turning",
+        "paper (path following), none (passive: thrusters and joints idle), thruster_turning or "
+        "gait (serpentine swimming, [gait])",
         "paper",
     )
     u_d: gain(MAX_SPEED, "m/s", f"desired surge speed (eq. 21, 25); default {_GAINS.u_d:g}")
@@ -227,6 +230,35 @@ class ControllerTable(BaseModel):
     )
     turn_moment_gain: gain(
         1.0e6, "N m/rad", "effective hydrodynamic moment per radian of base angle"
+    )
+
+
+class GaitTable(BaseModel):
+    """``[gait]``: the serpentine gait of ``controller.type = "gait"``
+    (:class:`aiauv_pin.controllers.gait_controller.Gait`; Kelasidi et al., IEEE T-RO 33(3), 2017).
+    Joint servo gains are ``controller.k_qp``, ``controller.k_qd``; the combined mode's speed and
+    surge gains ``controller.u_d``, ``k_1p``, ``k_1i``."""
+
+    model_config = strict_config("gait")
+    kind: key(
+        Literal[tuple(GAIT_KINDS)],
+        "-",
+        "envelope g(i): lateral_undulation (1) or eel_like ((n - i) / (n + 1))",
+    )
+    amplitude: key(number(0.0, math.pi), "rad", "amplitude alpha of the joint references")
+    omega: key(number(0.0, 100.0, low_open=True), "rad/s", "angular frequency of the gait (> 0)")
+    delta: key(number(-2.0 * math.pi, 2.0 * math.pi), "rad", "phase offset between joints")
+    k_theta: key(number(0.0, 100.0), "-", "heading gain: phi_0 = k_theta (theta - theta_ref)")
+    max_offset: key(number(0.0, math.pi), "rad", "saturation of the gait offset phi_0")
+    lookahead: key(Size, "m", "LOS lookahead distance Delta (default: twice the length)")
+    integral_los: key(bool, "-", "integral LOS (against currents) instead of LOS")
+    los_integral_gain: key(
+        number(0.0, 1.0e3, low_open=True), "-", "integral gain sigma of the integral LOS"
+    )
+    thrust: key(
+        Literal[THRUST_MODES],
+        "-",
+        "none (thrusters idle) or surge (combined: X thrusters hold controller.u_d)",
     )
 
 
@@ -282,4 +314,5 @@ class ScenarioFile(BaseModel):
         _tagged_union(CURRENT_TABLES, "constant"), "-", "the water current (default: none)"
     )
     controller: key(ControllerTable, "-", "the controller and its gains")
+    gait: key(GaitTable, "-", "the serpentine gait (controller.type = gait)")
     output: key(OutputTable, "-", "outputs")

@@ -170,6 +170,7 @@ TABLES: dict[str, tuple[str, ...] | None] = {
     "path": None,
     "current": None,
     "controller": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("controller.")),
+    "gait": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("gait.")),
     "output": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("output.")),
 }
 

@@ -35,7 +35,7 @@ import json
 import math
 import sys
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import asdict, dataclass, fields
 from functools import cache, lru_cache
 from pathlib import Path
 from typing import Annotated, Any, Union
@@ -524,7 +524,8 @@ def scenario_parameters(scenario: Scenario) -> dict[str, Any]:
     starts along the path, the path and the current as their readers describe them (directions
     normalised; ``path.points`` a list of points), every gain (``k_d`` of the case,
     ``k_e = u_d / 10``, ``controller.k_e.y/z``), numbers as floats, ``control_period`` ``None``
-    when the outer loops run every step. :func:`scenario_from_parameters` rebuilds the scenario.
+    when the outer loops run every step, and the ``gait.*`` keys when the scenario has a gait.
+    :func:`scenario_from_parameters` rebuilds the scenario.
     """
     period = scenario.control_period
     out: dict[str, Any] = {
@@ -571,6 +572,10 @@ def scenario_parameters(scenario: Scenario) -> dict[str, Any]:
             out[f"controller.{name}"] = value
         else:
             out[f"controller.{name}"] = float(value)
+    if scenario.gait is not None:  # only then: the keys of other runs stay as they were
+        for name, value in asdict(scenario.gait).items():
+            plain = value is None or isinstance(value, (str, bool))
+            out[f"gait.{name}"] = value if plain else float(value)
     return out
 
 
@@ -587,7 +592,7 @@ def is_parameter_column(name: str) -> bool:
     return (
         name == "vehicle_sha256"
         or name in SCHEMA
-        or section in ("start", "path", "current", "controller")
+        or section in ("start", "path", "current", "controller", "gait")
     )
 
 
@@ -992,7 +997,9 @@ def load_sweep_spec(path: str | Path) -> SweepSpec:
     from aiauv_pin.description.input_limits import read_text
 
     try:
-        text = read_text(path, "sweep spec")  # regular file, byte cap (aiauv_pin.description.input_limits)
+        text = read_text(
+            path, "sweep spec"
+        )  # regular file, byte cap (aiauv_pin.description.input_limits)
     except AiauvError as error:
         reason = str(error).removeprefix(f"{path}: ")
         raise SweepSpecError(f"{path}: cannot read sweep spec: {reason}") from None

@@ -56,6 +56,7 @@ from aiauv_control.paths import from_mapping as path_from_mapping
 from aiauv_hydro.currents import current_from_mapping
 from aiauv_hydro.spec import HydroError
 from aiauv_pin._internal.schema_validation import given, validate
+from aiauv_pin.controllers.gait_controller import Gait
 from aiauv_pin.errors import AiauvError
 from aiauv_pin.scenario.definition import Scenario
 from aiauv_pin.scenario.file_schemas import ScenarioFile
@@ -151,6 +152,11 @@ def scenario_from_mapping(table: Mapping[str, Any], base_dir: str | Path = ".") 
             options["gains"] = PathFollowingGains.for_case(case, **controller)
         except (TypeError, ValueError) as exc:
             raise ScenarioFileError(f"controller: {' '.join(str(exc).split())}") from None
+    if checked.gait is not None:
+        try:
+            options["gait"] = Gait(**_plain(checked.gait))
+        except ValueError as exc:
+            raise ScenarioFileError(" ".join(str(exc).split())) from None
     output = given(checked.output)
     if "csv_period" in output:
         options["csv_period"] = output["csv_period"]

@@ -43,6 +43,7 @@ from functools import cache, lru_cache
 from typing import NamedTuple
 
 from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled, is_project_function
+from aiauv_pin.controllers.gait_compiled import GaitParameters, serpentine_gait
 from aiauv_pin.controllers.paper_compiled import PaperParameters, paper_path_following, passive
 from aiauv_pin.controllers.turning_compiled import TurningParameters, thruster_turning
 from aiauv_pin.kernels.articulated_body import (
@@ -100,14 +101,17 @@ def steps_to_next_event(k, n_total, steps_per_control, log_every):
 # ------------------------------------------------------------------ the controller
 def run_controller(user, t, q, v, model, workspace, parameters, state, tau, info):
     """``user(...)``, or with ``user = None`` the built-in controller ``parameters`` select:
-    :class:`PaperParameters` the paper's, :class:`TurningParameters` thruster turning, anything else
-    passive. Compiled, the choice is made at compile time (an overload)."""
+    :class:`PaperParameters` the paper's, :class:`TurningParameters` thruster turning,
+    :class:`GaitParameters` the serpentine gait, anything else passive. Compiled, the choice is
+    made at compile time (an overload)."""
     if user is not None:
         return user(t, q, v, model, workspace, parameters, state, tau, info)
     if isinstance(parameters, PaperParameters):
         return paper_path_following(t, q, v, model, workspace, parameters, state, tau, info)
     if isinstance(parameters, TurningParameters):
         return thruster_turning(t, q, v, model, workspace, parameters, state, tau, info)
+    if isinstance(parameters, GaitParameters):
+        return serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info)
     return passive(t, q, v, model, workspace, parameters, state, tau, info)
 
 
@@ -138,6 +142,12 @@ if NUMBA_AVAILABLE:
                 thruster_turning(t, q, v, model, workspace, parameters, state, tau, info)
 
             return call_turning
+        if _is(parameters, GaitParameters):
+
+            def call_gait(user, t, q, v, model, workspace, parameters, state, tau, info):
+                serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info)
+
+            return call_gait
 
         def call_passive(user, t, q, v, model, workspace, parameters, state, tau, info):
             passive(t, q, v, model, workspace, parameters, state, tau, info)
