@@ -7,9 +7,9 @@ motion patterns", Robotics and Biomimetics 2:8, 2015; IEEE Robotics & Automation
 2016): the average forward speed rises with the gait frequency, rises with the amplitude up to a
 limit beyond which it falls, and eel-like motion is slower than lateral undulation at equal
 parameters (checked at 30 and 50 deg: beyond lateral undulation's best amplitude, 60 deg and more
-on this snake, the eel-like gait is the faster). On the Mamba-like snake of ``urdf/mamba_like.toml`` (assumed dimensions, the project's
-slender-cylinder fluid coefficients): no published number is compared here (see
-docs/source/swimming.md).
+on this snake, the eel-like gait is the faster). On the Mamba-like snake of
+``urdf/mamba_like.toml`` (assumed dimensions, the project's slender-cylinder fluid coefficients):
+no published number is compared here (see docs/source/swimming.md).
 """
 
 from __future__ import annotations
