@@ -123,13 +123,12 @@ def undulating_joints(vehicle: Vehicle) -> tuple[np.ndarray, np.ndarray]:
     index = np.full(len(labels), STRAIGHT_JOINT, dtype=np.int64)
     sign = np.ones(len(labels))
     count = 0
-    for j, (label, joint) in enumerate(zip(labels, vehicle.model.joints[2:], strict=True)):
-        if label != "z":
+    for j, label in enumerate(labels):  # signed: "+z", "-z", ...
+        if label[1] != "z":
             continue
         count += 1
         index[j] = count
-        axis = getattr(joint, "axis", None)
-        if axis is not None and float(np.asarray(axis, dtype=float)[2]) < 0.0:
+        if label[0] == "-":
             sign[j] = -1.0
     return index, sign
 

@@ -41,6 +41,7 @@ WORKLOADS = (
     ("simulate", "--duration", "1", "--no-html", "--method", "midpoint", "--dt", "0.02"),
     ("simulate", "--duration", "1", "--no-html", "--controller", "none"),
     ("simulate", "--duration", "1", "--no-html", "--controller", "thruster_turning"),
+    ("simulate", "--duration", "1", "--no-html", "--controller", "gait"),
     ("rollout",),
 )
 
