@@ -198,6 +198,7 @@ def _shipped_kernels_serve_this_process() -> str | None:
         ["simulate", "--duration", "0.2", "--no-html", "--controller", "none", "--vehicle",
          str(ROOT / "tests" / "data" / "two_link_hydro.urdf")],
         ["simulate", "--duration", "0.2", "--no-html", "--controller", "thruster_turning"],
+        ["simulate", "--duration", "0.2", "--no-html", "--controller", "gait"],
     ],
 )  # fmt: skip
 def test_a_new_installation_compiles_nothing(tmp_path, arguments):
@@ -302,6 +303,7 @@ def test_another_numba_compiles_once_into_the_user_cache_and_every_later_run_reu
         "paper": ["--duration", "0.2"],
         "passive": ["--duration", "0.2", "--controller", "none", "--vehicle", foreign],
         "turning": ["--duration", "0.2", "--controller", "thruster_turning"],
+        "gait": ["--duration", "0.2", "--controller", "gait"],
     }
 
     def simulate(name: str) -> tuple[bool, str]:
