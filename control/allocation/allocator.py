@@ -83,12 +83,17 @@ def allocate(thrust_matrix, tau_d, parameters: AllocationParameters) -> Allocati
         max_iter=10_000,
     )
     solved = solution.info.status == proxsuite.proxqp.QPSolverOutput.PROXQP_SOLVED
-    u = np.clip(solution.x, lower, upper)
-    if solved:
-        u = polish(hessian, linear, lower, upper, u, solution.z, parameters.tolerance * scale)
-    return result_of(
-        matrix, tau, parameters, u, "optimal" if solved else "not converged", solution.info.iter
+    u, exact = polish(
+        hessian,
+        linear,
+        lower,
+        upper,
+        np.clip(solution.x, lower, upper),
+        solution.z,
+        parameters.tolerance * scale,
     )
+    status = "optimal" if solved or exact else "not converged"
+    return result_of(matrix, tau, parameters, u, status, solution.info.iter)
 
 
 def polish(hessian, linear, lower, upper, u, multipliers, tolerance):
@@ -99,8 +104,12 @@ def polish(hessian, linear, lower, upper, u, multipliers, tolerance):
     only ``W_u^2`` holds ``u``, so the answer is off by ``tolerance / min(W_u)^2``, e.g. 1e-8 N next
     to a limit it should sit on. The limits with a multiplier of ProxQP (``z < 0``: minimum,
     ``z > 0``: maximum) are held, ``H_FF u_F = g_F - H_FA u_A`` is solved for the others, and the
-    result is kept if it is feasible and the held limits' multipliers have the right sign
-    (the KKT conditions); otherwise ``u`` is returned unchanged.
+    result is kept if it is feasible and the held limits' multipliers have the right sign (the KKT
+    conditions, to the absolute ``tolerance`` in the units of ``g``); otherwise ``u`` is returned
+    unchanged.
+
+    Returns:
+        ``(u, exact)``: the polished answer and True, or ``u`` and False.
     """
     at_min = multipliers < -tolerance
     at_max = multipliers > tolerance
@@ -113,7 +122,8 @@ def polish(hessian, linear, lower, upper, u, multipliers, tolerance):
     gradient = hessian @ polished - linear
     feasible = np.all(polished >= lower) and np.all(polished <= upper)
     signs = np.all(gradient[at_min] >= -tolerance) and np.all(gradient[at_max] <= tolerance)
-    return polished if feasible and signs else u
+    exact = bool(feasible and signs)
+    return (polished, True) if exact else (u, False)
 
 
 def allocate_compiled(
