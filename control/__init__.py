@@ -10,6 +10,8 @@ Modules, after Wrzos-Kaminska et al. (2019):
 * :mod:`aiauv_control.surge` - surge PI on the longitudinal thrusters with anti-windup (eq. 25);
 * :mod:`aiauv_control.path_following` - gains, measurement/command records and the composed controller.
 
+For any vehicle: :mod:`aiauv_control.allocation` - thrust allocation within the actuators' limits.
+
 Nothing here imports Pinocchio or the simulator.
 """
 

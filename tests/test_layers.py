@@ -26,6 +26,7 @@ FLOORS = [
     ["aiauv_hydro"],  # the package's __init__ (its public names)
     ["aiauv_control.paths"],
     ["aiauv_control.laws"],
+    ["aiauv_control.allocation"],  # thrust allocation: numerics only
     ["aiauv_control:top"],
     ["aiauv_control"],
     ["aiauv_pin.errors"],
