@@ -1,0 +1,108 @@
+"""The paper's task as an environment: the end-effector follows a straight line
+(``aiauv/PathFollowing-v0``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from aiauv_pin.controllers.paper_controller import surge_thruster_indices
+from aiauv_pin.envs.vehicle_env import VehicleEnv, yaw_quaternion
+from aiauv_pin.errors import ArgumentError
+
+
+class PathFollowingEnv(VehicleEnv):
+    """The end-effector of the paper's vehicle follows the world x-axis (a straight line at zero
+    depth) forwards, steered by the joints and pushed by the surge thrusters, as in the paper's
+    path following (which steers the same joints through base-angle references).
+
+    * **Action** (n_joints + 1 = 9,) in [-1, 1]: joint references ``a[:8] * joint_limit`` [rad]
+      tracked by the paper's joint servo (eq. (24); ``control="torques"``: joint torques
+      ``a[:8] * max_joint_torque`` [N m]), and the surge thrust ``a[8] * max_thrust`` [N] of each
+      surge thruster (those along their link's x-axis; 50 N each on the paper's vehicle). The
+      other thrusters are off.
+    * **Observation** (37,): the end-effector's cross-track error ``(y, z)`` [m], its x-axis in
+      world axes (3,), its twist in its own axes [m/s, rad/s] (6,), then the body state (26,):
+      base quaternion ``(x, y, z, w)``, joint angles [rad], base twist [m/s, rad/s], joint rates
+      [rad/s].
+    * **Reward**: ``progress_weight * dx / T - error_weight * e - effort_weight * |a|^2``: the
+      end-effector's speed along the path over the step [m/s], its cross-track error
+      ``e = sqrt(y^2 + z^2)`` [m] after the step, and the effort.
+    * **Start**: the vehicle straight and level at rest, its base at ``(0, y0, 0)`` with
+      ``y0 ~ U(-initial_offset, initial_offset)`` [m], heading ``~ U(-initial_heading,
+      initial_heading)`` [rad], joints at zero.
+    * **Termination**: a cross-track error above ``max_error`` [m], or a non-finite state;
+      **truncation** after ``episode_steps`` steps (default 1000 steps of 0.04 s: 40 s).
+
+    Args:
+        progress_weight: Weight of the speed along the path [1/(m/s)].
+        error_weight: Weight of the cross-track error [1/m].
+        effort_weight: Weight of ``|a|^2``.
+        initial_offset: Largest initial lateral offset of the base [m].
+        initial_heading: Largest initial heading error [rad].
+        max_error: Cross-track error that ends an episode [m].
+        **kwargs: Those of :class:`~aiauv_pin.envs.vehicle_env.VehicleEnv`.
+    """
+
+    def __init__(
+        self,
+        vehicle=None,
+        *,
+        progress_weight: float = 1.0,
+        error_weight: float = 0.5,
+        effort_weight: float = 1e-3,
+        initial_offset: float = 1.0,
+        initial_heading: float = 0.3,
+        max_error: float = 5.0,
+        **kwargs,
+    ) -> None:
+        self.progress_weight, self.error_weight = float(progress_weight), float(error_weight)
+        self.effort_weight = float(effort_weight)
+        self.initial_offset, self.initial_heading = float(initial_offset), float(initial_heading)
+        if not max_error > 0.0:
+            raise ArgumentError(f"max_error must be > 0 [m], got {max_error!r:.40}")
+        self.max_error = float(max_error)
+        super().__init__(vehicle, **kwargs)
+        self.surge = surge_thruster_indices(self.vehicle)
+        if not self.surge:
+            raise ArgumentError("the vehicle has no thruster along a link x-axis for surge")
+
+    def observation_size(self) -> int:
+        return 2 + 3 + 6 + 4 + self.n_joints + self.vehicle.nv
+
+    def action_size(self) -> int:
+        return self.n_joints + 1
+
+    def initial_state(self, generator):
+        q = self.vehicle.neutral_configuration()
+        q[1] = generator.uniform(-self.initial_offset, self.initial_offset)
+        q[3:7] = yaw_quaternion(generator.uniform(-self.initial_heading, self.initial_heading))
+        return q, np.zeros(self.vehicle.nv), np.zeros(3)
+
+    def set_controls(self, actions):
+        self.joint_controls(actions[:, : self.n_joints])
+        thrust = actions[:, self.n_joints, None] * self.vehicle.max_thrust[self.surge]
+        self.sim.controls[:, self.surge] = thrust
+
+    def cross_track(self) -> np.ndarray:
+        """The end-effector's cross-track error ``(y, z)`` [m] (N, 2)."""
+        return self.sim.position[:, 1:]
+
+    def observe(self):
+        sim = self.sim
+        return np.concatenate(
+            (self.cross_track(), sim.rotation[:, :, 0], sim.twist, self.body_state()), axis=1
+        )
+
+    def reward(self, actions, previous):
+        progress = (self.sim.position[:, 0] - previous[:, 0]) / self.step_duration
+        error = np.linalg.norm(self.cross_track(), axis=1)
+        effort = np.sum(actions**2, axis=1)
+        reward = (
+            self.progress_weight * progress
+            - self.error_weight * error
+            - self.effort_weight * effort
+        )
+        return reward, {"progress_speed": progress, "cross_track_error": error, "effort": effort}
+
+    def failed(self):
+        return np.linalg.norm(self.cross_track(), axis=1) > self.max_error
