@@ -56,6 +56,8 @@ class VehicleBatch:
         currents: Each row's constant current (N, 3) [m/s], world axes.
         rotation, position, twist: The frame's world rotation (N, 3, 3), world position (N, 3)
             [m] and own-axes twist ``(v, w)`` (N, 6) [m/s, rad/s], after the last step.
+        centre: The vehicle's centre of mass (rigid masses) (N, 3) [m], world axes, after the
+            last step.
         done: Integration steps each row completed in its last step (N,): fewer than
             ``substeps`` if its state became non-finite.
     """
@@ -105,6 +107,7 @@ class VehicleBatch:
         self.currents = np.zeros((n_rows, 3))
         self.rotation = np.zeros((n_rows, 3, 3))
         self.position, self.twist = np.zeros((n_rows, 3)), np.zeros((n_rows, 6))
+        self.centre = np.zeros((n_rows, 3))
         self.done = np.zeros(n_rows, dtype=np.int64)
         self._frame = (int(body), np.ascontiguousarray(rotation), np.ascontiguousarray(translation))
         self._code = METHOD_CODES[method]
@@ -144,6 +147,7 @@ class VehicleBatch:
             self.rotation,
             self.position,
             self.twist,
+            self.centre,
             self.done,
             first,
             stop,

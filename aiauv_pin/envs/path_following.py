@@ -30,8 +30,9 @@ class PathFollowingEnv(VehicleEnv):
     * **Start**: the vehicle straight and level at rest, its base at ``(0, y0, 0)`` with
       ``y0 ~ U(-initial_offset, initial_offset)`` [m], heading ``~ U(-initial_heading,
       initial_heading)`` [rad], joints at zero.
-    * **Termination**: a cross-track error above ``max_error`` [m], or a non-finite state;
-      **truncation** after ``episode_steps`` steps (default 1000 steps of 0.04 s: 40 s).
+    * **Termination**: a cross-track error above ``max_error`` [m], a non-finite state or
+      a joint beyond its limits; **truncation** after ``episode_steps`` steps (default 1000
+      steps of 0.04 s: 40 s).
 
     Args:
         progress_weight: Weight of the speed along the path [1/(m/s)].

@@ -27,8 +27,9 @@ class StationKeepingEnv(VehicleEnv):
       is the end-effector's start moved by ``U(-target_offset, target_offset)`` [m] along each
       world axis, with its start attitude; the current is horizontal, of speed
       ``U(0, max_current)`` [m/s] in a uniformly drawn direction, constant over the episode.
-    * **Termination**: a position error above ``max_error`` [m], or a non-finite state;
-      **truncation** after ``episode_steps`` steps (default 1000 steps of 0.04 s: 40 s).
+    * **Termination**: a position error above ``max_error`` [m], a non-finite state or
+      a joint beyond its limits; **truncation** after ``episode_steps`` steps (default 1000
+      steps of 0.04 s: 40 s).
 
     Args:
         position_weight, attitude_weight, effort_weight: Weights of the reward's terms.

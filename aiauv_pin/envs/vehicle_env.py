@@ -11,7 +11,9 @@ Timing: an environment step is ``substeps`` integration steps of ``dt`` (default
 semi-implicit Euler at 4 ms, :mod:`aiauv_pin.scenario.defaults`, 10 substeps: 0.04 s per step);
 the action is held over the step (thrusts through ``B(q)`` at its start). An episode is truncated
 after ``episode_steps`` steps; it terminates early if the state becomes non-finite (``info
-["diverged"]``) or on the task's own condition.
+["diverged"]``), if a joint leaves its limits (``info["beyond_joint_limit"]``: the model has no
+joint stops, the URDF's limits are not forces, so a body driven past them would fold through
+itself) or on the task's own condition.
 """
 
 from __future__ import annotations
@@ -158,8 +160,9 @@ class VehicleEnv(gymnasium.Env, abc.ABC):
         self.steps += 1
         reward, info = self.reward(actions, previous)
         diverged = sim.done < sim.substeps
-        info["diverged"] = diverged
-        terminated = diverged | self.failed()
+        beyond = np.any(np.abs(sim.q[:, 7:]) > self.joint_limit, axis=1)
+        info["diverged"], info["beyond_joint_limit"] = diverged, beyond
+        terminated = diverged | beyond | self.failed()
         truncated = self.steps >= self.episode_steps
         return self.observe(), reward, terminated, truncated & ~terminated, info
 

@@ -1234,6 +1234,7 @@ def run_rows(
     frame_rotation,
     frame_position,
     frame_twist,
+    centre,
     done,
     first,
     stop,
@@ -1253,7 +1254,10 @@ def run_rows(
     Writes ``done[i]``: the steps completed (fewer than ``n_steps`` if the state became
     non-finite; then the row holds its last finite state), and the world rotation, position [m]
     and own-axes twist of the frame ``frame = (body, rotation, translation)`` at the row's new state
-    (:func:`frame_of_body_into`).
+    (:func:`frame_of_body_into`), and the world position of the vehicle's centre of mass
+    ``centre[i] = sum_b m_b (p_b + R_b c_b) / sum_b m_b`` [m] (rigid masses only; ``m_b c_b`` read
+    from the lower-left block ``m_b [c_b]x`` of each body's rigid inertia, Featherstone 2008,
+    eq. (2.63)).
     """
     m = model.thrusters.body.shape[0]
     n_joints = rows_v.shape[1] - 6
@@ -1274,6 +1278,18 @@ def run_rows(
         frame_of_body_into(
             W, body, rotation, translation, frame_rotation[i], frame_position[i], frame_twist[i]
         )
+        inertia, mass = model.bodies.rigid_inertia, 0.0
+        c0 = c1 = c2 = 0.0
+        for b in range(inertia.shape[0]):
+            m_b = inertia[b, 0, 0]
+            mc0, mc1, mc2 = inertia[b, 5, 1], inertia[b, 3, 2], inertia[b, 4, 0]  # m_b c_b
+            r = W.rotation[b]
+            p = W.position[b]
+            c0 += m_b * p[0] + r[0, 0] * mc0 + r[0, 1] * mc1 + r[0, 2] * mc2
+            c1 += m_b * p[1] + r[1, 0] * mc0 + r[1, 1] * mc1 + r[1, 2] * mc2
+            c2 += m_b * p[2] + r[2, 0] * mc0 + r[2, 1] * mc1 + r[2, 2] * mc2
+            mass += m_b
+        centre[i, 0], centre[i, 1], centre[i, 2] = c0 / mass, c1 / mass, c2 / mass
 
 
 @compiled(fastmath=True, borrows_only=True)
