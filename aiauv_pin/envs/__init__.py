@@ -17,9 +17,9 @@ try:
 except ImportError as exc:  # pragma: no cover - the extra is missing
     raise ImportError('aiauv_pin.envs needs gymnasium: pip install "aiauv-pin[gym]"') from exc
 
-from aiauv_pin.envs.path_following import PathFollowingEnv
-from aiauv_pin.envs.station_keeping import StationKeepingEnv
-from aiauv_pin.envs.swimming import SwimmingEnv
+from aiauv_pin.envs.path_following_env import PathFollowingEnv
+from aiauv_pin.envs.station_keeping_env import StationKeepingEnv
+from aiauv_pin.envs.swimming_env import SwimmingEnv
 from aiauv_pin.envs.vector import VehicleVectorEnv
 from aiauv_pin.envs.vehicle_env import VehicleEnv
 

@@ -13,7 +13,7 @@ from aiauv_pin.errors import ArgumentError
 class VehicleVectorEnv(VectorEnv):
     """``num_envs`` environments of one task, stepped in one compiled call per thread.
 
-    One task instance (e.g. a :class:`~aiauv_pin.envs.path_following.PathFollowingEnv`) runs its
+    One task instance (e.g. a :class:`~aiauv_pin.envs.path_following_env.PathFollowingEnv`) runs its
     hooks over N rows of a :class:`~aiauv_pin.envs.batch.VehicleBatch`: the physics of every row
     advance together on a pool of threads running compiled ``nogil`` code; observations, rewards
     and terminations are computed for all rows at once with NumPy. Row ``i`` is the single
@@ -54,7 +54,7 @@ class VehicleVectorEnv(VectorEnv):
         ``seed``: ``None`` (each row keeps drawing from its generator, made unseeded on first
         use), an int (row ``i`` seeded with ``seed + i``) or a list of N ints or ``None``.
         """
-        super().reset(seed=seed)
+        super().reset(seed=seed if isinstance(seed, int) else None)
         n = self.num_envs
         if seed is None:
             seeds = [None] * n
@@ -62,8 +62,8 @@ class VehicleVectorEnv(VectorEnv):
             seeds = [seed + i for i in range(n)]
         else:
             seeds = list(seed)
-            if len(seeds) != n:
-                raise ArgumentError(f"seed must give {n} seeds, got {len(seeds)}")
+            if len(seeds) != n or not all(s is None or isinstance(s, int) for s in seeds):
+                raise ArgumentError(f"seed must be an int, None or {n} ints or None")
         mask = np.ones(n, dtype=bool)
         if options is not None and "reset_mask" in options:
             mask = np.asarray(options["reset_mask"])

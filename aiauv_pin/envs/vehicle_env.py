@@ -1,7 +1,7 @@
 """The common part of the environments: a vehicle, its batched physics, the step and the reset.
 
 :class:`VehicleEnv` is a :class:`gymnasium.Env` over a :class:`~aiauv_pin.envs.batch.VehicleBatch`
-of one row. A task (:class:`~aiauv_pin.envs.path_following.PathFollowingEnv`, ...) fills in what
+of one row. A task (:class:`~aiauv_pin.envs.path_following_env.PathFollowingEnv`, ...) fills in what
 is its own, every hook on arrays of N rows: the initial state of an episode, the controls of an
 action, the observation, the reward and the termination. The vector environment
 (:class:`~aiauv_pin.envs.vector.VehicleVectorEnv`) runs the same hooks of one task instance over
