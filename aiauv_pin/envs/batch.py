@@ -3,7 +3,8 @@
 :class:`VehicleBatch` holds the states of N copies of one vehicle (``q`` (N, nq), ``v`` (N, nv))
 and advances the rows it is given by one environment step each: ``substeps`` integrator steps of
 ``dt`` with the row's controls held, in one compiled call per thread
-(:func:`aiauv_pin.kernels.articulated_body.run_rows`, compiled ``nogil``), as
+(:func:`aiauv_pin.kernels.articulated_body.run_rows` through
+:func:`aiauv_pin.kernels.handle.run_rows_of`, compiled ``nogil``), as
 :func:`aiauv_pin.rollout` runs its runs: the threads run on every core at once and only the
 unboxing of the arguments holds the GIL. Every thread has its own workspace, environment record
 and servo record, so a row's result does not depend on the thread count or on the other rows (a
@@ -74,8 +75,9 @@ class VehicleBatch:
         servo_gains: tuple[float, float] | None,
         threads: int | None = None,
     ) -> None:
-        from aiauv_pin.kernels.articulated_body import new_workspace, run_rows
+        from aiauv_pin.kernels.articulated_body import new_workspace
         from aiauv_pin.kernels.evaluation import METHOD_CODES, _entry_point
+        from aiauv_pin.kernels.handle import new_handle, run_rows_of
 
         fast = vehicle.fast
         if fast is None:
@@ -120,17 +122,18 @@ class VehicleBatch:
                 else JointServo.uniform(nj, servo_gains[0], servo_gains[1]).packed()
             )
             env = fast.environment(Current.constant(np.zeros(3)))
-            self._chunks.append(
-                (env, servo, new_workspace(fast.model, nq, nv), np.zeros(nv), int(first), int(stop))
+            handle = new_handle(  # the records cross into compiled code as one pointer
+                fast.model, new_workspace(fast.model, nq, nv), fast.still_water, fast.no_servo
             )
+            self._chunks.append((env, servo, handle, np.zeros(nv), int(first), int(stop)))
         self._pool = ThreadPoolExecutor(threads, "aiauv-envs") if threads > 1 else None
-        self._kernel = run_rows
-        self._entry = _entry_point(run_rows, self._arguments(self._chunks[0], 0))
+        self._kernel = run_rows_of
+        self._entry = _entry_point(run_rows_of, self._arguments(self._chunks[0], 0))
 
     def _arguments(self, chunk, n_steps: int) -> tuple:
-        env, servo, workspace, tau, first, stop = chunk
+        env, servo, handle, tau, first, stop = chunk
         return (
-            self.fast.model,
+            handle,
             env,
             servo,
             self.q,
@@ -141,7 +144,6 @@ class VehicleBatch:
             self.dt,
             n_steps,
             self._code,
-            workspace,
             tau,
             self._frame,
             self.rotation,
