@@ -81,8 +81,9 @@ def physics() -> dict:
         "Swimmer-v5": {
             "links": int(model.nbody - 1),
             "dof": int(model.nv),
-            "fluid": f"opt.viscosity={model.opt.viscosity:g} (viscous drag on each body's "
-            f"equivalent box), density={model.opt.density:g} (no added mass)",
+            "fluid": f"MuJoCo's inertia-box model: viscous drag (viscosity "
+            f"{model.opt.viscosity:g}) and quadratic drag (density {model.opt.density:g}) on "
+            f"each body's equivalent box; no added mass, no buoyancy",
             "integrator": mujoco.mjtIntegrator(model.opt.integrator).name,
             "dt_s": float(model.opt.timestep),
             "substeps": int(swimmer.unwrapped.frame_skip),
