@@ -217,3 +217,9 @@ def run_rows_of(
         first,
         stop,
     )
+
+
+@compiled(fastmath=True)
+def thrust_matrix_of(handle, q, out):
+    """:func:`aiauv_pin.kernels.articulated_body.thrust_matrix` on the records of ``handle``."""
+    kernels.thrust_matrix(handle.model, q, handle.workspace, out)
