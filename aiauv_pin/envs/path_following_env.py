@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from aiauv_pin.controllers.paper_controller import surge_thruster_indices
+from aiauv_control.joint_references import joint_reference_pattern
+from aiauv_control.path_following import PathFollowingGains
+from aiauv_pin.controllers.paper_controller import joint_axis_labels, surge_thruster_indices
 from aiauv_pin.envs.vehicle_env import VehicleEnv, yaw_quaternion
 from aiauv_pin.errors import ArgumentError
 
@@ -19,11 +21,16 @@ class PathFollowingEnv(VehicleEnv):
       tracked by the paper's joint servo (eq. (24); ``control="torques"``: joint torques
       ``a[:8] * max_joint_torque`` [N m]), and the surge thrust ``a[8] * max_thrust`` [N] of each
       surge thruster (those along their link's x-axis; 50 N each on the paper's vehicle). The
-      other thrusters are off.
-    * **Observation** (37,): the end-effector's cross-track error ``(y, z)`` [m], its x-axis in
-      world axes (3,), its twist in its own axes [m/s, rad/s] (6,), then the body state (26,):
-      base quaternion ``(x, y, z, w)``, joint angles [rad], base twist [m/s, rad/s], joint rates
-      [rad/s].
+      other thrusters are off. With ``steering="base_angles"`` (3,): the paper's base angles
+      ``q0 = (q_y0, q_z0) = a[:2] * q_max`` [rad], spread over the joints by eq. (22)
+      (``q*_{a,j} = exp(-alpha (j - 1)) q_{a,0}``, with the defaults of the project's paper
+      controller, :class:`aiauv_control.path_following.PathFollowingGains`: ``alpha = 0.7`` and
+      ``q_max`` = 30 deg, a project choice; ``|q0| <= q_max``, so eq. (22)'s saturation never
+      acts), and the surge thrust ``a[2] * max_thrust``.
+    * **Observation** (37,), either steering: the end-effector's cross-track error ``(y, z)``
+      [m], its x-axis in world axes (3,), its twist in its own axes [m/s, rad/s] (6,), then the
+      body state (26,): base quaternion ``(x, y, z, w)``, joint angles [rad], base twist [m/s,
+      rad/s], joint rates [rad/s].
     * **Reward**: ``progress_weight * dx / T - error_weight * e - effort_weight * |a|^2``: the
       end-effector's speed along the path over the step [m/s], its cross-track error
       ``e = sqrt(y^2 + z^2)`` [m] after the step, and the effort.
@@ -41,6 +48,8 @@ class PathFollowingEnv(VehicleEnv):
         initial_offset: Largest initial lateral offset of the base [m].
         initial_heading: Largest initial heading error [rad].
         max_error: Cross-track error that ends an episode [m].
+        steering: ``"joints"`` (joint references or torques) or ``"base_angles"`` (the paper's
+            two base angles; needs ``control="references"``).
         **kwargs: Those of :class:`~aiauv_pin.envs.vehicle_env.VehicleEnv`.
     """
 
@@ -54,8 +63,16 @@ class PathFollowingEnv(VehicleEnv):
         initial_offset: float = 1.0,
         initial_heading: float = 0.3,
         max_error: float = 5.0,
+        steering: str = "joints",
         **kwargs,
     ) -> None:
+        if steering not in ("joints", "base_angles"):
+            raise ArgumentError(
+                f"unknown steering {steering!r:.40} (expected one of joints, base_angles)"
+            )
+        if steering == "base_angles" and kwargs.get("control", "references") != "references":
+            raise ArgumentError('steering="base_angles" needs control="references"')
+        self.steering = steering
         self.progress_weight, self.error_weight = float(progress_weight), float(error_weight)
         self.effort_weight = float(effort_weight)
         self.initial_offset, self.initial_heading = float(initial_offset), float(initial_heading)
@@ -63,6 +80,11 @@ class PathFollowingEnv(VehicleEnv):
             raise ArgumentError(f"max_error must be > 0 [m], got {max_error!r:.40}")
         self.max_error = float(max_error)
         super().__init__(vehicle, **kwargs)
+        gains = PathFollowingGains()
+        self.q_max = gains.q_max  # [rad]
+        self.base_axis, self.base_scale = joint_reference_pattern(
+            joint_axis_labels(self.vehicle), gains.alpha
+        )
         self.surge = surge_thruster_indices(self.vehicle)
         if not self.surge:
             raise ArgumentError("the vehicle has no thruster along a link x-axis for surge")
@@ -71,7 +93,7 @@ class PathFollowingEnv(VehicleEnv):
         return 2 + 3 + 6 + 4 + self.n_joints + self.vehicle.nv
 
     def action_size(self) -> int:
-        return self.n_joints + 1
+        return (2 if self.steering == "base_angles" else self.n_joints) + 1
 
     def initial_state(self, generator):
         q = self.vehicle.neutral_configuration()
@@ -80,8 +102,13 @@ class PathFollowingEnv(VehicleEnv):
         return q, np.zeros(self.vehicle.nv), np.zeros(3)
 
     def set_controls(self, actions):
-        self.joint_controls(actions[:, : self.n_joints])
-        thrust = actions[:, self.n_joints, None] * self.vehicle.max_thrust[self.surge]
+        if self.steering == "base_angles":  # eq. (22), |q0| <= q_max: no saturation
+            base = actions[:, :2] * self.q_max
+            m, nj = self.n_thrusters, self.n_joints
+            self.sim.controls[:, m + nj :] = base[:, self.base_axis] * self.base_scale
+        else:
+            self.joint_controls(actions[:, :-1])
+        thrust = actions[:, -1, None] * self.vehicle.max_thrust[self.surge]
         self.sim.controls[:, self.surge] = thrust
 
     def cross_track(self) -> np.ndarray:

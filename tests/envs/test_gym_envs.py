@@ -127,3 +127,21 @@ def test_bad_actions_give_one_line(action):
 def test_the_pinocchio_backend_is_refused():
     with pytest.raises(ArgumentError, match="compiled backend"):
         SwimmingEnv(aiauv_pin.load_vehicle(backend="pinocchio"))
+
+
+def test_base_angles_spread_over_the_joints_by_the_papers_pattern():
+    from aiauv_control.joint_references import joint_references
+
+    env = PathFollowingEnv(steering="base_angles")
+    env.reset(seed=0)
+    env.set_controls(np.array([[0.4, -0.7, 0.0]]))
+    m, nj = env.n_thrusters, env.n_joints
+    expected = joint_references([0.4 * env.q_max, -0.7 * env.q_max], ["z", "y"] * 4, 0.7, env.q_max)
+    assert np.allclose(env.sim.controls[0, m + nj :], expected, rtol=0, atol=1e-15)
+
+
+def test_base_angles_need_references():
+    with pytest.raises(ArgumentError, match="references"):
+        PathFollowingEnv(steering="base_angles", control="torques")
+    with pytest.raises(ArgumentError, match="steering"):
+        PathFollowingEnv(steering="heading")

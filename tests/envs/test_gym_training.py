@@ -78,3 +78,18 @@ def test_random_search_on_the_vector_environment_improves_the_return():
             best, best_return = candidates[scores.argmax()], scores.max()
     vector.close()
     assert best_return > start + 1.0
+
+
+def test_steering_the_base_angles_towards_the_path_beats_surging_straight():
+    """A proportional law on the base angle about z (``steering="base_angles"``): against the
+    cross-track error ``e_y`` and the end-effector's heading ``x_e . y``, half the surge thrust."""
+    env = PathFollowingEnv(steering="base_angles", episode_steps=500)
+    assert env.action_space.shape == (3,)
+
+    def steer(t, o):
+        return np.array([0.0, np.clip(-(0.5 * o[0] + 2.0 * o[3]), -1.0, 1.0), 0.5])
+
+    straight = _episode_return(env, lambda t, o: np.array([0.0, 0.0, 0.5]), 500, seed=0)
+    steered = _episode_return(env, steer, 500, seed=0)
+    assert steered > straight + 100.0
+    assert np.linalg.norm(env.cross_track()[0]) < 1.0  # [m], after 20 s
