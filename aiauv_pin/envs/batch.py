@@ -81,9 +81,10 @@ class VehicleBatch:
 
         fast = vehicle.fast
         if fast is None:
+            why = vehicle.fallback_reason or f"backend={vehicle.backend!r}"
             raise ArgumentError(
                 f"the environments need the compiled backend (the vehicle runs on "
-                f"{vehicle.active_backend}: {vehicle.fallback_reason})"
+                f"{vehicle.active_backend}: {why})"
             )
         if isinstance(n_rows, bool) or not isinstance(n_rows, int) or n_rows < 1:
             raise ArgumentError(f"the number of environments must be >= 1, got {n_rows!r:.40}")

@@ -581,9 +581,10 @@ class Vehicle:
         """
         fast = self._fast
         if fast is None:
+            why = self._fast_reason or f"backend={self.backend!r}"
             raise ArgumentError(
                 f"Vehicle.step needs the compiled backend (this vehicle runs on Pinocchio: "
-                f"{self._fast_reason}); aiauv_pin.rk4_step steps it"
+                f"{why}); aiauv_pin.rk4_step steps it"
             )
         tau = self.controls_to_forces(q, controls)
         return fast.step(q, v, tau, dt, method=method, current=current, t=t)
