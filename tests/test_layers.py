@@ -43,6 +43,7 @@ FLOORS = [
     ["aiauv_pin.checks"],
     ["aiauv_pin.interop"],
     ["aiauv_pin.testing"],
+    ["aiauv_pin.envs"],  # Gymnasium environments (optional gymnasium)
     ["aiauv_pin"],  # the package's __init__: the public entry points
     ["aiauv_pin.tools"],
     ["aiauv_pin.app", "aiauv_pin.__main__"],

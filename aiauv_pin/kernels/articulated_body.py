@@ -1215,6 +1215,83 @@ def run_steps(model, env, servo, t0, q, v, tau, dt, n_steps, method, W):
     return n_steps
 
 
+@compiled(fastmath=True)
+def run_rows(
+    model,
+    env,
+    servo,
+    rows_q,
+    rows_v,
+    times,
+    controls,
+    currents,
+    dt,
+    n_steps,
+    method,
+    W,
+    tau,
+    frame,
+    frame_rotation,
+    frame_position,
+    frame_twist,
+    centre,
+    done,
+    first,
+    stop,
+):
+    """Advance the states ``rows_q[i], rows_v[i]`` of rows ``first <= i < stop`` in place by
+    ``n_steps`` steps each (:func:`run_steps`), every row with its own controls and current, then
+    evaluate one frame of each: the batched step of :mod:`aiauv_pin.envs`.
+
+    Row ``i`` holds ``tau = B(q_i) u_i + (0, tau_q,i)`` over its steps (the thrusts ``u_i =
+    controls[i, :m]`` [N] through ``B(q)`` of the paper's eq. (20) at the row's start, then held, as
+    the compiled loop holds a controller's output over its period; joint torques ``tau_q,i =
+    controls[i, m:]`` [N m]), runs its ``servo`` (if enabled) towards
+    ``controls[i, m + n_joints:]`` [rad], in the constant current ``currents[i]`` (3,) [m/s], world
+    axes (``env`` must hold a constant current: its first three parameters are overwritten) from
+    time ``times[i]`` [s]. ``env`` and ``servo`` are the calling thread's own (they are written).
+
+    Writes ``done[i]``: the steps completed (fewer than ``n_steps`` if the state became
+    non-finite; then the row holds its last finite state), and the world rotation, position [m]
+    and own-axes twist of the frame ``frame = (body, rotation, translation)`` at the row's new state
+    (:func:`frame_of_body_into`), and the world position of the vehicle's centre of mass
+    ``centre[i] = sum_b m_b (p_b + R_b c_b) / sum_b m_b`` [m] (rigid masses only; ``m_b c_b`` read
+    from the lower-left block ``m_b [c_b]x`` of each body's rigid inertia, Featherstone 2008,
+    eq. (2.63)).
+    """
+    m = model.thrusters.body.shape[0]
+    n_joints = rows_v.shape[1] - 6
+    body, rotation, translation = frame
+    for i in range(first, stop):
+        q, v = rows_q[i], rows_v[i]
+        for k in range(3):
+            env.current_parameters[k] = currents[i, k]
+        if servo.enabled:
+            for j in range(n_joints):
+                servo.references[j] = controls[i, m + n_joints + j]
+        kinematics(model.bodies, q, W.zero_velocity, W)
+        thrust_into(model, W, controls[i, :m], tau)
+        for j in range(n_joints):
+            tau[6 + j] += controls[i, m + j]
+        done[i] = run_steps(model, env, servo, times[i], q, v, tau, dt, n_steps, method, W)
+        kinematics(model.bodies, q, v, W)
+        frame_of_body_into(
+            W, body, rotation, translation, frame_rotation[i], frame_position[i], frame_twist[i]
+        )
+        inertia, mass = model.bodies.rigid_inertia, 0.0
+        c0 = c1 = c2 = 0.0
+        for b in range(inertia.shape[0]):
+            m_b = inertia[b, 0, 0]
+            mc0, mc1, mc2 = inertia[b, 5, 1], inertia[b, 3, 2], inertia[b, 4, 0]  # m_b c_b
+            r = W.rotation[b]
+            p = W.position[b]
+            c0 += m_b * p[0] + r[0, 0] * mc0 + r[0, 1] * mc1 + r[0, 2] * mc2
+            c1 += m_b * p[1] + r[1, 0] * mc0 + r[1, 1] * mc1 + r[1, 2] * mc2
+            c2 += m_b * p[2] + r[2, 0] * mc0 + r[2, 1] * mc1 + r[2, 2] * mc2
+            mass += m_b
+        centre[i, 0], centre[i, 1], centre[i, 2] = c0 / mass, c1 / mass, c2 / mass
+
+
 @compiled(fastmath=True, borrows_only=True)
 def time_accelerations(model, env, servo, q, v, tau, repeats, W, out):
     """Evaluate the dynamics ``repeats`` times in compiled code (benchmarking)."""

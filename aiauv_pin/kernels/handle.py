@@ -180,3 +180,59 @@ def step_of(handle, env, servo, t, q, v, tau, dt, method, q_out, v_out):
     kernels.step_into(
         handle.model, env, servo, t, q, v, tau, dt, method, handle.workspace, q_out, v_out
     )
+
+
+@compiled(fastmath=True)
+def run_rows_of(
+    handle,
+    env,
+    servo,
+    rows_q,
+    rows_v,
+    times,
+    controls,
+    currents,
+    dt,
+    n_steps,
+    method,
+    tau,
+    frame,
+    frame_rotation,
+    frame_position,
+    frame_twist,
+    centre,
+    done,
+    first,
+    stop,
+):
+    """:func:`aiauv_pin.kernels.articulated_body.run_rows` on the model and workspace of
+    ``handle`` (the environments' batched step, :mod:`aiauv_pin.envs.batch`)."""
+    kernels.run_rows(
+        handle.model,
+        env,
+        servo,
+        rows_q,
+        rows_v,
+        times,
+        controls,
+        currents,
+        dt,
+        n_steps,
+        method,
+        handle.workspace,
+        tau,
+        frame,
+        frame_rotation,
+        frame_position,
+        frame_twist,
+        centre,
+        done,
+        first,
+        stop,
+    )
+
+
+@compiled(fastmath=True)
+def thrust_matrix_of(handle, q, out):
+    """:func:`aiauv_pin.kernels.articulated_body.thrust_matrix` on the records of ``handle``."""
+    kernels.thrust_matrix(handle.model, q, handle.workspace, out)

@@ -517,6 +517,74 @@ class Vehicle:
             matrix[:, k] = jac.T @ wrench
         return matrix
 
+    @property
+    def n_controls(self) -> int:
+        """Size of the control vector of :meth:`step`: one thrust per thruster, one torque per joint."""
+        return len(self.hydro.thrusters) + self.nv - 6
+
+    def controls_to_forces(self, q: np.ndarray, controls) -> np.ndarray:
+        """Generalised forces ``tau = B(q) u + (0, tau_q)`` (nv,) [N, N m] of a control vector.
+
+        Args:
+            q: Configuration (nq,).
+            controls: (:attr:`n_controls`,): the thrusts ``u`` [N] in the order of
+                :attr:`thruster_names`, then the joint torques ``tau_q`` [N m] in the order of
+                :attr:`joint_names`. ``B(q)`` is :meth:`thrust_matrix` (the paper's eq. (20)).
+
+        Raises:
+            ArgumentError: A bad configuration or control vector (one line).
+        """
+        q = self._q(q)
+        controls = float_array(controls, "controls", (self.n_controls,))
+        m = len(self.hydro.thrusters)
+        tau = self.thrust_matrix(q) @ controls[:m]
+        tau[6:] += controls[m:]
+        return tau
+
+    def step(
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        controls,
+        dt: float,
+        *,
+        method: str = "rk4",
+        current=None,
+        t: float = 0.0,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """One integrator step of the compiled backend from ``(q, v)`` at time ``t``, with thrusts and
+        joint torques as controls; returns the new ``(q, v)`` (new arrays).
+
+        The controls enter as ``tau = B(q) u + (0, tau_q)`` (:meth:`controls_to_forces`) at the
+        step's start and are held over the step (the compiled loop holds a controller's output
+        the same way), then :meth:`aiauv_pin.kernels.evaluation.FastModel.step` integrates: the
+        integrators of :func:`aiauv_pin.simulate` (``"rk4"``: Munthe-Kaas RK4 on SE(3),
+        ``"euler"``: semi-implicit Euler, ``"midpoint"``). For a run of many steps with a
+        controller, :func:`aiauv_pin.simulate` or :func:`aiauv_pin.rollout` cost far less per step.
+
+        Args:
+            q: Configuration (nq,).
+            v: Velocity (nv,) [m/s, rad/s].
+            controls: Thrusts [N] then joint torques [N m], (:attr:`n_controls`,).
+            dt: Step [s], > 0.
+            method: ``"rk4"``, ``"euler"`` or ``"midpoint"``.
+            current: As in :meth:`acceleration`.
+            t: Time [s] of the step's start (a time-varying current is sampled from it).
+
+        Raises:
+            ArgumentError: A bad argument (one line), or a vehicle on the Pinocchio backend
+                (:func:`aiauv_pin.rk4_step` steps that one).
+        """
+        fast = self._fast
+        if fast is None:
+            why = self._fast_reason or f"backend={self.backend!r}"
+            raise ArgumentError(
+                f"Vehicle.step needs the compiled backend (this vehicle runs on Pinocchio: "
+                f"{why}); aiauv_pin.rk4_step steps it"
+            )
+        tau = self.controls_to_forces(q, controls)
+        return fast.step(q, v, tau, dt, method=method, current=current, t=t)
+
     @project_errors("Vehicle.momentum_in_world")
     def momentum_in_world(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Impulse of body plus fluid about the world origin, in world axes (6,).

@@ -595,7 +595,7 @@ def run_bench(
 
 
 #: Whole-run measurements of :mod:`aiauv_pin.tools.run_benchmarks` (``aiauv bench --only PART ...``).
-WHOLE_RUN_PARTS = ("throughput", "end-to-end", "first-run", "accuracy-per-cost")
+WHOLE_RUN_PARTS = ("throughput", "end-to-end", "first-run", "accuracy-per-cost", "gym")
 
 
 def run_parts(
@@ -621,6 +621,13 @@ def run_parts(
             out["accuracy_per_cost"] = bench_run.accuracy_per_cost(
                 case, 10.0 if quick else seconds, repeats=1 if quick else 3
             )
+        elif part == "gym":
+            try:
+                from aiauv_pin.tools.gym_benchmarks import gym_timings
+
+                out["gym"] = gym_timings(quick)
+            except ImportError as exc:  # the optional gymnasium[mujoco]
+                out["gym"] = {"note": f"skipped: {exc}"}
     return out
 
 
@@ -813,7 +820,8 @@ def add_bench_parser(subparsers) -> None:
         "MuJoCo and scaling figures, no scenario runs; throughput: runs per minute of sweeps and "
         "rollout; end-to-end: fresh 'aiauv simulate' processes; first-run: a new installation's first "
         "run, shipped kernels against compiling everything; accuracy-per-cost: error against a "
-        "converged reference per method and step)",
+        "converged reference per method and step; gym: the Gymnasium environments' steps per "
+        "second against MuJoCo's Swimmer-v5, single and vectorised)",
     )
     parser.set_defaults(handler=_run_bench_command)
 

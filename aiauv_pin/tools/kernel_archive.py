@@ -30,7 +30,8 @@ from aiauv_hydro.numerics import kernel_cache as prebuilt
 from aiauv_hydro.numerics.jit import source_hash
 from aiauv_pin.simulation.compilation import default_target_environment
 
-#: What the build runs (``aiauv`` command lines, and the README's batch rollout): the quick start,
+#: What the build runs (``aiauv`` command lines, the README's batch rollout and one step of each
+#: Gymnasium environment): the quick start,
 #: the commands a new user tries next, and each built-in controller (a passive run serves any
 #: vehicle: the loop's types do not depend on the vehicle). Each simulates 1 s; the compiled code
 #: does not depend on the duration.
@@ -43,6 +44,7 @@ WORKLOADS = (
     ("simulate", "--duration", "1", "--no-html", "--controller", "thruster_turning"),
     ("simulate", "--duration", "1", "--no-html", "--controller", "gait"),
     ("rollout",),
+    ("envs",),
 )
 
 _ROOT = Path(__file__).resolve().parents[2]  # the checkout (this file: aiauv_pin/tools/)
@@ -78,6 +80,26 @@ def _rollout_workload() -> None:
     aiauv_pin.rollout(vehicle, q0, v0, scenario.duration, 0.02, laws, method="midpoint")
 
 
+def _envs_workload() -> None:
+    """One step of each Gymnasium environment and of ``Vehicle.step`` (the batched step and the
+    thrust matrix through the handle); nothing when the optional gymnasium is missing."""
+    import numpy as np
+
+    import aiauv_pin
+
+    vehicle = aiauv_pin.load_vehicle()
+    vehicle.step(vehicle.neutral_configuration(), np.zeros(vehicle.nv), np.zeros(15), 0.01)
+    try:
+        from aiauv_pin import envs
+    except ImportError:
+        return
+    for task in envs.ENVIRONMENTS.values():
+        env = task()
+        env.reset(seed=0)
+        env.step(np.zeros(env.action_space.shape))
+        env.close()
+
+
 def _run_workloads(out: Path) -> None:
     """Child process: run :data:`WORKLOADS` (the environment is set by :func:`build_here`)."""
     import aiauv_hydro.numerics.jit
@@ -90,6 +112,9 @@ def _run_workloads(out: Path) -> None:
     for number, workload in enumerate(WORKLOADS):
         if workload == ("rollout",):
             _rollout_workload()
+            continue
+        if workload == ("envs",):
+            _envs_workload()
             continue
         # as a user runs it: the command in a process of its own, with this one's environment
         command = [sys.executable, "-m", "aiauv_pin", *workload, "--out", str(out / f"run{number}")]

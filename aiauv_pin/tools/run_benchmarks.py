@@ -668,6 +668,13 @@ def format_parts(results: dict) -> list[str]:
             lines.append(f"{'  functions compiled':<48} {compiled}")
         ratio = first["cpu_ratio_shipped_to_compiled"]
         lines.append(f"{'first run CPU, shipped / all compiled':<48} {ratio:10.3f}x")
+    gym = results.get("gym")
+    if gym and "note" in gym:
+        lines.append(f"{'gym':<48} {gym['note']}")
+    elif gym:
+        from aiauv_pin.tools.gym_benchmarks import format_gym
+
+        lines.extend(format_gym(results))
     acc = results.get("accuracy_per_cost")
     if acc:
         default = acc.get("default") or {}
