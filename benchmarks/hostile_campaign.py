@@ -339,7 +339,12 @@ def make_files(folder: Path, rng: random.Random, scale: float) -> list[dict]:
 
 
 def aiauv(*args: str) -> list[str]:
-    return [sys.executable, "-c", "from aiauv_pin.app.cli import console_main; console_main()", *args]
+    return [
+        sys.executable,
+        "-c",
+        "from aiauv_pin.app.cli import console_main; console_main()",
+        *args,
+    ]
 
 
 def classify(returncode: int | None, out: str, err: str) -> str:

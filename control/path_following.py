@@ -340,7 +340,9 @@ class PathFollowingController:
         self.max_thrust = limits.copy()
         self.path = X_AXIS if path is None else path
         if not isinstance(self.path, Path):
-            raise ValueError(f"path: expected a aiauv_control.paths.Path, got {type(self.path).__name__}")
+            raise ValueError(
+                f"path: expected a aiauv_control.paths.Path, got {type(self.path).__name__}"
+            )
         self._surge = SurgePIController(
             self.gains.k_1p,
             self.gains.k_1i,

@@ -358,18 +358,20 @@ class ReducedAttitudeLaw:
         x_ref_ddot = _vector(x_ref_ddot, 3, "x_ref_ddot")
 
         m = np.zeros(3) if m is None else _vector(m, 3, "m")
-        command = laws.reduced_attitude_law(  # eq. (9), findings 1 and 2: aiauv_control.laws.paper_laws
-            R,
-            omega,
-            x_ref,
-            x_ref_dot,
-            x_ref_ddot,
-            self.J,
-            m[1],
-            m[2],
-            self.k_p,
-            self.k_d,
-            self.feedforward == "exact",
+        command = (
+            laws.reduced_attitude_law(  # eq. (9), findings 1 and 2: aiauv_control.laws.paper_laws
+                R,
+                omega,
+                x_ref,
+                x_ref_dot,
+                x_ref_ddot,
+                self.J,
+                m[1],
+                m[2],
+                self.k_p,
+                self.k_d,
+                self.feedforward == "exact",
+            )
         )
         torque = np.array([command.u_y, command.u_z])
         omega_tilde = np.array([command.omega_tilde_y, command.omega_tilde_z])

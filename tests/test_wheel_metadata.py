@@ -75,4 +75,6 @@ def test_wheel_metadata_carries_licence_and_classifiers(tmp_path):
     assert metadata["Requires-Python"] == project["requires-python"]
     # the data the package cannot run without is in the wheel
     assert "aiauv_pin/urdf/paper_uniform.urdf" in names
-    assert any(name.startswith("aiauv_pin/kernels/shipped/") and name.endswith(".zip") for name in names)
+    assert any(
+        name.startswith("aiauv_pin/kernels/shipped/") and name.endswith(".zip") for name in names
+    )

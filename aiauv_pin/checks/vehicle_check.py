@@ -106,7 +106,9 @@ def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
         VehicleLoadError: The vehicle is not usable; the message is one line naming the reason.
     """
     path = Path(path)
-    vehicle = load_vehicle(path, **load_options)  # the validation gate of aiauv_pin.model.validation
+    vehicle = load_vehicle(
+        path, **load_options
+    )  # the validation gate of aiauv_pin.model.validation
     structure = vehicle.urdf_structure
     hydro = vehicle.hydro
     rho, g = hydro.fluid_density, hydro.gravity

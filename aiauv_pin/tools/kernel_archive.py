@@ -208,7 +208,13 @@ def build_with(python: str, out_dir: Path) -> None:
                 f"aiauv: error: the copy installed for {python} hashes differently from this "
                 "checkout (a compiled source not packaged?)"
             )
-        build = [str(interpreter), "-m", "aiauv_pin.tools.kernel_archive", "--out-dir", str(out_dir)]
+        build = [
+            str(interpreter),
+            "-m",
+            "aiauv_pin.tools.kernel_archive",
+            "--out-dir",
+            str(out_dir),
+        ]
         subprocess.run(build, check=True, cwd=temporary)
 
 

@@ -301,7 +301,9 @@ def test_simulate_out_refuses_special_and_foreign_folders(tmp_path, capfd):
 
 
 def test_simulate_out_planted_links_in_a_result_folder(tmp_path, capfd):
-    out = tmp_path / "run"  # a result folder as a run leaves it (tests/results/test_kill.py: a real one)
+    out = (
+        tmp_path / "run"
+    )  # a result folder as a run leaves it (tests/results/test_kill.py: a real one)
     _stage(out, {"summary.json": "{}", "timeseries.csv": "t\n0\n", "figures/a.png": "a"})
     outside = tmp_path / "outside"
     outside.mkdir()

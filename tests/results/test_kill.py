@@ -35,7 +35,12 @@ SWEEP_KILLS = int(os.environ.get("AIAUV_SWEEP_KILLS", "1"))
 
 
 def _aiauv(*args: str) -> list[str]:
-    return [sys.executable, "-c", "from aiauv_pin.app.cli import console_main; console_main()", *args]
+    return [
+        sys.executable,
+        "-c",
+        "from aiauv_pin.app.cli import console_main; console_main()",
+        *args,
+    ]
 
 
 def _assert_complete_run(out: Path) -> float:

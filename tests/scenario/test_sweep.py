@@ -115,7 +115,10 @@ def test_run_id_depends_on_the_resolved_run_only(tmp_path):
         ("[random]\nsamples = 3\nk_p = { uniform = [2.0, 1.0] }", "empty range"),
         ('dt = "fast"', "dt: expected a number in [1e-6, 10], got 'fast'"),
         ('[grid]\nmethod = ["rk4", "rk5"]', "grid.method[1]: expected one of rk4, euler"),
-        ("[grid]\nk_p = { linspace = [1.0, 2.0, 0] }", "grid.k_p: count must be a whole number >= 1"),
+        (
+            "[grid]\nk_p = { linspace = [1.0, 2.0, 0] }",
+            "grid.k_p: count must be a whole number >= 1",
+        ),
         ("[random]\nk_p = { normal = [1.0, 0.1] }", "'samples' (number of draws) is missing"),
         ("k_p = 1.0\n[grid]\nk_p = [1.0, 2.0]", "'k_p' is also set in fixed parameters"),
         ("current = [0.1, 0.2]", "current: expected a list of 3 numbers"),

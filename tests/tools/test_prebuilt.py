@@ -59,7 +59,9 @@ def test_portable_target_decision():
 def test_shipped_archive_is_current(tag):
     """Fails after any change to a compiled source until ``python -m aiauv_pin.tools.kernel_archive`` runs."""
     path = ROOT / "aiauv_pin" / "kernels" / "shipped" / f"{tag}.zip"
-    assert path.is_file(), f"{path} missing: build it with python -m aiauv_pin.tools.kernel_archive --python"
+    assert path.is_file(), (
+        f"{path} missing: build it with python -m aiauv_pin.tools.kernel_archive --python"
+    )
     with zipfile.ZipFile(path) as archive:
         manifest = prebuilt.Manifest.from_json(archive.read(prebuilt.MANIFEST).decode())
         names = archive.namelist()
