@@ -61,7 +61,7 @@ from aiauv_hydro.urdf.block_reader import parse_robot_text, read_hydrodynamics
 from aiauv_hydro.urdf.block_writer import format_number, format_numbers, fossen_link_element
 from aiauv_hydro.urdf.xml_reading import parse_bool
 from aiauv_pin._internal.atomic import write_text as atomic_write_text
-from aiauv_pin.description.input_limits import read_text
+from aiauv_pin.description.input_limits import check_xml_text, read_text
 from aiauv_pin.errors import InputLimitError, VehicleLoadError
 from aiauv_pin.interop.export_source import ExportSource, load_export_source, rpy_of, rpy_to_matrix
 from aiauv_pin.interop.interop_errors import InteropError
@@ -371,6 +371,7 @@ def _parse_sdf(path: Path) -> Element:
         raise
     except VehicleLoadError as exc:  # missing, a directory, unreadable, not UTF-8
         raise InteropError(str(exc)) from None
+    check_xml_text(text, str(path))  # the URDF's element and attribute limits, before any tree
     try:
         root = SafeElementTree.fromstring(text.removeprefix("\ufeff"), forbid_dtd=True)
     except defusedxml.DefusedXmlException:
