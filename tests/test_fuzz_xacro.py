@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import os
 import random
+import re
 import time
 from collections import Counter
 from pathlib import Path
@@ -325,6 +326,34 @@ def test_sdf_and_urdf_fifos_and_oversize_files_are_refused(tmp_path, capsys):
         assert error.startswith("aiauv: error: ") and error.count("\n") == 1
         TALLY["SDF input: refused"] += 1
     assert not (tmp_path / "o.urdf").exists() and not (tmp_path / "o.sdf").exists()
+
+
+@pytest.mark.parametrize(
+    "pattern, replacement, expected",
+    [
+        (r"(<sphere>\s*<radius>)[^<]*", r"\g<1>1e308", "sphere <radius>"),
+        (
+            r"<sphere>\s*<radius>[^<]*</radius>\s*</sphere>",
+            "<box><size>1 1e308 1</size></box>",
+            "box <size>",
+        ),
+        (r"(<xx>)[^<]*", r"\g<1>1e308", "does not load"),
+    ],
+)
+def test_import_gz_refuses_what_the_gate_refuses(tmp_path, pattern, replacement, expected):
+    """The campaign: a collision sphere of radius 1e308 surfaced as OverflowError; an added mass of
+    1e308 (and damping not positive semi-definite) were written. Sizes are checked
+    against the gate's distances, and the written URDF is loaded through the gate first."""
+    from aiauv_pin.interop.gz import export_sdf
+
+    urdf = aiauv_pin.bundled_urdf("uniform")
+    sdf = tmp_path / "model.sdf"
+    export_sdf(urdf, sdf)
+    sdf.write_text(re.sub(pattern, replacement, sdf.read_text(), count=1))  # the first collision
+    out = tmp_path / "out.urdf"
+    message = _outcome("SDF input", lambda: import_gz(sdf, urdf, out))
+    assert message is not None and expected in message, message
+    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["model.sdf"]
 
 
 def test_sdf_element_limit_is_the_urdf_one(tmp_path):
