@@ -439,7 +439,10 @@ def test_current_flag_has_the_scenario_files_range(tmp_path, capsys):
     from aiauv_pin.app.cli import main
 
     out = tmp_path / "run"
-    assert main(["simulate", "--current", "1e6", "0", "0", "--duration", "0.1", "--out", out]) == 1
+    assert (
+        main(["simulate", "--current", "1e6", "0", "0", "--duration", "0.1", "--out", str(out)])
+        == 1
+    )
     error = capsys.readouterr().err
     assert error.startswith("aiauv: error: --current") and "plausible range" in error
     assert error.count("\n") == 1 and not out.exists()
