@@ -33,23 +33,24 @@ per-section table of runs and findings. A run falls short when it ends in
   folder that claims completeness it lacks or mixes runs; a sweep that, resumed, does not give
   exactly the table of an uninterrupted sweep; or a surviving child process of a killed run.
 
-Devices: this script never creates or writes anything under ``/dev`` (the issue-11 section only
-reads ``/dev/zero`` and ``/dev/null`` as inputs). A device node cannot be made without privileges,
+Devices: the issue-29 sections never touch ``/dev`` (the issue-11 section gives ``/dev/zero`` and
+``/dev/null`` as inputs, and ``simulate --out /dev/null``, which must be refused). A device node
+cannot be made without privileges,
 so it is stood in for, inside the temporary folder, by a FIFO (one with a reader thread that
 discards what it gets: ``/dev/null``; one a thread feeds zeros: ``/dev/zero``) and a UNIX socket.
 
 Scale (full, 2026-11-27): 740 command-line runs over 430 mutated files, 1,446 API misuse calls on
 both backends (each in a forked process, so that a SIGSEGV is counted), 42 kills of ``simulate`` in
-fresh folders and 12 in a reused one, 7 sweep kills and 3 resumes (issue 11: 17 min); FULL_XACRO
-xacro runs (FULL_XACRO_FILES files through ``expand_xacro``, each forked, and FULL_XACRO_CLI command
-lines), FULL_OUTPUTS output runs (6 file writers and ``simulate --out``/``sweep --out`` against
-FIFOs, sockets, links, folders, planted links, absolute and relative), FULL_ENTRY forked calls of
-the compiled entry points on both backends, FULL_THREADS threaded calls compared with serial ones
-(2, 4 and 8 threads, 3 rounds), FULL_GZ SDF/gz and special-input runs, FULL_LATE implausible
-numbers (issue 29: FULL_29_MIN min). FULL_TOTAL runs in about FULL_MIN min on a shared 2-core
-machine; ``--quick`` (a twentieth of the files, a tenth of the API calls, 3 kills, one sweep
-kill-and-resume, a sample of each issue-29 class) about 8 min once the kernels are compiled. Not
-part of the test suite (CI time); the tests hold a short version of each claim
+fresh folders and 12 in a reused one, 7 sweep kills and 3 resumes (issue 11: 13 min); 2,146
+xacro runs (1,786 files through ``expand_xacro``, each forked, and 360 command lines), 182
+output runs (6 file writers and ``simulate --out``/``sweep --out`` against FIFOs, sockets, links,
+folders, planted links, absolute and relative), 1,389 forked calls of the compiled entry points on
+both backends, 63,396 threaded calls compared with serial ones (2, 4 and 8 threads, 3 rounds), 242
+SDF/gz and special-input runs, 66 implausible numbers (issue 29: 9.5 min). In all 6,279 runs and
+63,396 threaded calls in 23 min on a shared 2-core machine (load about 3-4); ``--quick`` (a
+twentieth of the files, a tenth of the API calls, 3 kills, one sweep kill-and-resume, a sample of
+each issue-29 class) about 6-7 min once the kernels are compiled (the sum of its sections, timed
+separately). Not part of the test suite (CI time); the tests hold a short version of each claim
 (``tests/test_fuzz.py``, ``test_hostile_input.py``, ``test_kill.py``, ``test_reliability.py``,
 ``test_fuzz_xacro.py``, ``test_fuzz_outputs.py``, ``test_fuzz_entry_points.py``).
 """
