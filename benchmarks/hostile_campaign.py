@@ -1,34 +1,59 @@
-"""Hostile/careless-user campaign of issue 11, reproducible: mutated files, command lines, API misuse,
-kills of ``simulate`` and kill-and-resume of sweeps.
+"""Hostile/careless-user campaign of issues 11 and 29, reproducible: mutated files, command lines,
+API misuse, kills of ``simulate``, kill-and-resume of sweeps (issue 11); hostile xacro, special
+outputs, compiled entry points, threads, SDF/gz inputs, late failures (issue 29).
 
-    python benchmarks/hostile_campaign.py [--quick] [--out benchmarks/hostile_campaign.json]
+    python benchmarks/hostile_campaign.py [--quick] [--sections a,b] [--update] [--out FILE]
 
-Everything is drawn from one seeded generator (:data:`SEED`), so each run tries the same inputs. The
-figures are written to ``benchmarks/hostile_campaign.json``: runs tried per category, and the runs
-that fell short, each with its command and the start of its standard error. A run falls short when
-it ends in
+Everything is drawn from seeded generators (:data:`SEED`; each issue-29 section has its own, so a
+section run alone tries the same inputs), so each run tries the same inputs. The figures are
+written to ``benchmarks/hostile_campaign.json``: runs tried per section, the runs that fell short
+(each with its command and the start of its standard error), and ``summary.categories``, the
+per-section table of runs and findings. A run falls short when it ends in
 
-* a **traceback** (or the command line's ``internal error`` line: an exception nobody anticipated),
-* a **crash** (the process died of a signal), a **hang** (no answer within the time limit),
+* a **traceback** (or the command line's ``internal error`` line, or an API call raising an
+  exception outside :class:`aiauv_pin.errors.AiauvError`: an exception nobody anticipated),
+* a **crash** (the process died of a signal), a **hang** (no answer within the time limit: every
+  run has one, so a hang is counted, not fatal),
 * a **messy error** (a failure that is not exactly one ``aiauv: error:`` line with exit status 1 or
-  2; ``aiauv: warning:`` lines and the one-time compile notice are allowed beside it),
-* an **accepted bad input**: a command that succeeded on an input known to be bad (a bad flag), or
-  on a vehicle this script finds non-physical by its own reading of the file (negative or
-  indefinite damping, a negative mass, an inertia breaking the triangle inequality, non-finite
-  numbers, magnitudes beyond the documented thresholds of :mod:`aiauv_pin.model.validation`, unsafe
-  names); an API call returning for a bad argument, or a non-finite result;
-* **data lost** (a killed ``simulate`` leaving a folder that claims completeness it lacks or mixes
-  runs; a sweep that, resumed, does not give exactly the table of an uninterrupted sweep) or a
-  surviving child process of a killed run.
+  2, or an API message of several lines or over 400 characters; ``aiauv: warning:`` lines and the
+  one-time compile notice are allowed beside it), or a **late failure** (a bad number refused only
+  when the run diverges, or by a message that does not name the parameter),
+* an **accepted bad input**: a command that succeeded on an input known to be bad (a bad flag, an
+  escape, a FIFO, an implausible number), or on a vehicle this script finds non-physical by its own
+  reading of the file (negative or indefinite damping, a negative mass, an inertia breaking the
+  triangle inequality, non-finite numbers, magnitudes beyond the documented thresholds of
+  :mod:`aiauv_pin.model.validation`, unsafe names); an API call returning for a bad argument;
+* **silently wrong**: a non-finite result, backends that disagree, a thread's result that differs
+  from the serial call's, a writer that said ``ok`` and wrote nothing;
+* **code executed**: a xacro payload left the marker file it would create (in the scratch
+  folder). Each escape also runs under ``--trust-xacro`` as a positive control: there, the payloads
+  that can run at all leave their marker, which shows the marker would catch an escape;
+* **files lost**: the scratch tree, compared before and after each output run without following
+  links, has an entry changed, replaced, removed or left behind; a killed ``simulate`` leaving a
+  folder that claims completeness it lacks or mixes runs; a sweep that, resumed, does not give
+  exactly the table of an uninterrupted sweep; or a surviving child process of a killed run.
 
-Scale (full): >= 700 command-line runs over >= 400 mutated files, every API misuse of issue 11
-points 1 and 9 on both backends (each call in a forked process, so that a SIGSEGV is counted, not
-fatal), 42 kills of ``simulate`` in fresh folders and 12 in a reused one, sweeps killed and resumed.
-About 20 min on a shared 2-core machine (19 min on 2026-11-23); ``--quick`` (a twentieth of the
-files, a tenth of the API calls, 3 kills, one sweep kill-and-resume) 95 s once the
-kernels are compiled. Not part of the test suite (CI time); the tests hold a short version of each
-claim (``tests/description/test_fuzz.py``, ``tests/app/test_hostile_input.py``,
-``tests/results/test_kill.py``, ``tests/test_reliability.py``).
+Devices: the issue-29 sections never touch ``/dev`` (the issue-11 section gives ``/dev/zero`` and
+``/dev/null`` as inputs, and ``simulate --out /dev/null``, which must be refused). A device node
+cannot be made without privileges,
+so it is stood in for, inside the temporary folder, by a FIFO (one with a reader thread that
+discards what it gets: ``/dev/null``; one a thread feeds zeros: ``/dev/zero``) and a UNIX socket.
+
+Scale (full, 2026-11-27): 740 command-line runs over 430 mutated files, 1,446 API misuse calls on
+both backends (each in a forked process, so that a SIGSEGV is counted), 42 kills of ``simulate`` in
+fresh folders and 12 in a reused one, 7 sweep kills and 3 resumes (issue 11: 13 min); 2,146
+xacro runs (1,786 files through ``expand_xacro``, each forked, and 360 command lines), 182
+output runs (6 file writers and ``simulate --out``/``sweep --out`` against FIFOs, sockets, links,
+folders, planted links, absolute and relative), 1,389 forked calls of the compiled entry points on
+both backends, 63,396 threaded calls compared with serial ones (2, 4 and 8 threads, 3 rounds), 242
+SDF/gz and special-input runs, 66 implausible numbers (issue 29: 9.5 min). In all 6,279 runs and
+63,396 threaded calls in 23 min on a shared 2-core machine (load about 3-4); ``--quick`` (a
+twentieth of the files, a tenth of the API calls, 3 kills, one sweep kill-and-resume, a sample of
+each issue-29 class) 2.6 min (159 s, 22,005 runs and calls) once the kernels are compiled. Not
+part of the test suite (CI time); the tests hold a short version of each claim
+(``tests/description/test_fuzz.py``, ``tests/app/test_hostile_input.py``,
+``tests/results/test_kill.py``, ``tests/test_reliability.py``, ``tests/description/test_fuzz_xacro.py``,
+``tests/app/test_fuzz_outputs.py``, ``tests/model/test_fuzz_entry_points.py``).
 """
 
 from __future__ import annotations
@@ -58,6 +83,19 @@ from aiauv_pin.testing.processes import descendants, wait_gone
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED = 20261123
+#: The sections, in the order they run (the first four: issue 11; the rest: issue 29).
+SECTIONS = (
+    "cli",
+    "api",
+    "kills",
+    "sweeps",
+    "xacro",
+    "outputs",
+    "entry_points",
+    "threads",
+    "gz_inputs",
+    "late",
+)
 DEFAULT_OUT = ROOT / "benchmarks" / "hostile_campaign.json"
 #: Command lines run at once (the machine has 2 cores).
 PARALLEL = 2
@@ -1450,15 +1488,1639 @@ def run_sweep_section(
     }
 
 
+# --- shared by the issue-29 sections: forked calls, scratch special files, tallies ----------------------
+
+#: The outcomes that are findings, by column of the per-category table (:func:`summarise`).
+FINDING_COLUMNS = {
+    "tracebacks": ("traceback", "internal error", "foreign exception"),
+    "crashes": ("crash",),
+    "hangs": ("hang",),
+    "messy_errors": ("messy error", "forged output", "late failure"),
+    "accepted_bad_inputs": ("accepted bad input",),
+    "silently_wrong": ("silently wrong", "non-finite result", "backends disagree"),
+    "code_executed": ("code executed",),
+    "files_lost": ("files lost",),
+}
+
+#: The loop of every forked-call worker: each case runs in a child (a SIGSEGV or a hang is
+#: counted, not fatal); ``describe`` turns a returned value into a JSON-able record.
+FORK_LOOP = r"""
+import json, os, select, signal, time
+from aiauv_pin.errors import AiauvError
+
+#: The exceptions that count as the project's own (a script may add a layer's own error).
+PROJECT_ERRORS = (AiauvError,)
+
+def _child(fn, describe, write_end):
+    try:
+        message = describe(fn())
+    except BaseException as exc:
+        message = {"kind": "exception", "type": type(exc).__name__,
+                   "aiauv": isinstance(exc, PROJECT_ERRORS), "message": str(exc)[:1000]}
+    os.write(write_end, json.dumps(message, default=str).encode())
+    os._exit(0)
+
+def run_forked(cases, describe, timeout, out_path):
+    results = []
+    for label, expect, fn in cases:
+        read_end, write_end = os.pipe()
+        pid = os.fork()
+        if pid == 0:
+            os.close(read_end)
+            _child(fn, describe, write_end)
+        os.close(write_end)
+        chunks, start, timed_out = [], time.monotonic(), False
+        while True:
+            if time.monotonic() - start > timeout:
+                os.kill(pid, signal.SIGKILL)
+                timed_out = True
+                break
+            ready, _, _ = select.select([read_end], [], [], 0.5)
+            if ready:
+                data = os.read(read_end, 1 << 16)
+                if not data:
+                    break
+                chunks.append(data)
+        os.close(read_end)
+        _, status = os.waitpid(pid, 0)
+        record = {"case": label, "expect": expect, "seconds": round(time.monotonic() - start, 2)}
+        if timed_out:
+            record["kind"] = "hang"
+        elif os.WIFSIGNALED(status) and not chunks:
+            record["kind"], record["signal"] = "crash", os.WTERMSIG(status)
+        else:
+            try:
+                record.update(json.loads(b"".join(chunks).decode()))
+            except ValueError:
+                record["kind"] = "crash"
+        results.append(record)
+    with open(out_path, "w") as handle:
+        json.dump(results, handle)
+"""
+
+
+def run_worker(script: str, work: Path, env: dict, args: list[str], timeout: float) -> list | None:
+    """Run a forked-call worker script; its records, or None if the worker itself failed."""
+    path = work / f"worker_{abs(hash(script)) % 10**8}.py"
+    path.write_text(FORK_LOOP + script, encoding="utf-8")
+    out = work / f"{path.stem}_{len(list(work.glob(path.stem + '_*.json')))}.json"
+    result = run_command([sys.executable, str(path), str(out), *args], work, env, timeout)
+    if result["status"] != 0 or not out.exists():
+        print(f"worker {path.name} {args} failed: {result['stderr'][-1500:]}", flush=True)
+        return None
+    return json.loads(out.read_text())
+
+
+def forked_outcome(record: dict) -> str:
+    """ok / error, or a finding: crash, hang, foreign exception, messy error, accepted bad input."""
+    kind, expect = record["kind"], record["expect"]
+    if kind in ("crash", "hang"):
+        return kind
+    if kind == "exception":
+        message = record["message"]
+        if not record["aiauv"]:
+            return "foreign exception"
+        if "\n" in message or len(message) > 400 or not message.strip():
+            return "messy error"
+        return "refused good input" if expect == "good" else "error"
+    if expect == "bad":
+        return "accepted bad input"
+    if record.get("finite") is False:
+        return "non-finite result"
+    return "ok"
+
+
+def tally_section(records: list[dict], findings: list[dict], extra: dict | None = None) -> dict:
+    """A section's report: runs, outcomes, failures (records whose outcome is a finding)."""
+    outcomes = Counter(r["outcome"] for r in records)
+    return {
+        "runs": len(records),
+        "outcomes": dict(sorted(outcomes.items())),
+        **(extra or {}),
+        "failures": findings,
+    }
+
+
+def _is_finding(outcome: str) -> bool:
+    return outcome not in ("ok", "error", "refused good input")
+
+
+def snapshot(root: Path) -> dict[str, tuple]:
+    """Every entry under ``root``, never following links: kind and content or link target."""
+    import hashlib
+    import stat
+
+    found = {}
+    for top, dirs, names in os.walk(root, followlinks=False):
+        for name in dirs + names:
+            path = Path(top) / name
+            mode = os.lstat(path).st_mode
+            key = str(path.relative_to(root))
+            if stat.S_ISLNK(mode):
+                found[key] = ("link", os.readlink(path))
+            elif stat.S_ISREG(mode):
+                found[key] = (
+                    "file",
+                    os.lstat(path).st_ino,
+                    hashlib.sha256(path.read_bytes()).hexdigest(),
+                )
+            elif stat.S_ISDIR(mode):
+                found[key] = ("dir",)
+            else:
+                found[key] = ("special", stat.S_IFMT(mode))
+    return found
+
+
+def make_socket(path: Path) -> None:
+    """A UNIX socket file at ``path``: with a FIFO, the stand-in for a device node (this script
+    never touches ``/dev``; a real character device cannot be made without privileges)."""
+    import socket
+
+    server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    server.bind(str(path))
+    server.close()  # the socket file stays
+
+
+class ZeroFeeder:
+    """A FIFO standing in for ``/dev/zero``: a thread writes zeros to whoever opens it to read."""
+
+    def __init__(self, path: Path, data: bytes = b"\0" * 65536) -> None:
+        import threading
+
+        os.mkfifo(path)
+        self.path, self.data, self.stop = path, data, threading.Event()
+        self.thread = threading.Thread(target=self._feed, daemon=True)
+        self.thread.start()
+
+    def _feed(self) -> None:
+        while not self.stop.is_set():
+            try:
+                fd = os.open(self.path, os.O_WRONLY | os.O_NONBLOCK)
+            except OSError:  # no reader yet (ENXIO)
+                time.sleep(0.05)
+                continue
+            os.set_blocking(fd, True)
+            try:
+                while not self.stop.is_set():
+                    os.write(fd, self.data)
+            except OSError:  # the reader went away (EPIPE)
+                pass
+            finally:
+                os.close(fd)
+
+    def close(self) -> None:
+        self.stop.set()
+
+
+# --- section 5: hostile xacro expressions and includes (issue 29 point 1 and 5) ---------------------------
+
+XACRO_HEAD = '<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+#: The two-link vehicle's body: a file whose harmless expressions give a usable vehicle.
+XACRO_BODY = TWO_LINK.split("<robot", 1)[1].split(">", 1)[1].rsplit("</robot>", 1)[0]
+#: Code-execution attempts; MARK is the marker file the payload would create, if it ran.
+XACRO_ESCAPES = {
+    "python.vars to _module": "python.vars(python.vars([c for c in python.vars(python.type)"
+    "['__subclasses__'](python.type.mro(python.type(0))[-1]) if 'catch_warnings' in "
+    "python.str(c)][0]()._module)['sys']).get('modules')['os'].system('touch MARK')",
+    "__import__": "__import__('os').system('touch MARK')",
+    "__builtins__": "__builtins__['__import__']('os').system('touch MARK')",
+    "dunder class chain": "[c for c in ().__class__.__base__.__subclasses__() "
+    "if c.__name__ == 'catch_warnings'][0]()._module.sys.modules['os'].system('touch MARK')",
+    "open": "open('MARK', 'w').write('x')",
+    "lambda": "(lambda: open('MARK', 'w'))()",
+    "comprehension": "[open('MARK', 'w') for i in [1]]",
+    "python.open": "python.open('MARK', 'w')",
+    "python.eval": "python.eval(\"__import__('os').system('touch MARK')\")",
+    "python.exec": "python.exec(\"import os; os.system('touch MARK')\")",
+    "python.getattr": "python.getattr(python, 'open')('MARK', 'w')",
+    "python.vars(python)": "python.vars(python)['open']('MARK', 'w')",
+    "python.globals": "python.globals()['__builtins__']",
+    "xacro.os": "xacro.os.system('touch MARK')",
+    "xacro.sys": "xacro.sys.modules['os'].system('touch MARK')",
+    "xacro.subprocess": "xacro.subprocess.call(['touch', 'MARK'])",
+    "xacro.load_yaml": "xacro.load_yaml('MARK')",
+    "math.__loader__": "math.__loader__.load_module('os').system('touch MARK')",
+    "format attribute": "'{0.__class__.__init__.__globals__}'.format(xacro)",
+    "getattr chain": "python.type(0).mro()[-1].__subclasses__()",
+    "str.format_map": "'{x.__globals__}'.format_map({'x': xacro.load_yaml})",
+    "os.system name": "os.system('touch MARK')",
+    "sys.modules": "sys.modules['os'].system('touch MARK')",
+    "vars()": "vars()['__builtins__']",
+    "globals()": "globals()['__builtins__']['open']('MARK', 'w')",
+    "walrus": "[(o := open), o('MARK', 'w')]",
+}
+#: Where an expression may sit in a xacro file (``{e}`` is the expression).
+XACRO_PLACES = {
+    "attribute": '<gazebo><x v="${{{e}}}"/></gazebo>',
+    "text": "<gazebo><x>${{{e}}}</x></gazebo>",
+    "property": '<xacro:property name="p" value="${{{e}}}"/><gazebo><x v="${{p}}"/></gazebo>',
+    "lazy property": '<xacro:property name="p" value="${{{e}}}" lazy_eval="false"/>',
+    "if": '<xacro:if value="${{{e}}}"><gazebo/></xacro:if>',
+    "macro default": '<xacro:macro name="m" params="a:=${{{e}}}"><x v="${{a}}"/></xacro:macro>'
+    "<gazebo><xacro:m/></gazebo>",
+    "element name": '<gazebo><xacro:element xacro:name="${{{e}}}"/></gazebo>',
+    "include filename": '<xacro:include filename="${{{e}}}"/>',
+    "eval substitution": '<xacro:property name="p" value="{r}"/><gazebo><x v="$(eval ${{p}})"/></gazebo>',
+}
+XACRO_BOMBS = {
+    "9**9**9": "9**9**9", "9.0**9**9": "9.0**9**9", "(10**300)**(10**300)": "(10**300)**(10**300)",
+    "2**1000 cubed": "(2**1000) * (2**1000) * (2**1000)", "shift": "1 << 10**9",
+    "string": "'a' * 10**9", "list": "[0] * 10**9", "format width": "'%0999999999d' % 1",
+    "3000 terms": "+".join(["1"] * 3000), "20000 digits": "1" * 20_000,
+    "int of 5000 digits": "int('9' * 5000)", "factorial": "math.factorial(10**6)",
+    "nested lists": "[" * 500 + "]" * 500, "range list": "list(range(10**9))",
+    "string repeat in join": "','.join(['x'] * 10**8)",
+}  # fmt: skip
+
+
+def _xacro_escape(value: str) -> str:
+    return value.replace("&", "&amp;").replace("<", "&lt;").replace('"', "&quot;")
+
+
+def _xacro_file(folder: Path, name: str, body: str) -> Path:
+    path = folder / name
+    path.write_text(f'<?xml version="1.0"?>\n{XACRO_HEAD}{XACRO_BODY}{body}</robot>\n')
+    return path
+
+
+def _doubling_macros(leaf: str, levels: int = 30) -> str:
+    macros = f'<xacro:macro name="m0">{leaf}</xacro:macro>'
+    for level in range(1, levels + 1):
+        macros += (
+            f'<xacro:macro name="m{level}"><xacro:m{level - 1}/><xacro:m{level - 1}/></xacro:macro>'
+        )
+    return macros + f"<xacro:m{levels}/>"
+
+
+def make_xacro_cases(folder: Path, rng: random.Random, scale: float) -> list[dict]:
+    """Every hostile xacro file: dicts with label, path, marker, expect (bad, either)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    markers = folder / "markers"
+    markers.mkdir(exist_ok=True)
+    cases: list[dict] = []
+
+    def add(label: str, body: str | None, expect: str, path: Path | None = None, **extra) -> dict:
+        index = len(cases)
+        marker = markers / f"m{index}"
+        if path is None:
+            path = _xacro_file(folder, f"x{index:04d}.xacro", body.replace("MARK", str(marker)))
+        case = {"label": label, "path": str(path), "marker": str(marker), "expect": expect, **extra}
+        cases.append(case)
+        return case
+
+    for name, expression in XACRO_ESCAPES.items():
+        for place, template in XACRO_PLACES.items():
+            if place == "eval substitution":  # $(eval) cannot hold ')': a property brings it
+                body = template.format(r=_xacro_escape(repr(expression.replace("'", '"'))))
+            else:
+                body = template.format(e=_xacro_escape(expression))
+            case = add(f"escape {name} in {place}", body, "bad")
+            # the positive control: the same payload under full xacro (trust) must leave its
+            # marker when it can run at all (it shows the marker would catch an escape)
+            trusted = Path(case["path"]).with_suffix(".trusted.xacro")
+            trusted.write_text(
+                Path(case["path"]).read_text().replace(case["marker"], case["marker"] + ".trusted")
+            )
+            case["trusted_path"] = str(trusted)
+    for name, expression in XACRO_BOMBS.items():
+        for place in ("attribute", "property") if scale >= 1 else ("attribute",):
+            add(
+                f"bomb {name} in {place}",
+                XACRO_PLACES[place].format(e=_xacro_escape(expression)),
+                "bad",
+            )
+    expansion = {
+        "doubling macro 2^30": _doubling_macros('<link name="x"/>'),
+        "doubling empty macro 2^30": _doubling_macros(""),
+        "doubling macro 2^60": _doubling_macros("", 60),
+        "doubling block": '<xacro:macro name="b" params="*x"><a><xacro:insert_block name="x"/>'
+        '<xacro:insert_block name="x"/></a></xacro:macro>' + "<xacro:b>" * 25 + "<y/>" + "</xacro:b>" * 25,
+        "recursive macro": '<xacro:macro name="m"><xacro:m/></xacro:macro><xacro:m/>',
+        "mutual macros": '<xacro:macro name="a"><xacro:b/></xacro:macro>'
+        '<xacro:macro name="b"><xacro:a/></xacro:macro><xacro:a/>',
+        "property chain 3000": "".join(
+            f'<xacro:property name="p{i}" value="${{p{i - 1} + 1}}"/>' for i in range(1, 3000)
+        ) + '<xacro:property name="p0" value="1"/><x v="${p2999}"/>',
+        "string doubling 2^39": '<xacro:property name="s0" value="ab"/>' + "".join(
+            f'<xacro:property name="s{i}" value="${{s{i - 1} + s{i - 1}}}"/>' for i in range(1, 40)
+        ) + '<x v="${s39}"/>',
+        "self-referencing property": '<xacro:property name="p" value="${p}"/><x v="${p}"/>',
+    }  # fmt: skip
+    for name, body in expansion.items():
+        add(f"expansion {name}", body, "bad")
+    # hostile includes: a FIFO, a 200 MB and a 2 GB sparse file, a folder, a socket, a zero-feeding
+    # FIFO (the stand-in for /dev/zero), self, mutual, doubling includes (4096 files)
+    special = folder / "special"
+    special.mkdir(exist_ok=True)
+    os.mkfifo(special / "fifo.xacro")
+    for name, size in (("huge.xacro", 200_000_000), ("huge2g.xacro", 2_000_000_000)):
+        with open(special / name, "wb") as handle:
+            handle.truncate(size)  # sparse: no disk used
+    (special / "folder.xacro").mkdir(exist_ok=True)
+    make_socket(special / "socket.xacro")
+    includes = {
+        "FIFO": special / "fifo.xacro", "200 MB": special / "huge.xacro",
+        "2 GB": special / "huge2g.xacro", "folder": special / "folder.xacro",
+        "socket": special / "socket.xacro", "zero FIFO": special / "zero.xacro",
+        "missing": special / "missing.xacro",
+    }  # fmt: skip
+    for name, target in includes.items():
+        add(f"include {name}", f'<xacro:include filename="{target}"/>', "bad")
+    add(
+        "include self",
+        None,
+        "bad",
+        path=_xacro_file(folder, "self.xacro", '<xacro:include filename="self.xacro"/>'),
+    )
+    (folder / "ping.xacro").write_text(
+        f'{XACRO_HEAD}<xacro:include filename="pong.xacro"/></robot>'
+    )
+    (folder / "pong.xacro").write_text(
+        f'{XACRO_HEAD}<xacro:include filename="ping.xacro"/></robot>'
+    )
+    add("include ping-pong", None, "bad", path=folder / "ping.xacro")
+    for level in range(12):
+        (folder / f"d{level}.xacro").write_text(
+            XACRO_HEAD + f'<xacro:include filename="d{level + 1}.xacro"/>' * 2 + "</robot>"
+        )
+    (folder / "d12.xacro").write_text(XACRO_HEAD + "</robot>")
+    add("include doubling 2^12", None, "bad", path=folder / "d0.xacro")
+    add("top file FIFO", None, "bad", path=special / "fifo.xacro")
+    add("top file zero FIFO", None, "bad", path=special / "zero.xacro")
+    add("top file 2 GB", None, "bad", path=special / "huge2g.xacro")
+    # random compositions of dangerous and harmless pieces (fixed seed)
+    for index in range(int(1500 * scale)):
+        parts = [
+            rng.choice(RANDOM_PIECES) + rng.choice(RANDOM_SUFFIXES)
+            for _ in range(rng.randint(1, 4))
+        ]
+        expression = parts[0]
+        for part in parts[1:]:
+            expression += rng.choice(RANDOM_JOINS) + part
+        place = rng.choice(["attribute", "property", "if", "macro default", "text"])
+        body = (
+            '<xacro:property name="n" value="2"/><xacro:property name="s" value="ab"/>'
+            '<xacro:property name="l" value="${[1, 2, 3]}"/>'
+            + XACRO_PLACES[place].format(e=_xacro_escape(expression))
+        )
+        add(f"random {index}", body, "either", expression=expression)
+    return cases
+
+
+RANDOM_PIECES = [
+    "python", "xacro", "math", "__import__", "open", "eval", "exec", "getattr", "vars", "type",
+    "globals", "python.vars", "python.type", "xacro.load_yaml", "math.sin", "math.factorial",
+    "__builtins__", "os", "sys", "xacro.os", "().__class__", "''.__class__", "[].__class__",
+    "pi", "n", "s", "l", "1", "2.5", "-3", "'a'", "'touch MARK'", "[1, 2]", "(1, 2)", "True",
+    "9**9**9", "10**400", "2.0**4096", "'a'*10**9", "[0]*10**9", "[l]*10**5", "1 << 10**9",
+    "'%0999999999d' % 1", "sin(n)", "radians(n)", "sqrt(-1)", "max(l)", "len(s)", "int('9'*5000)",
+    "dict(a=1)", "n if n > 1 else -n", "not n", "n == 1 and s", "lambda: 1", "[x for x in l]",
+    "{'a': 1}", "s.upper", "s.format", "'{0}'.format", "l.__len__", "math.__dict__",
+]  # fmt: skip
+RANDOM_JOINS = [
+    " + ",
+    " * ",
+    " ** ",
+    " - ",
+    " / ",
+    " // ",
+    " % ",
+    " and ",
+    " or ",
+    " < ",
+    " == ",
+    " in ",
+]
+RANDOM_SUFFIXES = [
+    "", ".__class__", "._module", ".mro()", ".system('touch MARK')", "[0]", "(1)", "()",
+    ".__globals__", ".__subclasses__()", "('MARK', 'w')", ".__dict__",
+]  # fmt: skip
+
+XACRO_WORKER = r"""
+import sys
+import aiauv_pin
+from aiauv_pin.description.xacro_loading import expand_xacro
+cases = json.load(open(sys.argv[2]))
+calls = [(c["label"], c["expect"], lambda c=c: expand_xacro(c["path"])) for c in cases]
+calls += [
+    ("trusted: " + c["label"], "either", lambda c=c: expand_xacro(c["trusted_path"], trust=True))
+    for c in cases
+    if "trusted_path" in c
+]
+run_forked(calls, lambda value: {"kind": "ok"}, 60.0, sys.argv[1])
+"""
+
+
+def run_xacro_section(work: Path, env: dict, rng: random.Random, scale: float) -> dict:
+    folder = work / "xacro"
+    cases = make_xacro_cases(folder, rng, scale)
+    feeder = ZeroFeeder(folder / "special" / "zero.xacro")
+    records: list[dict] = []
+    findings: list[dict] = []
+    try:
+        # the API route (expand_xacro), each file in a forked child
+        listing = work / "xacro_cases.json"
+        listing.write_text(json.dumps(cases))
+        forked = run_worker(XACRO_WORKER, work, env, [str(listing)], 3600) or []
+        by_label = {r["case"]: r for r in forked}
+        controls = [c for c in cases if "trusted_path" in c]
+        live = [c["label"] for c in controls if Path(c["marker"] + ".trusted").exists()]
+        for case in cases:
+            record = by_label.get(
+                case["label"], {"kind": "worker failed", "expect": case["expect"]}
+            )
+            outcome = (
+                "worker failed" if record["kind"] == "worker failed" else forked_outcome(record)
+            )
+            if Path(case["marker"]).exists():
+                outcome = "code executed"
+                Path(case["marker"]).unlink()
+            records.append({"route": "expand_xacro", "outcome": outcome})
+            if _is_finding(outcome):
+                findings.append(
+                    {
+                        "route": "expand_xacro",
+                        "case": case["label"],
+                        "path": case["path"],
+                        "outcome": outcome,
+                        "message": record.get("message", "")[:300],
+                    }
+                )
+        # the command line: every fixed payload, a sample of the random ones, and the routes a
+        # scenario, a sweep and --arg open to a vehicle file
+        fixed = [c for c in cases if not c["label"].startswith("random")]
+        sample = rng.sample(
+            [c for c in cases if c["label"].startswith("random")],
+            min(int(60 * scale) or 3, len(cases) - len(fixed)),
+        )
+        chosen = fixed if scale >= 1 else fixed[::6]
+        runs = [(c, ["check", c["path"]]) for c in chosen + sample]
+        escape = next(c for c in cases if c["label"] == "escape __import__ in attribute")
+        trojan = next(
+            c for c in cases if c["label"] == "escape python.vars to _module in eval substitution"
+        )
+        for c in (escape, trojan):
+            scenario = folder / f"scenario_{Path(c['path']).stem}.toml"
+            scenario.write_text(f'vehicle = "{c["path"]}"\nduration = 0.1\n')
+            sweep = folder / f"sweep_{Path(c['path']).stem}.toml"
+            sweep.write_text(
+                f'vehicle = "{c["path"]}"\nduration = 0.1\ndt = 0.01\n[grid]\nk_e = [0.05, 0.1]\n'
+            )
+            runs.append(
+                (
+                    c,
+                    [
+                        "simulate",
+                        str(scenario),
+                        "--quiet",
+                        "--no-html",
+                        "--out",
+                        str(folder / f"out_{len(runs)}"),
+                    ],
+                )
+            )
+            runs.append(
+                (
+                    c,
+                    [
+                        "simulate",
+                        "--vehicle",
+                        c["path"],
+                        "--duration",
+                        "0.1",
+                        "--quiet",
+                        "--out",
+                        str(folder / f"out_{len(runs)}"),
+                    ],
+                )
+            )
+            runs.append(
+                (
+                    c,
+                    [
+                        "sweep",
+                        str(sweep),
+                        "--workers",
+                        "1",
+                        "--quiet",
+                        "--no-plots",
+                        "--out",
+                        str(folder / f"sw_{len(runs)}"),
+                    ],
+                )
+            )
+            runs.append((c, ["annotate", c["path"], "-o", str(folder / f"a_{len(runs)}.urdf")]))
+            runs.append((c, ["export", c["path"], "-o", str(folder / f"e_{len(runs)}.sdf")]))
+            runs.append((c, ["linearize", str(scenario)]))
+        marker = folder / "markers" / "arg"
+        argument = _xacro_file(
+            folder,
+            "argument.xacro",
+            '<xacro:arg name="x" default="1"/><gazebo><x v="$(arg x)" w="${xacro.arg(\'x\')}"/></gazebo>',
+        )
+        arg_case = {
+            "label": "--arg payload",
+            "path": str(argument),
+            "marker": str(marker),
+            "expect": "either",
+        }
+        for payload in (
+            "${__import__('os').system('touch MARK')}",
+            "$(eval __import__('os').system('touch MARK'))",
+        ):
+            runs.append(
+                (
+                    arg_case,
+                    ["check", str(argument), "--arg", "x=" + payload.replace("MARK", str(marker))],
+                )
+            )
+        print(
+            f"xacro: {len(cases)} files through expand_xacro, {len(runs)} command lines", flush=True
+        )
+
+        def execute(item):
+            case, argv = item
+            result = run_command(aiauv(*argv), work, env, TIMEOUT)
+            return case, result
+
+        with ThreadPoolExecutor(PARALLEL) as pool:
+            done = list(pool.map(execute, runs))
+        for case, result in done:
+            outcome = result["outcome"]
+            if outcome == "ok" and case["expect"] == "bad":
+                outcome = "accepted bad input"
+            if Path(case["marker"]).exists():
+                outcome = "code executed"
+                Path(case["marker"]).unlink()
+            records.append({"route": result["argv"][0], "outcome": outcome})
+            if _is_finding(outcome):
+                findings.append(
+                    {
+                        "route": "cli",
+                        "case": case["label"],
+                        "argv": result["argv"],
+                        "outcome": outcome,
+                        "stderr": result["stderr"][-400:],
+                    }
+                )
+    finally:
+        feeder.close()
+    cli = Counter(r["outcome"] for r in records if r["route"] != "expand_xacro")
+    return tally_section(
+        records,
+        findings,
+        {
+            "files": len(cases),
+            "positive_controls": {
+                "escapes run with --trust-xacro": len(controls),
+                "of them leaving their marker (code ran)": len(live),
+                "live payloads": sorted({label.split(" in ")[0] for label in live}),
+            },
+            "outcomes_command_line": dict(cli),
+            "seconds_slowest_expansion": max((r.get("seconds", 0) for r in forked), default=None),
+        },
+    )
+
+
+# --- section 6: special outputs of every writing command (issue 29 point 2 and 4) -------------------------
+
+
+class DrainReader:
+    """A FIFO with a reader that discards what it gets: the stand-in for ``/dev/null``."""
+
+    def __init__(self, path: Path) -> None:
+        import threading
+
+        os.mkfifo(path)
+        self.fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._drain, daemon=True)
+        self.thread.start()
+
+    def _drain(self) -> None:
+        import select
+
+        while not self.stop.is_set():
+            ready, _, _ = select.select([self.fd], [], [], 0.1)
+            if ready:
+                try:
+                    os.read(self.fd, 1 << 16)
+                except OSError:
+                    pass
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join()
+        os.close(self.fd)
+
+
+#: File writers: suffix of the output and the command line (i: the inputs, out: the output).
+FILE_WRITERS = {
+    "build": (".urdf", lambda i, out: ["build", i["spec"], "-o", out]),
+    "annotate": (".urdf", lambda i, out: ["annotate", i["urdf"], "-o", out]),
+    "export sdf": (".sdf", lambda i, out: ["export", i["urdf"], "-o", out]),
+    "export mjcf": (".xml", lambda i, out: ["export", i["urdf"], "-o", out]),
+    "import-gz": (".urdf", lambda i, out: ["import-gz", i["sdf"], "--urdf", i["urdf"], "-o", out]),
+    "bench": (".json", lambda i, out: ["bench", "--quick", "--out", out]),
+}
+FOLDER_WRITERS = {
+    "simulate --out": lambda i, out: [
+        "simulate",
+        "--duration",
+        "0.1",
+        "--no-html",
+        "--quiet",
+        "--out",
+        out,
+    ],
+    "sweep --out": lambda i, out: [
+        "sweep",
+        i["sweep"],
+        "--workers",
+        "1",
+        "--quiet",
+        "--no-plots",
+        "--out",
+        out,
+    ],
+}
+
+
+def _output_targets(root: Path, suffix: str, folder_writer: str | None) -> tuple[dict, list]:
+    """Hostile output paths in ``root/work`` (expect: refuse, or ok for a regular file), with
+    ``root/outside`` holding what links point at; and the helpers to close afterwards."""
+    from aiauv_pin._internal.result_folder import claim_folder, staged_folder
+
+    work, outside = root / "work", root / "outside"
+    work.mkdir(parents=True)
+    outside.mkdir()
+    (outside / f"precious{suffix}").write_text("precious bytes\n")
+    (outside / "keep.png").write_text("keep")
+    os.mkfifo(outside / "pipe")
+    make_socket(outside / "sock")
+    helpers: list = []
+    targets: dict[str, tuple[Path, str]] = {}
+
+    def target(name: str, expect: str = "refuse") -> Path:
+        path = work / f"{re.sub(r'[^A-Za-z0-9.]+', '_', name)}{suffix}"
+        targets[name] = (path, expect)
+        return path
+
+    os.mkfifo(target("FIFO"))
+    helpers.append(DrainReader(target("FIFO with a reader (/dev/null stand-in)")))
+    make_socket(target("socket (device stand-in)"))
+    target("link to a file outside").symlink_to(outside / f"precious{suffix}")
+    target("link to a FIFO").symlink_to(outside / "pipe")
+    target("link to a socket").symlink_to(outside / "sock")
+    target("dangling link").symlink_to(outside / f"nothing{suffix}")
+    target("link to a folder outside").symlink_to(outside)
+    if folder_writer is None:
+        folder = target("folder")
+        folder.mkdir()
+        (folder / "inside.txt").write_text("kept\n")
+        regular = target("regular file with a second name", "ok")
+        regular.write_text("old bytes\n")
+        os.link(regular, work / "second_name")
+        return targets, helpers
+    target("regular file").write_text("a file\n")
+    hidden = target("folder of hidden entries only (.git)")
+    (hidden / ".git").mkdir(parents=True)
+    (hidden / ".git" / "HEAD").write_text("ref: refs/heads/main\n")
+    (hidden / ".env").write_text("SECRET=1\n")
+    foreign = target("folder with a foreign summary.json and results.csv")
+    foreign.mkdir()
+    (foreign / "summary.json").write_text('{"status": "complete"}')
+    (foreign / "results.csv").write_text("mine\n")
+    other = target("folder with a user's file")
+    other.mkdir()
+    (other / "notes.txt").write_text("mine\n")
+    kind = "simulate" if folder_writer.startswith("simulate") else "sweep"
+    if kind == "simulate":
+        for planted, link in (
+            ("figures", outside),
+            ("summary.json", outside / "keep.png"),
+            ("timeseries.csv", outside / f"precious{suffix}"),
+        ):
+            ours = target(f"our result folder with {planted} a link outside")
+            with staged_folder(ours) as staging:
+                (staging / "summary.json").write_text("{}")
+                (staging / "timeseries.csv").write_text("t\n0\n")
+                (staging / "figures").mkdir()
+                (staging / "figures" / "a.png").write_text("a")
+            victim = ours / planted
+            shutil.rmtree(victim) if victim.is_dir() else victim.unlink()
+            victim.symlink_to(link)
+        ours = target("our result folder with the manifest a link")
+        with staged_folder(ours) as staging:
+            (staging / "summary.json").write_text("{}")
+        from aiauv_pin._internal.result_folder import MARKER
+
+        (outside / "forged.json").write_text(
+            json.dumps(
+                {
+                    "written_by": "aiauv-pin",
+                    "kind": "simulate",
+                    "files": [str(outside / "keep.png"), "../outside/keep.png"],
+                    "folders": [".."],
+                }
+            )
+        )
+        (ours / MARKER).unlink()
+        (ours / MARKER).symlink_to(outside / "forged.json")
+    else:
+        for planted in ("runs", "figures", ".sweep.lock"):
+            ours = target(f"our sweep folder with {planted} a link outside")
+            claim_folder(ours, "sweep")
+            (ours / planted).symlink_to(outside if planted != ".sweep.lock" else outside / "pipe")
+        ours = target("our sweep folder with a FIFO lock")
+        claim_folder(ours, "sweep")
+        os.mkfifo(ours / ".sweep.lock")
+    return targets, helpers
+
+
+def run_outputs_section(work: Path, env: dict, rng: random.Random, scale: float) -> dict:
+    base = work / "outputs29"
+    base.mkdir()
+    inputs = {
+        "urdf": str(ROOT / "urdf" / "paper_uniform.urdf"),
+        "spec": str(ROOT / "urdf" / "paper_uniform.toml"),
+        "sdf": str(base / "paper.sdf"),
+        "sweep": str(base / "sweep.toml"),
+    }
+    (base / "sweep.toml").write_text("duration = 0.1\ndt = 0.01\n[grid]\nk_e = [0.05, 0.08]\n")
+    exported = run_command(aiauv("export", inputs["urdf"], "-o", inputs["sdf"]), work, env)
+    if exported["outcome"] != "ok":
+        return {"runs": 0, "failures": [{"what": "export of the input SDF", **exported}]}
+    plans = []
+    variants = ("absolute", "relative") if scale >= 1 else ("absolute",)
+    writers = [(name, suffix, argv, None) for name, (suffix, argv) in FILE_WRITERS.items()]
+    writers += [(name, "", argv, name) for name, argv in FOLDER_WRITERS.items()]
+    helpers: list = []
+    for name, suffix, argv, folder_writer in writers:
+        for variant in variants:
+            root = base / f"{name.replace(' ', '_').replace('--', '')}_{variant}"
+            targets, more = _output_targets(root, suffix, folder_writer)
+            helpers += more
+            items = sorted(targets.items())
+            rng.shuffle(items)
+            if scale < 1:
+                items = items[::3]
+            for label, (path, expect) in items:
+                if name == "bench" and expect == "ok":
+                    continue  # a real benchmark run: not what this section tries
+                shown = os.path.relpath(path, root / "work") if variant == "relative" else str(path)
+                plans.append(
+                    {
+                        "writer": name,
+                        "variant": variant,
+                        "target": label,
+                        "expect": expect,
+                        "root": root,
+                        "path": path,
+                        "argv": [str(a) for a in argv(inputs, shown)],
+                    }
+                )
+    print(f"outputs: {len(plans)} runs", flush=True)
+    records, findings = [], []
+    try:
+        for plan in plans:  # one at a time: each compares its scratch tree before and after
+            before = snapshot(plan["root"])
+            cwd = plan["root"] / "work" if plan["variant"] == "relative" else work
+            result = run_command(aiauv(*plan["argv"]), cwd, env, TIMEOUT)
+            after = snapshot(plan["root"])
+            key = str(plan["path"].relative_to(plan["root"]))
+            changed = sorted(
+                k for k in before.keys() | after.keys() if before.get(k) != after.get(k)
+            )
+            outcome = result["outcome"]
+            lost = [k for k in changed if k in before]
+            if plan["expect"] == "ok":
+                lost = [k for k in lost if k != key]
+                litter = [k for k in changed if k not in before]
+                if outcome == "ok" and (
+                    after.get(key, ("",))[0] != "file" or after[key] == before[key]
+                ):
+                    outcome = "silently wrong"  # said ok, did not write
+            else:
+                litter = [k for k in changed if k not in before]
+                if outcome == "ok":
+                    outcome = "accepted bad input"
+            if lost:
+                outcome = "files lost"
+            elif litter:
+                outcome = "files lost"  # left behind (a temporary file, a folder it made)
+            if plan["expect"] == "ok":
+                (plan["root"] / "work" / "second_name").unlink(missing_ok=True)
+                plan["path"].write_text("old bytes\n")
+                os.link(plan["path"], plan["root"] / "work" / "second_name")
+            records.append({"outcome": outcome})
+            if _is_finding(outcome) or (plan["expect"] == "ok" and outcome != "ok"):
+                findings.append(
+                    {
+                        "writer": plan["writer"],
+                        "target": plan["target"],
+                        "variant": plan["variant"],
+                        "argv": plan["argv"],
+                        "outcome": outcome,
+                        "changed": changed[:6],
+                        "stderr": result["stderr"][-400:],
+                    }
+                )
+    finally:
+        for helper in helpers:
+            helper.close()
+    by_writer = Counter()
+    for plan, record in zip(plans, records, strict=False):
+        by_writer[f"{plan['writer']}: {record['outcome']}"] += 1
+    return tally_section(
+        records,
+        findings,
+        {
+            "by_writer": dict(sorted(by_writer.items())),
+            "devices": "stood in for by FIFOs and UNIX sockets in a scratch folder; /dev is never touched",
+        },
+    )
+
+
+# --- section 7: every compiled entry point with bad arguments, each call forked (issue 29 point 3) --------
+
+ENTRY_WORKER = r'''
+import collections, ctypes, dataclasses, mmap, sys
+import numba
+import numpy as np
+import aiauv_pin
+import aiauv_pin.dynamics.linear_model
+import aiauv_pin.dynamics.transitions
+from aiauv_pin.kernels.records import Servo
+from aiauv_pin.controllers.paper_controller import VehiclePathFollowing
+from aiauv_pin.controllers.compiled_controller import CompiledController
+from aiauv_pin.model.derivatives import compiled_derivatives
+from aiauv_pin.dynamics.linear_model import Trim
+from aiauv_hydro.currents import Current, constant_current, tidal_current
+from aiauv_hydro.spec import HydroError
+
+PROJECT_ERRORS = (AiauvError, HydroError)  # HydroError: the hydro layer's own (a ValueError)
+backend, every = sys.argv[2], int(sys.argv[3])
+rng = np.random.default_rng(20261127)
+vehicle = aiauv_pin.load_vehicle(backend=backend)
+fast = vehicle.fast
+nq, nv, m = vehicle.nq, vehicle.nv, len(vehicle.thruster_names)
+q0, v0, tau0 = vehicle.neutral_configuration(), 0.1 * rng.normal(size=nv), np.zeros(nv)
+
+page = mmap.PAGESIZE
+guard = mmap.mmap(-1, 2 * page)
+address = ctypes.addressof(ctypes.c_char.from_buffer(guard))
+libc = ctypes.CDLL(None, use_errno=True)
+assert libc.mprotect(ctypes.c_void_p(address + page), ctypes.c_size_t(page), 0) == 0
+
+def at_guard(values):
+    """A copy of ``values`` ending exactly where an unreadable page begins."""
+    n = len(values)
+    array = np.frombuffer(guard, dtype=np.float64, count=n, offset=page - 8 * n)
+    array[:] = values
+    return array
+
+def bad_arrays(good):
+    n = good.shape[0]
+    nan, inf = good.copy(), good.copy()
+    nan[rng.integers(n)] = np.nan
+    inf[rng.integers(n)] = -np.inf
+    k = int(rng.integers(2, 50))
+    return {
+        "too long": np.concatenate((good, [0.0])), "too short": good[:-1].copy(),
+        f"{k} too long": np.concatenate((good, np.zeros(k))), "one entry": good[:1].copy(),
+        "complex": good.astype(complex) + 1j, "object": np.array(list(good) + [None], dtype=object)[:n],
+        "nan": nan, "inf": inf, "string": "abc", "bytes": b"abc" * n, "2-D": good[None, :],
+        "column": good[:, None], "empty": np.zeros(0), "none": None, "scalar": np.float64(0.0),
+        "dict": {"a": 1}, "ragged": [[1.0], [2.0, 3.0]], "guard short": at_guard(good[:-1]),
+        "strings": ["a"] * n, "datetime": np.zeros(n, dtype="datetime64[s]"),
+    }
+
+def convertible_arrays(good):
+    strided = np.zeros(2 * good.shape[0])
+    strided[::2] = good
+    readonly = good.copy()
+    readonly.setflags(write=False)
+    return {
+        "int32": np.round(good).astype(np.int32), "non-contiguous": strided[::2], "list": list(good),
+        "float32": good.astype(np.float32), "big-endian": good.astype(">f8"), "read-only": readonly,
+        "guard exact": at_guard(good), "tuple": tuple(good), "bool": good.astype(bool),
+    }
+
+cases = []
+def case(kind, call, must_fail=True):
+    cases.append((kind, "bad" if must_fail else "either", call))
+
+entries = {
+    "fast.acceleration": lambda q, v, tau: fast.acceleration(q, v, tau),
+    "fast.acceleration(current)": lambda q, v, tau: fast.acceleration(q, v, tau, np.array([0.1, 0.0, 0.0])),
+    "fast.step": lambda q, v, tau: fast.step(q, v, tau, 0.01),
+    "fast.step(euler)": lambda q, v, tau: fast.step(q, v, tau, 0.01, method="euler"),
+    "fast.run": lambda q, v, tau: fast.run(q, v, tau, 0.01, 2),
+    "fast.restoring_forces": lambda q, v, tau: fast.restoring_forces(q),
+    "fast.thrust_matrix": lambda q, v, tau: fast.thrust_matrix(q),
+    "fast.frame_motion": lambda q, v, tau: fast.frame_motion(q, v, 1),
+    "compiled_derivatives": lambda q, v, tau: compiled_derivatives(vehicle)(q, v, tau, np.zeros(3), 0.0),
+    "Vehicle.acceleration": lambda q, v, tau: vehicle.acceleration(q, v, tau),
+    "acceleration_derivatives": lambda q, v, tau: vehicle.acceleration_derivatives(q, v, tau),
+    "transition_jacobians": lambda q, v, tau: aiauv_pin.dynamics.transitions.transition_jacobians(
+        vehicle, q, v, dt=0.01, tau=tau),
+    "linearize(Trim)": lambda q, v, tau: aiauv_pin.dynamics.linear_model.linearize(
+        vehicle, Trim(q, v, np.zeros(m), tau, 0.0)),
+}
+if fast is None:  # the Pinocchio backend: no compiled kernels to call
+    entries = {k: f for k, f in entries.items() if "fast" not in f.__code__.co_names}
+in_place = {("fast.run", 0), ("fast.run", 1)}
+goods = {"linearize(Trim)": (q0, v0, tau0[6:])}
+for name, entry in entries.items():
+    good_args = goods.get(name, (q0, v0, tau0))
+    try:  # compile in the parent, so that no child compiles
+        entry(*[a.copy() for a in good_args])
+    except Exception:
+        pass
+    slots = 1 if "restoring" in name or "thrust_matrix" in name else (2 if "frame_motion" in name else 3)
+    for slot in range(slots):
+        good = good_args[slot]
+        for label, bad in bad_arrays(good).items():
+            if (name, slot, label) == ("transition_jacobians", 2, "none"):
+                continue  # tau=None: the documented default (no joint torques)
+            args = [a.copy() for a in good_args]
+            args[slot] = bad
+            case(f"{name} arg {slot} {label}", lambda entry=entry, args=args: entry(*args))
+        if slot == 0:
+            continue  # a configuration's quaternion does not survive most conversions
+        for label, value in convertible_arrays(good).items():
+            args = [a.copy() for a in good_args]
+            args[slot] = value
+            # advanced in place: refused unless it is already a writable contiguous float64
+            case(f"{name} arg {slot} {label}", lambda entry=entry, args=args: entry(*args),
+                 must_fail=(name, slot) in in_place and label != "guard exact")
+    case(f"{name} good", lambda entry=entry, g=good_args: entry(*[a.copy() for a in g]), must_fail=False)
+
+read_only = q0.copy()
+read_only.setflags(write=False)
+others = {
+    "step dt nan": lambda: fast.step(q0, v0, tau0, float("nan")),
+    "step dt 0": lambda: fast.step(q0, v0, tau0, 0.0),
+    "step dt -0.01": lambda: fast.step(q0, v0, tau0, -0.01),
+    "step dt 1e308": lambda: fast.step(q0, v0, tau0, 1e308),
+    "step dt str": lambda: fast.step(q0, v0, tau0, "0.01"),
+    "step method": lambda: fast.step(q0, v0, tau0, 0.01, method="rk5"),
+    "step t inf": lambda: fast.step(q0, v0, tau0, 0.01, t=float("inf")),
+    "run n_steps -1": lambda: fast.run(q0.copy(), v0.copy(), tau0, 0.01, -1),
+    "run n_steps 1e308": lambda: fast.run(q0.copy(), v0.copy(), tau0, 0.01, 1e308),
+    "run n_steps 2**63": lambda: fast.run(q0.copy(), v0.copy(), tau0, 0.01, 2**63),
+    "run q read-only": lambda: fast.run(read_only, v0.copy(), tau0, 0.01, 2),
+    "run n_steps str": lambda: fast.run(q0.copy(), v0.copy(), tau0, 0.01, "2"),
+    "run same array q and v": lambda: fast.run(np.zeros(nq), np.zeros(nq)[:nv], tau0, 0.01, 2),
+    "acceleration quaternion 0": lambda: fast.acceleration(np.zeros(nq), v0, tau0),
+    "acceleration quaternion x2": lambda: fast.acceleration(np.r_[q0[:3], 0, 0, 0, 2, q0[7:]], v0, tau0),
+    "frame_motion id -1": lambda: fast.frame_motion(q0, v0, -1),
+    "frame_motion id 10**6": lambda: fast.frame_motion(q0, v0, 10**6),
+    "frame_motion id 2**70": lambda: fast.frame_motion(q0, v0, 2**70),
+    "frame_motion id 1.5": lambda: fast.frame_motion(q0, v0, 1.5),
+    "frame_positions 1-D": lambda: fast.frame_positions(q0, 1),
+    "servo short": lambda: fast.acceleration(
+        q0, v0, tau0, servo=Servo(np.ones(1), np.ones(1), np.ones(1), True, True)),
+    "servo nan": lambda: fast.acceleration(q0, v0, tau0, servo=Servo(
+        np.full(nv - 6, np.nan), np.ones(nv - 6), np.ones(nv - 6), True, True)),
+    "disturbance str": lambda: fast.acceleration(q0, v0, tau0, disturbance="wind"),
+    "disturbance short": lambda: fast.acceleration(q0, v0, tau0, disturbance=np.zeros(2)),
+    "derivatives thrusts long": lambda: compiled_derivatives(vehicle)(
+        q0, v0, tau0, np.zeros(3), 0.0, np.zeros(m + 1)),
+    "derivatives thrusts nan": lambda: compiled_derivatives(vehicle)(
+        q0, v0, tau0, np.zeros(3), 0.0, np.full(m, np.nan)),
+    "derivatives velocity short": lambda: compiled_derivatives(vehicle)(q0, v0, tau0, np.zeros(2), 0.0),
+    "derivatives t nan": lambda: compiled_derivatives(vehicle)(q0, v0, tau0, np.zeros(3), float("nan")),
+    "linearize trim not a Trim": lambda: aiauv_pin.dynamics.linear_model.linearize(vehicle, (q0, v0)),
+    "linearize trim thrusts short": lambda: aiauv_pin.dynamics.linear_model.linearize(
+        vehicle, Trim(q0, v0, np.zeros(m - 1), tau0[6:], 0.0)),
+    "linearize trim nan": lambda: aiauv_pin.dynamics.linear_model.linearize(
+        vehicle, Trim(q0, np.full(nv, np.nan), np.zeros(m), tau0[6:], 0.0)),
+    "linearize joint_gains nan": lambda: aiauv_pin.dynamics.linear_model.linearize(
+        vehicle, joint_gains=(float("nan"), 1.0)),
+    "linearize joint_gains 1e308": lambda: aiauv_pin.dynamics.linear_model.linearize(
+        vehicle, joint_gains=(1e308, 1e308)),
+    "transition method": lambda: aiauv_pin.dynamics.transitions.transition_jacobians(
+        vehicle, q0, v0, dt=0.01, method="rk9"),
+    "transition dt 0": lambda: aiauv_pin.dynamics.transitions.transition_jacobians(vehicle, q0, v0, dt=0.0),
+    "Vehicle.frame_placement id": lambda: vehicle.frame_placement(q0, 5),
+    "Vehicle.link_placements ids": lambda: vehicle.link_placements(q0, [5]),
+}
+for name, call in others.items():
+    if fast is not None or "fast" not in call.__code__.co_names:
+        case(name, call)
+
+currents = {
+    "constant 1 parameter": lambda: Current(constant_current, np.zeros(1), "constant"),
+    "tidal 3 parameters": lambda: Current(tidal_current, np.zeros(3), "tidal"),
+    "user tidal function 3 parameters": lambda: Current(tidal_current, np.zeros(3)),
+    "constant NaN": lambda: Current.constant([np.nan, 0.0, 0.0]),
+    "kind not its function": lambda: Current(constant_current, np.zeros(8), "tidal"),
+}
+for name, call in currents.items():
+    case(f"current {name}", call)
+for name, make in {  # plausible only through the scenario gate; a run must refuse or not diverge
+    "tidal period 1e-300": lambda: Current.tidal([0, 0, 0], [0.1, 0, 0], 1e-300),
+    "constant 1e6 m/s": lambda: Current.constant([1e6, 0.0, 0.0]),
+}.items():
+    case(f"simulate current {name}", lambda make=make: aiauv_pin.simulate(
+        vehicle, q0, np.zeros(nv), 0.05, 0.01, current=make()), must_fail=False)
+
+def mutated_current():
+    current = Current.constant([0.1, 0.0, 0.0])
+    current.parameters[1] = np.nan
+    return current
+
+def shrunk_current():
+    current = Current.constant([0.1, 0.0, 0.0])
+    object.__setattr__(current, "parameters", np.zeros(1))
+    return current
+
+for name, call in {
+    "fast.acceleration": lambda c: fast.acceleration(q0, v0, tau0, c),
+    "fast.step": lambda c: fast.step(q0, v0, tau0, 0.01, current=c),
+    "Vehicle.acceleration": lambda c: vehicle.acceleration(q0, v0, tau0, c),
+    "rollout": lambda c: aiauv_pin.rollout(vehicle, q0, v0, 0.02, 0.01, current=c),
+    "simulate": lambda c: aiauv_pin.simulate(vehicle, q0, v0, 0.02, 0.01, current=c),
+}.items():
+    if fast is None and "fast" in call.__code__.co_names:
+        continue
+    case(f"current mutated to NaN via {name}", lambda call=call: call(mutated_current()))
+    case(f"current shrunk via {name}", lambda call=call: call(shrunk_current()))
+
+@numba.njit
+def helper_writes(array, k):
+    array[k] = 1.0
+
+@numba.njit
+def writes(t, q, v, model, workspace, parameters, state, tau, info):
+    for i in range(tau.shape[0]):
+        tau[i] = 0.0
+    for i in range(int(parameters[0])):
+        info[i] = t
+    if parameters[1] > 0:
+        helper_writes(info, int(parameters[1]))
+    if parameters[2] > 0:
+        state[int(parameters[2])] = t
+
+def law(n_info, helper, state_index, **shapes):
+    parameters = np.array([n_info, helper, state_index], dtype=float)
+    return CompiledController(writes, parameters, np.zeros(2), **shapes)
+
+lying = {
+    "info_shapes understated": lambda: law(4, 0, 0, info_shapes={"u": ()}),
+    "info_shapes empty": lambda: law(4, 0, 0),
+    "info through a helper": lambda: law(0, 2, 0, info_shapes={"u": (2,)}),
+    "state too short": lambda: law(0, 0, 5),
+    "not compiled": lambda: CompiledController(lambda *a: None),
+    "info_shapes not tuples": lambda: law(4, 0, 0, info_shapes={"u": 4}),
+    "info_shapes negative": lambda: law(0, 0, 0, info_shapes={"u": (-3,)}),
+    "paper info_shapes understated": lambda: dataclasses.replace(
+        VehiclePathFollowing(vehicle).compiled(), info_shapes={"u": ()}),
+}
+honest = law(4, 3, 1, info_shapes={"u": (4,)})
+try:  # compile the loops for `writes` in the parent
+    aiauv_pin.simulate(vehicle, q0, np.zeros(nv), 0.05, 0.01, honest)
+    aiauv_pin.rollout(vehicle, q0, np.zeros(nv), 0.05, 0.01, [honest, honest])
+except Exception:
+    pass
+for name, make in lying.items():
+    case(f"simulate {name}", lambda make=make: aiauv_pin.simulate(
+        vehicle, q0, np.zeros(nv), 0.05, 0.01, make()))
+    case(f"rollout {name}", lambda make=make: aiauv_pin.rollout(
+        vehicle, q0, np.zeros(nv), 0.05, 0.01, [make(), make()]))
+case("simulate honest", lambda: aiauv_pin.simulate(
+    vehicle, q0, np.zeros(nv), 0.05, 0.01, honest).q, must_fail=False)
+
+def describe(value):
+    try:
+        if hasattr(value, "q"):
+            value = value.q
+        arrays = value if isinstance(value, tuple) else (value,)
+        finite = all(bool(np.all(np.isfinite(np.asarray(a, dtype=float)))) for a in arrays)
+    except (TypeError, ValueError):
+        finite = None
+    return {"kind": "ok", "finite": finite}
+
+run_forked(cases[::every], describe, 120.0, sys.argv[1])
+'''
+
+
+def run_entry_section(work: Path, env: dict, quick: bool) -> dict:
+    records, findings, per_backend = [], [], {}
+    for backend in ("numba",) if quick else ("numba", "pinocchio"):
+        results = run_worker(ENTRY_WORKER, work, env, [backend, "5" if quick else "1"], 5400)
+        if results is None:
+            records.append({"outcome": "crash"})
+            findings.append({"backend": backend, "outcome": "crash", "what": "the worker died"})
+            continue
+        per_backend[backend] = len(results)
+        for record in results:
+            outcome = forked_outcome(record)
+            records.append({"outcome": outcome})
+            if _is_finding(outcome) or outcome == "refused good input":
+                findings.append({"backend": backend, **record, "outcome": outcome})
+    return tally_section(records, findings, {"calls_per_backend": per_backend})
+
+
+# --- section 8: threads sharing one Vehicle (issue 29 point 6) -------------------------------------------
+
+THREAD_WORKER = r"""
+import collections, json, sys, threading
+import numpy as np
+import aiauv_pin
+from aiauv_pin.errors import AiauvError
+
+backend, rounds = sys.argv[1], int(sys.argv[2])
+vehicle = aiauv_pin.load_vehicle(backend=backend)
+rng = np.random.default_rng(29_1127)
+nv = vehicle.nv
+states = []
+for _ in range(1200):
+    q = vehicle.neutral_configuration()
+    q[7:] = rng.uniform(-0.6, 0.6, vehicle.nq - 7)
+    q[:3] = rng.normal(size=3)
+    states.append((q, rng.normal(size=nv), rng.normal(size=nv)))
+
+def call(function, args):
+    try:
+        return ("ok", function(*args))
+    except AiauvError as exc:  # a refusal (the Pinocchio backend's rollout): allowed if clear
+        return ("error", str(exc))
+    except Exception as exc:
+        return ("foreign exception", f"{type(exc).__name__}: {exc}")
+
+def parallel(function, args, threads):
+    out = [None] * len(args)
+    barrier = threading.Barrier(threads)
+    def work(start):
+        barrier.wait()
+        for i in range(start, len(args), threads):
+            out[i] = call(function, args[i])
+    workers = [threading.Thread(target=work, args=(k,)) for k in range(threads)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    return out
+
+def as_arrays(value):
+    if hasattr(value, "q"):
+        return (np.asarray(value.q), np.asarray(value.v))
+    if hasattr(value, "bias"):
+        return (np.asarray(value.bias),)
+    return tuple(np.asarray(a) for a in (value if isinstance(value, tuple) else (value,)))
+
+starts = [(s[0], 0.2 * s[1]) for s in states[:8]]
+functions = {
+    "acceleration": (vehicle.acceleration, states),
+    "mass_matrix": (vehicle.mass_matrix, [(s[0],) for s in states[:300]]),
+    "restoring_forces": (vehicle.restoring_forces, [(s[0],) for s in states[:300]]),
+    "thrust_matrix": (vehicle.thrust_matrix, [(s[0],) for s in states[:300]]),
+    "fluid_forces": (vehicle.fluid_forces, [s[:2] for s in states[:300]]),
+    "kinetic_energy": (vehicle.kinetic_energy, [s[:2] for s in states[:300]]),
+    "acceleration_derivatives": (vehicle.acceleration_derivatives, states[:60]),
+    "simulate": (lambda q, v: aiauv_pin.simulate(vehicle, q, v, 0.2, 0.01), starts),
+    "rollout": (lambda q, v: aiauv_pin.rollout(vehicle, q, v, 0.2, 0.01), starts[:4]),
+}
+if vehicle.fast is not None:  # the compiled kernels (the numba backend)
+    functions["fast.acceleration"] = (vehicle.fast.acceleration, states)
+    functions["fast.step"] = (lambda q, v, tau: vehicle.fast.step(q, v, tau, 0.01), states[:300])
+report = collections.Counter()
+details = []
+for name, (function, args) in functions.items():
+    serial = [call(function, a) for a in args]
+    for round_ in range(rounds):
+        for threads in (2, 4, 8):
+            threaded = parallel(function, args, threads)
+            for a, b in zip(serial, threaded):
+                if b[0] != "ok":
+                    report[b[0]] += 1
+                    details.append(f"{name} x{threads}: {b[1][:200]}")
+                elif a[0] != "ok":
+                    report["silently wrong"] += 1
+                    details.append(f"{name} x{threads}: returned where the serial call failed")
+                elif all(np.array_equal(x, y, equal_nan=True)
+                         for x, y in zip(as_arrays(a[1]), as_arrays(b[1]))):
+                    report["ok"] += 1
+                else:
+                    report["silently wrong"] += 1
+                    details.append(f"{name} x{threads}: differs from the serial call")
+with open(sys.argv[3], "w") as handle:
+    json.dump({"outcomes": dict(report), "details": details[:20]}, handle)
+"""
+
+
+def run_thread_section(work: Path, env: dict, quick: bool) -> dict:
+    script = work / "thread_worker.py"
+    script.write_text(THREAD_WORKER, encoding="utf-8")
+    records, findings, details = [], [], {}
+    for backend in ("pinocchio", "numba"):
+        out = work / f"threads_{backend}.json"
+        result = run_command(
+            [sys.executable, str(script), backend, "1" if quick else "3", str(out)], work, env, 3600
+        )
+        if result["outcome"] != "ok":
+            records.append({"outcome": result["outcome"]})
+            findings.append(
+                {"backend": backend, "outcome": result["outcome"], "stderr": result["stderr"]}
+            )
+            continue
+        report = json.loads(out.read_text())
+        for outcome, count in report["outcomes"].items():
+            records += [{"outcome": outcome}] * count
+        details[backend] = report["details"]
+        if any(_is_finding(o) for o in report["outcomes"]):
+            findings.append({"backend": backend, "details": report["details"]})
+    return tally_section(records, findings, {"threads": [2, 4, 8], "details": details})
+
+
+# --- section 9: SDF / gz and other inputs that are FIFOs, zero streams or huge (issue 29 point 5) ---------
+
+
+def run_gz_inputs_section(work: Path, env: dict, rng: random.Random, scale: float) -> dict:
+    from aiauv_pin.interop.gz import MAX_SDF_BYTES
+
+    base = work / "gz_inputs"
+    base.mkdir()
+    urdf = str(ROOT / "urdf" / "paper_uniform.urdf")
+    sdf = base / "paper.sdf"
+    exported = run_command(aiauv("export", urdf, "-o", str(sdf)), work, env)
+    if exported["outcome"] != "ok":
+        return {"runs": 0, "failures": [{"what": "export of the input SDF", **exported}]}
+    sdf_text = sdf.read_text()
+    special = base / "special"
+    special.mkdir()
+    helpers = [ZeroFeeder(special / "zero"), ZeroFeeder(special / "sdf_stream", sdf_text.encode())]
+    os.mkfifo(special / "fifo")
+    make_socket(special / "socket")
+    (special / "folder").mkdir()
+    (special / "empty").write_bytes(b"")
+    for name, size in (("over_limit", MAX_SDF_BYTES + 1), ("sparse_2g", 2_000_000_000)):
+        with open(special / name, "wb") as handle:
+            handle.truncate(size)
+    big = special / "big_valid.sdf"  # under the byte limit, far over any element count
+    big.write_text(sdf_text.replace("</model>", "<frame name='f'/>" * 300_000 + "</model>", 1))
+    (special / "laughs.sdf").write_text(
+        '<?xml version="1.0"?><!DOCTYPE s [<!ENTITY a "aaaaaaaaaa">'
+        + "".join(f'<!ENTITY {chr(98 + i)} "' + f"&{chr(97 + i)};" * 10 + '">' for i in range(8))
+        + "]><sdf version='1.9'><model name='&i;'/></sdf>"
+    )
+    (special / "entity.sdf").write_text(
+        '<?xml version="1.0"?><!DOCTYPE s [<!ENTITY x SYSTEM "file:///etc/passwd">]>'
+        "<sdf version='1.9'><model name='&x;'/></sdf>"
+    )
+    (special / "binary").write_bytes(bytes(random.Random(SEED).randrange(256) for _ in range(5000)))
+    names = ["zero", "sdf_stream", "fifo", "socket", "folder", "empty", "over_limit", "sparse_2g"]
+    sdf_only = ["big_valid.sdf", "laughs.sdf", "entity.sdf", "binary"]
+    out = base / "out"
+    out.mkdir()
+    plans = []
+
+    def plan(label: str, argv: list[str], judge: str = "refuse") -> None:
+        if label.endswith(" empty") and argv[0] in ("simulate", "sweep", "linearize"):
+            judge = "either"  # an empty TOML file: every key at its default, a valid scenario
+        plans.append({"label": label, "argv": [str(a) for a in argv], "judge": judge})
+
+    for name in names + sdf_only:
+        path = special / name
+        plan(
+            f"import-gz SDF {name}",
+            ["import-gz", path, "--urdf", urdf, "-o", out / f"i_{len(plans)}.urdf"],
+        )
+    for name in names:
+        path = special / name
+        plan(
+            f"import-gz --urdf {name}",
+            ["import-gz", sdf, "--urdf", path, "-o", out / f"u_{len(plans)}.urdf"],
+        )
+        plan(f"export {name}", ["export", path, "-o", out / f"e_{len(plans)}.sdf"])
+        plan(f"check {name}", ["check", path])
+        plan(f"annotate {name}", ["annotate", path, "-o", out / f"a_{len(plans)}.urdf"])
+        plan(f"build {name}", ["build", path, "-o", out / f"b_{len(plans)}.urdf"])
+        plan(
+            f"simulate scenario {name}",
+            ["simulate", path, "--quiet", "--out", out / f"s_{len(plans)}"],
+        )
+        plan(
+            f"simulate --vehicle {name}",
+            [
+                "simulate",
+                "--vehicle",
+                path,
+                "--duration",
+                "0.1",
+                "--quiet",
+                "--out",
+                out / f"v_{len(plans)}",
+            ],
+        )
+        plan(
+            f"sweep spec {name}",
+            ["sweep", path, "--workers", "1", "--quiet", "--out", out / f"w_{len(plans)}"],
+        )
+        plan(f"linearize {name}", ["linearize", path])
+        scenario = base / f"names_{name}.toml"
+        scenario.write_text(f'vehicle = "{path}"\nduration = 0.1\n')
+        plan(
+            f"scenario naming {name}",
+            ["simulate", scenario, "--quiet", "--out", out / f"n_{len(plans)}"],
+        )
+    for index in range(int(150 * scale)):  # mutated SDFs (values and structure), fixed seed
+        text = mutate_values(
+            sdf_text, rng, _TEXT if rng.random() < 0.6 else _ATTRIBUTE, rng.randint(1, 3)
+        )
+        if rng.random() < 0.3:
+            text = mutate_structure(text, rng)
+        path = base / f"mutated_{index:03d}.sdf"
+        path.write_text(text, encoding="utf-8", errors="surrogatepass")
+        plan(
+            f"mutated SDF {index}",
+            ["import-gz", path, "--urdf", urdf, "-o", out / f"m_{index}.urdf"],
+            "mutated",
+        )
+    if scale < 1:
+        plans = plans[::4]
+    print(f"gz inputs: {len(plans)} runs", flush=True)
+
+    def execute(item):
+        return item, run_command(aiauv(*item["argv"]), work, env, TIMEOUT)
+
+    records, findings = [], []
+    try:
+        with ThreadPoolExecutor(PARALLEL) as pool:
+            done = list(pool.map(execute, plans))
+    finally:
+        for helper in helpers:
+            helper.close()
+    for item, result in done:
+        outcome = result["outcome"]
+        reasons = None
+        if outcome == "ok" and item["judge"] == "refuse":
+            outcome = "accepted bad input"
+        elif outcome == "ok" and item["judge"] == "mutated":
+            written = Path(item["argv"][-1])
+            reasons = non_physical_reasons(written) or loaded_vehicle_reasons(written)
+            if reasons:
+                outcome = "accepted bad input"
+        records.append({"outcome": outcome})
+        if _is_finding(outcome):
+            findings.append(
+                {
+                    "case": item["label"],
+                    "argv": item["argv"],
+                    "outcome": outcome,
+                    "stderr": result["stderr"][-400:],
+                    "reasons": (reasons or [])[:5],
+                    "seconds": result["seconds"],
+                }
+            )
+    slowest = sorted(done, key=lambda d: -d[1]["seconds"])[:3]
+    return tally_section(
+        records,
+        findings,
+        {
+            "zero_stream": "a FIFO fed with zeros by a thread (the stand-in for /dev/zero)",
+            "slowest_runs": [{"case": i["label"], "seconds": r["seconds"]} for i, r in slowest],
+        },
+    )
+
+
+# --- section 10: accepted, then failing late or silently wrong (issue 29 points 6 and 7) -----------------
+
+CYLINDER_VEHICLE = """<robot name="c">
+  <link name="hull">
+    <inertial><mass value="10"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.3" iyz="0" izz="0.3"/>
+    </inertial>
+    <visual><origin xyz="{xyz}" rpy="0 1.5707963 0"/>
+      <geometry><cylinder radius="{radius}" length="{length}"/></geometry></visual>{extra}
+  </link>
+  <hydrodynamics><link name="hull" model="slender_cylinder" {attributes}/></hydrodynamics>
+</robot>"""
+#: Vehicles: (label, CYLINDER_VEHICLE fields, what the refusal must name).
+LATE_VEHICLES = [
+    ("visual radius 1e308", dict(radius="1e308"), "cylinder"),
+    ("visual length 1e308", dict(length="1e308"), "cylinder"),
+    ("visual origin 1e308", dict(xyz="1e308 0 0"), "origin"),
+    ("C_dC 1e20", dict(attributes='C_dC="1e20"'), "C_dC"),
+    ("hydro cylinder length 1e308", dict(attributes='length="1e308"'), "length"),
+    ("C_a 1e6", dict(attributes='C_a="1e6"'), "C_a"),
+    ("v_ref 1e-9", dict(attributes='v_ref="1e-9"'), "v_ref"),
+    (
+        "mesh scale 1e9",
+        dict(
+            extra='<visual><geometry><mesh filename="hull.stl" scale="1e9 1 1"/></geometry></visual>'
+        ),
+        "scale",
+    ),
+    (
+        "sphere visual radius 1e308",
+        dict(extra='<visual><geometry><sphere radius="1e308"/></geometry></visual>'),
+        "sphere",
+    ),
+    (
+        "box visual 1e308",
+        dict(extra='<visual><geometry><box size="1e308 1 1"/></geometry></visual>'),
+        "box",
+    ),
+]
+#: Scenario files: (label, TOML text, what the refusal must name).
+LATE_SCENARIOS = [
+    ("current 1e6 m/s", "[current]\nvelocity = [1e6, 0.0, 0.0]\n", "velocity"),
+    ("current 1e308 m/s", "[current]\nvelocity = [1e308, 0.0, 0.0]\n", "velocity"),
+    (
+        "tidal period 1e-300",
+        '[current]\ntype = "tidal"\namplitude = [0.1, 0.0, 0.0]\nperiod = 1e-300\n',
+        "period",
+    ),
+    (
+        "tidal amplitude 1e6",
+        '[current]\ntype = "tidal"\namplitude = [1e6, 0.0, 0.0]\nperiod = 100.0\n',
+        "amplitude",
+    ),
+    ("shear gradient 1e6", '[current]\ntype = "shear"\ngradient = [1e6, 0.0, 0.0]\n', "gradient"),
+    ("k_d 1e308", "[controller]\nk_d = 1e308\n", "k_d"),
+    ("k_p 1e308", "[controller]\nk_p = 1e308\n", "k_p"),
+    ("k_e [1, 2, 3]", "[controller]\nk_e = [1.0, 2.0, 3.0]\n", "k_e"),
+    ("k_e 1e308", "[controller]\nk_e = 1e308\n", "k_e"),
+    ("csv_period 1e308", "[output]\ncsv_period = 1e308\n", "csv_period"),
+    ("start 1e308", "[start]\nposition = [1e308, 0.0, 0.0]\n", "position"),
+    ("surge 1e6", "[start]\nsurge = 1e6\n", "surge"),
+]
+#: Sweep specs: (label, TOML text after the fixed part, what the refusal must name).
+LATE_SWEEPS = [
+    (
+        "linspace count 1e9",
+        '"initial_offset.y" = { linspace = [1.0, 3.0, 1000000000] }\n',
+        "count",
+    ),
+    (
+        "linspace count 1e18",
+        '"initial_offset.y" = { linspace = [1.0, 3.0, 1000000000000000000] }\n',
+        "count",
+    ),
+    ("grid k_d 1e308", "k_d = [1e308, 12.0]\n", "k_d"),
+    ("grid current.y 1e6", '"current.y" = [1e6]\n', "current"),
+    ("grid k_e [1, 2, 3]", "k_e = [[1.0, 2.0, 3.0]]\n", "k_e"),
+    (
+        "grid 1e6 x 1e6 cells",
+        '"initial_offset.y" = { linspace = [1.0, 3.0, 1000000] }\n'
+        '"initial_offset.z" = { linspace = [1.0, 3.0, 1000000] }\n',
+        "count",
+    ),
+]
+
+
+def run_late_section(work: Path, env: dict, scale: float) -> dict:
+    base = work / "late"
+    base.mkdir()
+    plans = []
+
+    def plan(label: str, argv: list, named: str) -> None:
+        plans.append({"label": label, "argv": [str(a) for a in argv], "named": named})
+
+    fields = dict(radius="0.1", length="0.5", xyz="0.25 0 0", attributes="", extra="")
+    good = base / "good_cylinder.urdf"
+    good.write_text(CYLINDER_VEHICLE.format(**fields))
+    plan("the unmutated cylinder vehicle (control)", ["check", good], "")
+    for index, (label, mutation, named) in enumerate(LATE_VEHICLES):
+        path = base / f"vehicle_{index}.urdf"
+        path.write_text(CYLINDER_VEHICLE.format(**{**fields, **mutation}))
+        plan(f"check {label}", ["check", path], named)
+        plan(
+            f"simulate {label}",
+            [
+                "simulate",
+                "--vehicle",
+                path,
+                "--controller",
+                "none",
+                "--duration",
+                "0.2",
+                "--quiet",
+                "--no-html",
+                "--out",
+                base / f"sv_{index}",
+            ],
+            named,
+        )
+        plan(f"export {label}", ["export", path, "-o", base / f"ev_{index}.sdf"], named)
+    sdf = base / "paper.sdf"
+    run_command(
+        aiauv("export", str(ROOT / "urdf" / "paper_uniform.urdf"), "-o", str(sdf)), work, env
+    )
+    text = sdf.read_text()
+    for label, pattern, replacement, named in (  # the first link's collision, its added mass
+        ("SDF sphere radius 1e308", r"(<sphere>\s*<radius>)[^<]*", r"\g<1>1e308", "radius"),
+        (
+            "SDF box size 1e308",
+            r"<sphere>\s*<radius>[^<]*</radius>\s*</sphere>",
+            "<box><size>1e308 1 1</size></box>",
+            "size",
+        ),
+        ("SDF added mass 1e308", r"(<xx>)[^<]*", r"\g<1>1e308", "added"),
+        ("SDF added mass -1e3", r"(<xx>)[^<]*", r"\g<1>-1e3", "added"),
+    ):
+        mutated = base / f"{label.replace(' ', '_')}.sdf"
+        mutated.write_text(re.sub(pattern, replacement, text, count=1))
+        urdf = ROOT / "urdf" / "paper_uniform.urdf"
+        argv = ["import-gz", mutated, "--urdf", urdf, "-o", base / f"{mutated.stem}.urdf"]
+        plan(f"import-gz {label}", argv, named)
+    for index, (label, body, named) in enumerate(LATE_SCENARIOS):
+        path = base / f"scenario_{index}.toml"
+        path.write_text(f"duration = 0.2\ndt = 0.01\n{body}")
+        plan(
+            f"simulate {label}",
+            ["simulate", path, "--quiet", "--no-html", "--out", base / f"ss_{index}"],
+            named,
+        )
+        plan(f"linearize {label}", ["linearize", path], named)
+    plan(
+        "simulate --current 1e6 0 0",
+        [
+            "simulate",
+            "--current",
+            "1e6",
+            "0",
+            "0",
+            "--duration",
+            "0.2",
+            "--quiet",
+            "--out",
+            base / "flag_current",
+        ],
+        "current",
+    )
+    for index, (label, grid, named) in enumerate(LATE_SWEEPS):
+        path = base / f"sweep_{index}.toml"
+        path.write_text(f"duration = 0.2\ndt = 0.01\n[grid]\n{grid}")
+        plan(
+            f"sweep {label}",
+            [
+                "sweep",
+                path,
+                "--workers",
+                "1",
+                "--quiet",
+                "--no-plots",
+                "--out",
+                base / f"sw_{index}",
+            ],
+            named,
+        )
+    if scale < 1:
+        plans = plans[:1] + plans[1::4]
+    print(f"late: {len(plans)} runs", flush=True)
+
+    def execute(item):
+        return item, run_command(aiauv(*item["argv"]), work, env, TIMEOUT)
+
+    with ThreadPoolExecutor(PARALLEL) as pool:
+        done = list(pool.map(execute, plans))
+    records, findings = [], []
+    for item, result in done:
+        outcome = result["outcome"]
+        if not item["named"]:  # the control: a good vehicle passes
+            outcome = "ok" if outcome == "ok" else "refused good input"
+        elif outcome == "ok":
+            outcome = "accepted bad input"
+        elif outcome == "error":
+            message = result["stderr"].strip().splitlines()[-1]
+            late = any(
+                word in message for word in ("diverged", "smaller step", "internal error", "JSON")
+            )
+            if late or item["named"].lower() not in message.lower():
+                outcome = "late failure"  # refused, but late or without naming the parameter
+        records.append({"outcome": outcome})
+        if outcome not in ("ok", "error"):
+            findings.append(
+                {
+                    "case": item["label"],
+                    "argv": item["argv"],
+                    "outcome": outcome,
+                    "expected to name": item["named"],
+                    "stderr": result["stderr"][-400:],
+                    "seconds": result["seconds"],
+                }
+            )
+    return tally_section(records, findings)
+
+
 # --- main ----------------------------------------------------------------------------------------------
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="a short version (about 95 s)")
+    parser.add_argument("--quick", action="store_true", help="a short version (about 3 min)")
     parser.add_argument("--out", type=Path, default=None, help=f"JSON file ({DEFAULT_OUT.name})")
     parser.add_argument(
-        "--sections", default="cli,api,kills,sweeps", help="comma-separated subset to run"
+        "--sections", default=",".join(SECTIONS), help="comma-separated subset to run"
+    )
+    parser.add_argument(
+        "--update",
+        action="store_true",
+        help="keep the other sections of an existing --out file (a campaign run in parts)",
     )
     parser.add_argument("--keep", action="store_true", help="keep the work folder")
     args = parser.parse_args(argv)
@@ -1481,6 +3143,16 @@ def main(argv: list[str] | None = None) -> int:
         "date": time.strftime("%Y-%m-%d", time.gmtime()),
         "machine": f"{os.cpu_count()} cores, Python {sys.version.split()[0]}",
     }
+    if args.update and out.exists():
+        previous = json.loads(out.read_text())
+        report["parts"] = previous.get("parts") or [
+            {
+                "sections": [k for k in SECTIONS if k in previous],
+                "date": previous.get("date"),
+                "wall_time_seconds": previous.get("wall_time_seconds"),
+            }
+        ]
+        report.update({k: previous[k] for k in SECTIONS if k in previous and k not in sections})
     subprocess.run(
         aiauv("simulate", "--duration", "0.05", "--quiet", "--out", str(work / "warm")),
         env=env,
@@ -1511,12 +3183,40 @@ def main(argv: list[str] | None = None) -> int:
             )
             report["sweeps"]["seconds"] = round(time.monotonic() - section_start, 1)
             print(f"sweeps: {report['sweeps'].get('tally')}", flush=True)
+        # issue 29's classes: each section draws from its own generator (a section run alone
+        # tries the same inputs as in the whole campaign)
+        issue29 = {
+            "xacro": lambda r: run_xacro_section(work, env, r, scale),
+            "outputs": lambda r: run_outputs_section(work, env, r, scale),
+            "entry_points": lambda r: run_entry_section(work, env, args.quick),
+            "threads": lambda r: run_thread_section(work, env, args.quick),
+            "gz_inputs": lambda r: run_gz_inputs_section(work, env, r, scale),
+            "late": lambda r: run_late_section(work, env, scale),
+        }
+        for number, (name, run) in enumerate(issue29.items()):
+            if name not in sections:
+                continue
+            section_start = time.monotonic()
+            report[name] = run(random.Random(SEED + 29 + number))
+            report[name]["seconds"] = round(time.monotonic() - section_start, 1)
+            print(f"{name}: {report[name].get('outcomes')}", flush=True)
     finally:
         if not args.keep:
             shutil.rmtree(work, ignore_errors=True)
         else:
             print(f"work folder kept: {work}")
     report["wall_time_seconds"] = round(time.monotonic() - started, 1)
+    if "parts" in report:
+        report["parts"].append(
+            {
+                "sections": sorted(sections),
+                "date": report["date"],
+                "wall_time_seconds": report["wall_time_seconds"],
+            }
+        )
+        report["wall_time_seconds"] = round(
+            sum(p["wall_time_seconds"] or 0 for p in report["parts"]), 1
+        )
     report["summary"] = summarise(report)
     out.write_text(json.dumps(report, indent=1, default=str) + "\n")
     print(json.dumps(report["summary"], indent=1))
@@ -1555,11 +3255,52 @@ def summarise(report: dict) -> dict:
         "data_lost": kills.get("data lost", 0) + sweeps.get("data lost", 0),
         "surviving_children": kills.get("surviving children", 0),
     }
-    failures = sum(
-        len(report.get(s, {}).get("failures", [])) for s in ("cli", "api", "kills", "sweeps")
-    )
+    summary["categories"] = categories(report)
+    summary["total_runs"] = sum(row["runs"] for row in summary["categories"].values())
+    summary["total_findings"] = {
+        column: sum(row[column] for row in summary["categories"].values())
+        for column in FINDING_COLUMNS
+    }
+    failures = sum(len(report.get(s, {}).get("failures", [])) for s in SECTIONS)
     summary["shortfalls"] = failures + summary["check_simulate_disagreements"]
     return summary
+
+
+def categories(report: dict) -> dict:
+    """The per-category table: runs and findings by column (:data:`FINDING_COLUMNS`)."""
+    table = {}
+    for name in SECTIONS:
+        section = report.get(name)
+        if not section:
+            continue
+        if name in ("kills", "sweeps"):
+            tally = section.get("tally", {})
+            runs = sum(
+                tally.get(k, 0)
+                for k in (
+                    "kills",
+                    "kills in reused folder",
+                    "sweep kills",
+                    "worker kills",
+                    "resumes",
+                    "concurrent sweeps",
+                    "--workers 100000",
+                    "all-runs-fail sweeps",
+                    "planted cache file",
+                )
+            )
+            outcomes = {"files lost": tally.get("data lost", 0)}
+        else:
+            runs = section.get("runs", section.get("calls", 0))
+            outcomes = dict(section.get("outcomes", {}))
+            if name == "api":
+                outcomes["backends disagree"] = section.get("backend_disagreements", 0)
+        row = {"runs": runs}
+        for column, kinds in FINDING_COLUMNS.items():
+            row[column] = sum(outcomes.get(kind, 0) for kind in kinds)
+        row["failure_records"] = len(section.get("failures", []))
+        table[name] = row
+    return table
 
 
 if __name__ == "__main__":

@@ -143,6 +143,14 @@ def scenario_for_args(args):
     if args.vehicle is not None:
         changes["vehicle"] = str(args.vehicle)
     if args.current is not None:
+        from aiauv_pin.scenario.file_schemas import MAX_SPEED
+
+        # the scenario file's plausible range (a current of 1e6 m/s ran, then diverged)
+        if not all(abs(component) <= MAX_SPEED for component in args.current):
+            raise AiauvError(
+                f"--current: each component must be within the plausible range "
+                f"[-{MAX_SPEED:g}, {MAX_SPEED:g}] m/s, got {' '.join(f'{c:g}' for c in args.current)}"
+            )
         changes["current"] = Current.constant(args.current)
     scenario = dataclasses.replace(scenario, **changes)
     if args.lagged_filter is not None and scenario.added_mass != "lagged":

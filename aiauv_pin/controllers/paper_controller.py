@@ -229,11 +229,11 @@ class VehiclePathFollowing:
         """This controller for the compiled loop (a fresh state; the same law and parameters).
 
         Raises:
-            ValueError: It cannot run compiled (see :func:`compiled_path_following_reason`).
+            ArgumentError: It cannot run compiled (see :func:`compiled_path_following_reason`).
         """
         reason = compiled_path_following_reason(self)
         if reason is not None:
-            raise ValueError(f"compiled path following unavailable: {reason}")
+            raise ArgumentError(f"compiled path following unavailable: {reason}")
         controller = self.controller
         body, rotation, translation = self.vehicle.fast.frame(self.frame)
         parameters = PaperParameters(

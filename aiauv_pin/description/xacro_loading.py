@@ -67,8 +67,14 @@ def is_xacro(path: str | os.PathLike) -> bool:
     return Path(path).suffix.lower() in XACRO_SUFFIXES
 
 
+#: Longest message of xacro's own errors we pass on [characters] (they quote whole expressions).
+MAX_MESSAGE_CHARACTERS = 200
+
+
 def _one_line(error: BaseException) -> str:
     text = " ".join(str(error).split())
+    if len(text) > MAX_MESSAGE_CHARACTERS:
+        text = text[: MAX_MESSAGE_CHARACTERS - 3] + "..."
     return text or error.__class__.__name__
 
 

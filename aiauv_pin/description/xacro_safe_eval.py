@@ -91,6 +91,12 @@ SAFE_FUNCTIONS: dict[str, Callable] = {
 }
 
 
+def _short(value) -> str:
+    """``value`` for a message: a number of up to 20 characters as is, a longer one abridged."""
+    text = repr(value)
+    return text if len(text) <= 20 else f"{text[:8]}...({len(text)} digits)"
+
+
 def _size(value, memo: dict[int, tuple[object, int]]) -> int:
     """Items plus characters of ``value``, through nested containers, stopping past the cap.
 
@@ -200,12 +206,13 @@ class SafeXacroEvaluator(EvalWithCompoundTypes):
         if isinstance(a, int) and isinstance(b, int) and b > 0 and abs(a) > 1:
             if b * math.log2(abs(a)) > MAX_INTEGER_BITS:
                 raise UnsafeXacroExpression(
-                    f"{a} ** {b} exceeds {MAX_INTEGER_BITS} bits (not a robot dimension)"
+                    f"{_short(a)} ** {_short(b)} exceeds {MAX_INTEGER_BITS} bits (not a robot "
+                    "dimension)"
                 )
         try:
             return a**b
         except OverflowError:
-            raise UnsafeXacroExpression(f"{a} ** {b} overflows") from None
+            raise UnsafeXacroExpression(f"{_short(a)} ** {_short(b)} overflows") from None
 
     # -- the tree ---------------------------------------------------------------------------------
 

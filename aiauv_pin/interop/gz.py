@@ -60,11 +60,14 @@ from aiauv_hydro.spec import HydroError, LinkHydrodynamics
 from aiauv_hydro.urdf.block_reader import parse_robot_text, read_hydrodynamics
 from aiauv_hydro.urdf.block_writer import format_number, format_numbers, fossen_link_element
 from aiauv_hydro.urdf.xml_reading import parse_bool
+from aiauv_pin._internal.atomic import atomic_path
 from aiauv_pin._internal.atomic import write_text as atomic_write_text
-from aiauv_pin.description.input_limits import read_text
-from aiauv_pin.errors import InputLimitError, VehicleLoadError
+from aiauv_pin.description.input_limits import check_xml_text, read_text
+from aiauv_pin.description.plausible_ranges import MAX_DISTANCE
+from aiauv_pin.errors import AiauvError, InputLimitError, VehicleLoadError
 from aiauv_pin.interop.export_source import ExportSource, load_export_source, rpy_of, rpy_to_matrix
 from aiauv_pin.interop.interop_errors import InteropError
+from aiauv_pin.model.loading import load_vehicle
 
 #: SNAME letters of the force/moment axes and of the velocities, in our twist order.
 FORCE_AXES = "xyzkmn"
@@ -188,15 +191,21 @@ def _shape_volume(geometry: Element, what: str) -> float:
     if shape is None:
         raise InteropError(f"{what}: empty <geometry>")
 
+    def sizes(values, tag: str):
+        # sizes within the validation gate's distances (a radius of 1e308 overflowed the volume)
+        for value in np.atleast_1d(values):
+            if not 0.0 <= value <= MAX_DISTANCE:
+                raise InteropError(
+                    f"{what} {shape.tag} <{tag}>: must be in [0, {MAX_DISTANCE:g}] m, got {value:g}"
+                )
+        return values
+
     def scalar(tag: str) -> float:
-        value = _number(shape.findtext(tag), f"{what} {shape.tag} <{tag}>")
-        if value < 0.0:
-            raise InteropError(f"{what} {shape.tag} <{tag}>: must be >= 0, got {value}")
-        return value
+        return sizes(_number(shape.findtext(tag), f"{what} {shape.tag} <{tag}>"), tag)
 
     if shape.tag == "box":
-        size = _numbers(shape.findtext("size"), 3, f"{what} box <size>")
-        return float(np.prod(np.abs(size)))
+        size = sizes(np.abs(_numbers(shape.findtext("size"), 3, f"{what} box <size>")), "size")
+        return float(np.prod(size))
     if shape.tag == "sphere":
         return 4.0 / 3.0 * math.pi * scalar("radius") ** 3
     if shape.tag == "cylinder":
@@ -205,8 +214,8 @@ def _shape_volume(geometry: Element, what: str) -> float:
         radius = scalar("radius")
         return math.pi * radius**2 * scalar("length") + 4.0 / 3.0 * math.pi * radius**3
     if shape.tag == "ellipsoid":
-        radii = _numbers(shape.findtext("radii"), 3, f"{what} ellipsoid <radii>")
-        return 4.0 / 3.0 * math.pi * float(np.prod(np.abs(radii)))
+        radii = np.abs(_numbers(shape.findtext("radii"), 3, f"{what} ellipsoid <radii>"))
+        return 4.0 / 3.0 * math.pi * float(np.prod(sizes(radii, "radii")))
     if shape.tag == "cone":
         return math.pi * scalar("radius") ** 2 * scalar("length") / 3.0
     if shape.tag == "plane":
@@ -371,6 +380,7 @@ def _parse_sdf(path: Path) -> Element:
         raise
     except VehicleLoadError as exc:  # missing, a directory, unreadable, not UTF-8
         raise InteropError(str(exc)) from None
+    check_xml_text(text, str(path))  # the URDF's element and attribute limits, before any tree
     try:
         root = SafeElementTree.fromstring(text.removeprefix("\ufeff"), forbid_dtd=True)
     except defusedxml.DefusedXmlException:
@@ -600,7 +610,13 @@ def import_gz(
     except HydroError as exc:
         raise InteropError(f"imported block is not valid: {exc}") from None
     output = Path(output)
-    atomic_write_text(output, text)
+    with atomic_path(output) as temporary:  # refuses a FIFO, device, folder or link at ``output``
+        temporary.write_text(text, encoding="utf-8", newline="\n")
+        try:  # the validation gate, before the file is put in place (as ``build`` does)
+            load_vehicle(temporary, backend="pinocchio")
+        except AiauvError as exc:
+            message = str(exc).replace(str(temporary), "the imported URDF")
+            raise InteropError(f"{output}: the imported URDF does not load: {message}") from None
     return ImportReport(output, gz.name, tuple(sorted(imported)), density, pose_checked)
 
 

@@ -56,6 +56,7 @@ from aiauv_pin.controllers.paper_controller import (
     compiled_path_following_reason,
 )
 from aiauv_pin.dynamics.lagged_added_mass import check_filter, check_scheme
+from aiauv_pin.errors import ArgumentError
 from aiauv_pin.model.vehicle import Vehicle
 from aiauv_pin.scenario.defaults import DEFAULT_CSV_PERIOD, DEFAULT_DT, DEFAULT_METHOD
 from aiauv_pin.simulation.energy import energy_summary, exact_sum
@@ -429,7 +430,7 @@ def run_scenario(
             )
         reason = compiled_path_following_reason(controller)
         if compiled and reason is not None:
-            raise ValueError(f"compiled path following unavailable: {reason}")
+            raise ArgumentError(f"compiled path following unavailable: {reason}")
         use_compiled = reason is None and compiled is not False
         law = controller.compiled() if use_compiled else controller
         servo = controller.joint_servo if controller.continuous_joints else None

@@ -503,23 +503,24 @@ def _simulate_compiled(
     from aiauv_pin.simulation.compiled_loop import loop_for
 
     fast = vehicle.fast
-    if fast is None:
-        raise ValueError(
+    if fast is None:  # project errors here (the campaign found plain ValueErrors)
+        why = vehicle.fallback_reason or "as loaded; load it with backend='numba'"
+        raise ArgumentError(
             f"a compiled controller needs the numba backend (the vehicle runs on "
-            f"{vehicle.active_backend}: {vehicle.fallback_reason})"
+            f"{vehicle.active_backend}: {why})"
         )
     if disturbance is not None and not isinstance(disturbance, Disturbance):
-        raise ValueError(
+        raise ArgumentError(
             "a compiled controller runs with compiled disturbances only (a Disturbance)"
         )
     servo = controller.servo if servo is None else servo
     if servo is not None and not isinstance(servo, JointServo):
-        raise ValueError("a compiled controller runs with a JointServo only, not a Python servo")
+        raise ArgumentError("a compiled controller runs with a JointServo only, not a Python servo")
     nq, nv = fast.nq, fast.nv
     q = np.array(q0, dtype=float)
     v = np.array(v0, dtype=float)
     if q.shape != (nq,) or v.shape != (nv,):
-        raise ValueError(f"q0 must have {nq} and v0 {nv} entries")
+        raise ArgumentError(f"q0 must have {nq} and v0 {nv} entries")
     check_compiled_controller(controller, nq, nv, fast.n_thrusters)  # records it writes (issue 29)
     if controller.reset is not None:
         controller.reset()
@@ -626,7 +627,7 @@ def _simulate_compiled(
 def _generalized(value, nv: int) -> np.ndarray:
     force = np.asarray(value, dtype=float)
     if force.shape != (nv,):
-        raise ValueError(
+        raise ArgumentError(
             f"disturbance must return a generalised force of shape ({nv},), got {force.shape}"
         )
     return force

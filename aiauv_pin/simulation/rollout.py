@@ -216,10 +216,11 @@ def rollout(
         duration, dt, method, log_every, control_period
     )
     fast = vehicle.fast
-    if fast is None:
-        raise ValueError(
+    if fast is None:  # a project error (the campaign found a plain ValueError here)
+        why = vehicle.fallback_reason or "as loaded; load it with backend='numba'"
+        raise ArgumentError(
             f"rollout needs the compiled backend (the vehicle runs on {vehicle.active_backend}: "
-            f"{vehicle.fallback_reason})"
+            f"{why})"
         )
     nq, nv = fast.nq, fast.nv
     q_rows, n_q = _states(q0, nq, "q0", lambda row, name: configuration(row, nq, name))

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import os
 import random
+import re
 import time
 from collections import Counter
 from pathlib import Path
@@ -211,6 +212,17 @@ def test_expression_bombs_are_refused_quickly(tmp_path, name):
     assert _outcome("expression bomb", lambda: expand_xacro(path)) is not None
 
 
+@pytest.mark.parametrize(
+    "expression", ["(10**300)**(10**300)", "[" * 500 + "]" * 500, "1" * 300 + " ** 99"]
+)
+def test_refusals_of_long_expressions_and_numbers_stay_short(tmp_path, expression):
+    """The campaign (benchmarks/hostile_campaign.py) found refusals of 860 and 1,103 characters:
+    the huge base of a power, xacro's own message quoting a whole expression. They are abridged."""
+    path = _write(tmp_path, "long.xacro", f'{LINK}<gazebo><x v="${{{expression}}}"/></gazebo>')
+    message = _outcome("expression bomb", lambda: expand_xacro(path))
+    assert message is not None and len(message) <= 400, len(message)
+
+
 def _doubling_macros(leaf: str) -> str:
     macros = f'<xacro:macro name="m0">{leaf}</xacro:macro>'
     for level in range(1, 31):
@@ -314,6 +326,56 @@ def test_sdf_and_urdf_fifos_and_oversize_files_are_refused(tmp_path, capsys):
         assert error.startswith("aiauv: error: ") and error.count("\n") == 1
         TALLY["SDF input: refused"] += 1
     assert not (tmp_path / "o.urdf").exists() and not (tmp_path / "o.sdf").exists()
+
+
+@pytest.mark.parametrize(
+    "pattern, replacement, expected",
+    [
+        (r"(<sphere>\s*<radius>)[^<]*", r"\g<1>1e308", "sphere <radius>"),
+        (
+            r"<sphere>\s*<radius>[^<]*</radius>\s*</sphere>",
+            "<box><size>1 1e308 1</size></box>",
+            "box <size>",
+        ),
+        (r"(<xx>)[^<]*", r"\g<1>1e308", "does not load"),
+    ],
+)
+def test_import_gz_refuses_what_the_gate_refuses(tmp_path, pattern, replacement, expected):
+    """The campaign: a collision sphere of radius 1e308 surfaced as OverflowError; an added mass of
+    1e308 (and damping not positive semi-definite) were written. Sizes are checked
+    against the gate's distances, and the written URDF is loaded through the gate first."""
+    from aiauv_pin.interop.gz import export_sdf
+
+    urdf = aiauv_pin.bundled_urdf("uniform")
+    sdf = tmp_path / "model.sdf"
+    export_sdf(urdf, sdf)
+    sdf.write_text(re.sub(pattern, replacement, sdf.read_text(), count=1))  # the first collision
+    out = tmp_path / "out.urdf"
+    message = _outcome("SDF input", lambda: import_gz(sdf, urdf, out))
+    assert message is not None and expected in message, message
+    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["model.sdf"]
+
+
+def test_sdf_element_limit_is_the_urdf_one(tmp_path):
+    """An SDF under the byte limit but with 300,000 elements was imported (the campaign): the
+    URDF's element and attribute limits apply to SDF too, before any tree is built."""
+    from aiauv_pin.description.input_limits import MAX_XML_ELEMENTS
+    from aiauv_pin.interop.gz import export_sdf
+
+    sdf = tmp_path / "model.sdf"
+    export_sdf(aiauv_pin.bundled_urdf("uniform"), sdf)
+    read_gz_model(sdf)  # the exported file reads
+    text = sdf.read_text().replace("</model>", "<frame name='f'/>" * 300_000 + "</model>", 1)
+    sdf.write_text(text)
+    message = _outcome("SDF input", lambda: read_gz_model(sdf))
+    assert message is not None and f"more than {MAX_XML_ELEMENTS} XML elements" in message
+    wide = tmp_path / "wide.sdf"
+    attributes = " ".join(f'a{i}="{i}"' for i in range(100))
+    wide.write_text(
+        sdf.read_text().replace("<frame name='f'/>" * 300_000, f"<frame {attributes}/>")
+    )
+    message = _outcome("SDF input", lambda: read_gz_model(wide))
+    assert message is not None and "attributes" in message
 
 
 # --------------------------------------------------------------------------------------------------

@@ -416,6 +416,38 @@ def test_divergence_suspect_names_the_coefficient_nearest_its_range(tmp_path):
     assert suspect is not None and "C_dC" in suspect and "hull" in suspect
 
 
+def test_compiled_runs_on_the_pinocchio_backend_are_project_errors():
+    """The campaign found a plain ValueError ending in ': None' (issue 29: one hierarchy)."""
+    from aiauv_pin.errors import ArgumentError
+
+    vehicle = aiauv_pin.load_vehicle(backend="pinocchio")
+    q0 = vehicle.neutral_configuration()
+    with pytest.raises(ArgumentError, match="compiled backend") as error:
+        aiauv_pin.rollout(vehicle, q0, np.zeros(vehicle.nv), 0.02, 0.01)
+    assert "None" not in str(error.value) and "backend='numba'" in str(error.value)
+    from aiauv_pin.controllers.paper_controller import VehiclePathFollowing
+
+    controller = VehiclePathFollowing(aiauv_pin.load_vehicle()).compiled()
+    with pytest.raises(ArgumentError, match="numba backend") as error:
+        aiauv_pin.simulate(vehicle, q0, np.zeros(vehicle.nv), 0.02, 0.01, controller)
+    assert "None" not in str(error.value)
+
+
+def test_current_flag_has_the_scenario_files_range(tmp_path, capsys):
+    """``simulate --current 1e6 0 0`` ran and diverged (the campaign); the flag now has the
+    scenario file's plausible range and is refused up front, naming it."""
+    from aiauv_pin.app.cli import main
+
+    out = tmp_path / "run"
+    assert (
+        main(["simulate", "--current", "1e6", "0", "0", "--duration", "0.1", "--out", str(out)])
+        == 1
+    )
+    error = capsys.readouterr().err
+    assert error.startswith("aiauv: error: --current") and "plausible range" in error
+    assert error.count("\n") == 1 and not out.exists()
+
+
 def test_physical_parameter_error_is_a_project_error():
     assert issubclass(PhysicalParameterError, AiauvError)
 
