@@ -41,7 +41,7 @@ from aiauv_pin._internal.array_checks import (
     step_count,
     unit_quaternion,
 )
-from aiauv_pin.errors import ArgumentError, project_errors
+from aiauv_pin.errors import ArgumentError, NumericalError, project_errors
 from aiauv_pin.kernels import articulated_body as kernels
 from aiauv_pin.kernels.disturbances import Disturbance
 from aiauv_pin.kernels.handle import (
@@ -404,6 +404,8 @@ class FastModel:
 
         Raises:
             ArgumentError: A bad argument (see the module docstring), before anything runs.
+            NumericalError: The step gave a non-finite state (``dt`` too large for the
+                vehicle's dynamics, or a state that diverges).
         """
         # the fast path (benchmarks/entry_checks.py): a still-water step of 1-D float64 arrays,
         # their sizes, contiguity, finiteness and quaternion checked in the compiled call
@@ -472,6 +474,17 @@ class FastModel:
 
     @project_errors("FastModel.step")
     def _step_unchecked(self, q, v, tau, dt, code, env, servo, t):
+        """One step with checked arguments; a non-finite result is a :class:`NumericalError`."""
+        q_out, v_out = self._step_into_new(q, v, tau, dt, code, env, servo, t)
+        if not (np.isfinite(q_out).all() and np.isfinite(v_out).all()):
+            raise NumericalError(
+                f"FastModel.step: the step gave a non-finite state at t = {float(t):g} s with "
+                f"dt = {float(dt):g} s: take a smaller step"
+            )
+        return q_out, v_out
+
+    def _step_into_new(self, q, v, tau, dt, code, env, servo, t):
+        """The step into new arrays ``(q_out, v_out)``, unchecked."""
         q_out = np.empty(self.nq)
         v_out = np.empty(self.nv)
         if self._fixed_types(env, servo):

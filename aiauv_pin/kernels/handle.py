@@ -59,6 +59,9 @@ def new_handle(model, workspace, still_water, no_servo):
 STATE_OK, STATE_Q_NOT_FINITE, STATE_V_NOT_FINITE, STATE_TAU_NOT_FINITE = 0, 1, 2, 3
 STATE_QUATERNION_NOT_UNIT, STATE_T_NOT_FINITE, STATE_NOT_CONTIGUOUS = 4, 5, 6
 STATE_WRONG_SIZE = 7
+#: :func:`checked_step_of`'s verdict when the step itself gave a non-finite state (``dt`` far
+#: beyond what the vehicle's dynamics allow, e.g. ``1e308`` s).
+STATE_RESULT_NOT_FINITE = 8
 
 
 @compiled
@@ -141,8 +144,9 @@ def checked_acceleration_of(handle, t, q, v, tau, out):
 def checked_step_of(handle, t, q, v, tau, dt, method, q_unit, q_out, v_out):
     """:func:`aiauv_pin.kernels.articulated_body.step_into` in still water without servo, after
     :func:`state_verdict` (``q_unit`` (nq,): scratch for the normalised ``q``); returns its
-    verdict (``q_out, v_out`` are written only when it is ``STATE_OK``). ``dt`` and ``method``
-    are checked by the caller."""
+    verdict (``q_out, v_out`` hold the step only when it is ``STATE_OK``;
+    ``STATE_RESULT_NOT_FINITE`` when the step gave a non-finite state). ``dt`` and ``method`` are
+    checked by the caller."""
     W = handle.workspace
     nq, nv = W.q_stage.shape[0], W.v_stage.shape[0]
     if q_unit.shape[0] != nq or q_out.shape[0] != nq or v_out.shape[0] != nv:
@@ -165,6 +169,8 @@ def checked_step_of(handle, t, q, v, tau, dt, method, q_unit, q_out, v_out):
         q_out,
         v_out,
     )
+    if not kernels.is_finite_state(q_out, v_out):
+        return STATE_RESULT_NOT_FINITE
     return STATE_OK
 
 

@@ -363,3 +363,28 @@ def test_python_and_compiled_state_checks_apply_one_quaternion_rule(paper_vehicl
     assert verdict == STATE_OK
     assert np.array_equal(q_unit if normalised else q, checked)
     assert normalised == (checked is not q)
+
+
+@pytest.mark.parametrize("dt", [1e308, 1e200])
+@pytest.mark.parametrize("path", ["fast", "with a current", "euler"])
+def test_a_step_that_overflows_is_refused_in_one_line(dt, path):
+    """Issue 29's campaign: ``fast.step(..., dt=1e308)`` returned NaN; a step whose result is not
+    finite raises :class:`NumericalError` naming ``dt``, on the compiled fast path and the checked
+    path alike."""
+    from aiauv_pin.errors import NumericalError
+
+    vehicle = aiauv_pin.load_vehicle()
+    fast = vehicle.fast
+    if fast is None:
+        pytest.skip(vehicle.fallback_reason)
+    q, v = vehicle.neutral_configuration(), np.full(vehicle.nv, 0.3)
+    tau = np.ones(vehicle.nv)
+    options = {
+        "with a current": {"current": np.array([0.2, 0.0, 0.0])},
+        "euler": {"method": "euler"},
+    }
+    with pytest.raises(NumericalError, match=r"non-finite state .* dt = 1e\+(308|200) s") as error:
+        fast.step(q, v, tau, dt, **options.get(path, {}))
+    assert "\n" not in str(error.value)
+    q_next, v_next = fast.step(q, v, tau, 0.01, **options.get(path, {}))  # a usual step still works
+    assert np.all(np.isfinite(q_next)) and np.all(np.isfinite(v_next))
