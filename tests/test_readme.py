@@ -282,5 +282,5 @@ def test_own_vehicle_example_suits_the_paper_controller(document, tmp_path):
     assert report.smallest_mass_eigenvalue > 0.0
     vehicle = load_vehicle(path)
     labels = joint_axis_labels(vehicle)
-    assert labels == ("z", "y", "z", "y")
+    assert labels == ("+z", "+y", "+z", "+y")
     VehiclePathFollowing(vehicle)  # raises for a joint layout the paper's law cannot steer
