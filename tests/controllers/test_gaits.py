@@ -26,7 +26,9 @@ from aiauv_control.laws.gait_laws import (
     LATERAL_UNDULATION,
     gait_envelope,
     heading_offset,
+    pitch_base_angle,
     serpenoid_reference,
+    vertical_los_elevation,
     wrap_angle,
 )
 from aiauv_control.path_following import PathFollowingGains
@@ -246,6 +248,18 @@ def test_a_gait_built_for_another_vehicle_is_refused(mamba):
 
 
 # ---------------------------------------------------------------- depth keeping
+def test_vertical_los_and_pitch_pd():
+    """``gamma_d = atan2(-e_v, Delta_v)``; ``q_y0 = sat(k_v (gamma - gamma_d) + k_v T_v
+    gamma_dot, q_max)``: above the path the body is asked to point down, and a body pointing up
+    more than asked gets a positive (nose-down for a ``+y`` joint) base angle."""
+    assert vertical_los_elevation(1.0, 3.0) == pytest.approx(math.atan2(-1.0, 3.0))
+    assert vertical_los_elevation(-1.0, 3.0) > 0.0
+    assert pitch_base_angle(0.1, 0.0, -0.1, 2.0, 0.0, 1.0) == pytest.approx(0.4)
+    assert pitch_base_angle(0.0, 0.2, 0.0, 2.0, 0.5, 1.0) == pytest.approx(0.2)
+    assert pitch_base_angle(1.0, 0.0, -1.0, 2.0, 0.0, 0.5) == 0.5
+    assert pitch_base_angle(-1.0, 0.0, 1.0, 2.0, 0.0, 0.5) == -0.5
+
+
 def _depth_run(gait_options, z=-1.0):
     """The paper vehicle undulating along the x-axis 1 m beside its start and ``z`` [m] below it
     (the table of examples/gait_depth.toml with other depth options), 120 s."""
