@@ -2,7 +2,8 @@
 
 Measurement: the vehicle's centre of mass and its world velocity (the point that follows the path,
 as in Kelasidi 2017), the mean heading (direction of the mass-weighted mean of the links' x-axes in
-the horizontal plane) and the speed along it. The law is
+the horizontal plane) and the speed along it, and for depth keeping the mean elevation (of the same
+mean x-axis, positive towards +z) and its rate. The law is
 :func:`aiauv_control.laws.gait_laws.gait_command`; the action: the joint references go to the
 continuous joint servo (:class:`aiauv_pin.dynamics.joint_servo.JointServo`, its limits and gains),
 and ``tau = B(q) thrusts`` (the paper's eq. 20) in combined mode.
@@ -40,6 +41,8 @@ class GaitParameters(NamedTuple):
     servo_references: np.ndarray  # (n,) the servo's references, updated in place
     joint_stiffness: np.ndarray  # (n,) servo gains, for logging its torque [N m/rad]
     joint_damping: np.ndarray  # (n,) [N m s/rad]
+    pitch_scale: np.ndarray  # (n,) eq. (22)'s signed scale of the pitch joints, 0 for the others
+    heave_sign: np.ndarray  # (m,) sign of the vertical thrusters of the depth PI, 0 for the others
 
 
 class GaitState(NamedTuple):
@@ -48,6 +51,7 @@ class GaitState(NamedTuple):
     surge: SurgeState
     guidance: GuidanceState
     command: GaitBuffers
+    depth: SurgeState  # the depth PI of the vertical thrusters
 
 
 def gait_info_shapes(n_joints: int, n_thrusters: int) -> dict[str, tuple[int, ...]]:
@@ -64,6 +68,8 @@ def gait_info_shapes(n_joints: int, n_thrusters: int) -> dict[str, tuple[int, ..
         "joint_torque": (n_joints,),
         "cross_track": (2,),  # of the centre of mass [m]
         "path_s": (),
+        "elevation": (),  # mean elevation gamma_bar [rad], positive towards +z
+        "depth": (3,),  # e_v [m], gamma_d [rad], q_y0 [rad] (joints) or F [N] (thrusters)
     }
 
 
@@ -101,6 +107,30 @@ def centre_and_heading(W, link_mass, link_centre):
 
 
 @compiled(borrows_only=True)
+def mean_elevation(W, link_mass):
+    """Elevation [rad] of ``X = sum m_b R_b e_x`` (positive towards +z) and its rate [rad/s]:
+    ``gamma = atan2(X_z, h)``, ``h = |(X_x, X_y)|``, with ``X_dot = sum m_b R_b (w_b x e_x)``."""
+    x0 = x1 = x2 = 0.0
+    d0 = d1 = d2 = 0.0
+    for b in range(link_mass.shape[0]):
+        m = link_mass[b]
+        R, tw = W.rotation[b], W.twist[b]
+        wy, wz = tw[4], tw[5]
+        x0 += m * R[0, 0]
+        x1 += m * R[1, 0]
+        x2 += m * R[2, 0]
+        # w x e_x = (0, w_z, -w_y) in body axes
+        d0 += m * (R[0, 1] * wz - R[0, 2] * wy)
+        d1 += m * (R[1, 1] * wz - R[1, 2] * wy)
+        d2 += m * (R[2, 1] * wz - R[2, 2] * wy)
+    h = math.sqrt(x0 * x0 + x1 * x1)
+    h_dot = (x0 * d0 + x1 * d1) / h if h > 0.0 else 0.0
+    norm2 = h * h + x2 * x2
+    rate = (h * d2 - x2 * h_dot) / norm2 if norm2 > 0.0 else 0.0
+    return math.atan2(x2, h), rate
+
+
+@compiled(borrows_only=True)
 def serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info):
     """The steered serpentine gait on the vehicle: measure, :func:`gait_command`, act.
 
@@ -113,6 +143,7 @@ def serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info):
     kinematics(model.bodies, q, v, W)
     restoring_into(model, W, W.restoring)
     centre, velocity, heading = centre_and_heading(W, P.link_mass, P.link_centre)
+    elevation, elevation_rate = mean_elevation(W, P.link_mass)
     c, s = math.cos(heading), math.sin(heading)
     u = velocity[0] * c + velocity[1] * s
     out = state.command
@@ -133,6 +164,11 @@ def serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info):
         heading,
         u,
         out,
+        P.pitch_scale,
+        P.heave_sign,
+        state.depth,
+        elevation,
+        elevation_rate,
     )
     n = q.shape[0] - 7
     for j in range(n):
@@ -170,3 +206,6 @@ def serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info):
     info[o] = out.cross_track[0]
     info[o + 1] = out.cross_track[1]
     info[o + 2] = out.path_s[0]
+    info[o + 3] = elevation
+    for i in range(3):
+        info[o + 4 + i] = out.depth[i]

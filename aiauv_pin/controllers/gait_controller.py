@@ -3,8 +3,11 @@
 :class:`Gait` holds a gait's parameters (checked on their own); :class:`VehicleGait` checks them
 against a vehicle (the joint limits) and builds the compiled controller
 (:func:`aiauv_pin.controllers.gait_compiled.serpentine_gait`). The yaw joints (about a link's z axis)
-undulate; the pitch joints are held straight by the joint servo; thrusters stay idle, or in the
-combined mode (``thrust = "surge"``) the X thrusters push with the paper's surge PI (eq. 25).
+undulate; the pitch joints are held straight by the joint servo, or keep the depth
+(``depth = "joints"``: vertical LOS and a saturated PD spread over them by eq. 22); thrusters stay
+idle, or in the combined mode (``thrust = "surge"``) the X thrusters push with the paper's surge PI
+(eq. 25), and with ``depth = "thrusters"`` the vertical thrusters keep the depth by a PI (see
+:mod:`aiauv_control.laws.gait_laws`).
 
 A run in Python::
 
@@ -28,7 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from aiauv_control.guidance import X_AXIS
+from aiauv_control.joint_references import joint_reference_pattern
 from aiauv_control.laws.gait_laws import (
+    DEPTH_MODES,
     GAIT_KINDS,
     STRAIGHT_JOINT,
     GaitGains,
@@ -79,6 +84,14 @@ class Gait:
         los_integral_gain: ``sigma`` of the integral LOS [-].
         thrust: ``"none"`` (thrusters idle) or ``"surge"`` (combined mode: the X thrusters hold the
             speed ``u_d`` of the controller gains with the surge PI).
+        depth: Depth keeping: ``"none"``, ``"joints"`` (the pitch joints; their pattern's
+            ``alpha`` and saturation ``q_max`` are the controller gains') or ``"thrusters"`` (the
+            vertical thrusters).
+        depth_gain: ``k_v`` of the pitch PD, base angle per rad of elevation error [-].
+        depth_damping: Its derivative time ``T_v`` [s].
+        depth_lookahead: Vertical LOS lookahead ``Delta_v`` [m]; ``None``: the gait's lookahead.
+        depth_kp: Proportional gain of the thrusters' depth PI [N/m].
+        depth_ki: Its integral gain [N/(m s)].
     """
 
     kind: str = "lateral_undulation"
@@ -91,6 +104,12 @@ class Gait:
     integral_los: bool = False
     los_integral_gain: float = DEFAULT_LOS_INTEGRAL_GAIN
     thrust: str = "none"
+    depth: str = "none"
+    depth_gain: float = 2.0
+    depth_damping: float = 0.0
+    depth_lookahead: float | None = None
+    depth_kp: float = 5.0
+    depth_ki: float = 0.1
 
     def __post_init__(self) -> None:
         if self.kind not in GAIT_KINDS:
@@ -114,6 +133,35 @@ class Gait:
         object.__setattr__(
             self, "los_integral_gain", _positive("los_integral_gain", self.los_integral_gain)
         )
+        if self.depth not in DEPTH_MODES:
+            raise ArgumentError(
+                f"gait.depth must be one of {', '.join(DEPTH_MODES)}, got {self.depth!r:.40}"
+            )
+        for name in ("depth_gain", "depth_damping", "depth_kp", "depth_ki"):
+            object.__setattr__(self, name, _positive(name, getattr(self, name), zero=True))
+        if self.depth_lookahead is not None:
+            object.__setattr__(
+                self, "depth_lookahead", _positive("depth_lookahead", self.depth_lookahead)
+            )
+
+
+def pitch_joint_scale(vehicle: Vehicle, alpha: float) -> np.ndarray:
+    """Per joint: eq. (22)'s signed scale ``sign exp(-alpha (j - 1))`` for the pitch (y-axis)
+    joints, ``j`` counted from the tail among them, and 0 for the others
+    (:func:`aiauv_control.joint_references.joint_reference_pattern`)."""
+    labels = joint_axis_labels(vehicle)
+    _, scale = joint_reference_pattern(labels, alpha)
+    return np.array([s if label[1] == "y" else 0.0 for s, label in zip(scale, labels, strict=True)])
+
+
+def heave_thruster_signs(vehicle: Vehicle) -> np.ndarray:
+    """Per thruster: the sign of its axis if it pushes along its link's z-axis, else 0."""
+    return np.array(
+        [
+            math.copysign(1.0, t.direction[2]) if abs(t.direction[2]) > 0.999 else 0.0
+            for t in vehicle.hydro.thrusters
+        ]
+    )
 
 
 def undulating_joints(vehicle: Vehicle) -> tuple[np.ndarray, np.ndarray]:
@@ -197,6 +245,20 @@ class VehicleGait:
             lookahead = self.gait.lookahead
         else:
             lookahead = 2.0 * vehicle_length(vehicle)
+        depth = DEPTH_MODES[self.gait.depth]
+        self.pitch_scale = np.zeros(len(self.tail_index))
+        self.heave_sign = np.zeros(len(vehicle.hydro.thrusters))
+        if self.gait.depth == "joints":
+            self.pitch_scale = pitch_joint_scale(vehicle, self.gains.alpha)
+            if not np.any(self.pitch_scale):
+                raise ArgumentError("gait.depth = 'joints' needs pitch (y-axis) joints")
+        elif self.gait.depth == "thrusters":
+            self.heave_sign = heave_thruster_signs(vehicle)
+            if not np.any(self.heave_sign):
+                raise ArgumentError("gait.depth = 'thrusters' needs thrusters along a link z-axis")
+        depth_lookahead = self.gait.depth_lookahead
+        if depth_lookahead is None:
+            depth_lookahead = lookahead
         self.gait_gains = GaitGains(
             kind=kind,
             amplitude=self.gait.amplitude,
@@ -212,6 +274,14 @@ class VehicleGait:
             k_1p=self.gains.k_1p,
             k_1i=self.gains.k_1i,
             max_thrust=float(np.min(vehicle.max_thrust)) if len(vehicle.max_thrust) else 0.0,
+            depth=depth,
+            depth_gain=self.gait.depth_gain,
+            depth_damping=self.gait.depth_damping,
+            depth_lookahead=float(depth_lookahead),
+            alpha=float(self.gains.alpha),
+            q_max=float(self.gains.q_max),
+            depth_kp=self.gait.depth_kp,
+            depth_ki=self.gait.depth_ki,
         )
         n = vehicle.nv - 6
         self.joint_servo = JointServo.uniform(n, self.gains.k_qp, self.gains.k_qd)
@@ -242,15 +312,18 @@ class VehicleGait:
             servo_references=self.joint_servo.references,
             joint_stiffness=self.joint_servo.stiffness,
             joint_damping=self.joint_servo.damping,
+            pitch_scale=self.pitch_scale,
+            heave_sign=self.heave_sign,
         )
         state = GaitState(
             surge=new_surge_state(),
             guidance=new_guidance_state(),
             command=new_gait_buffers(self.vehicle.nv - 6, len(self.vehicle.hydro.thrusters)),
+            depth=new_surge_state(),
         )
 
         def reset() -> None:
-            for array in (*state.surge, *state.guidance):
+            for array in (*state.surge, *state.guidance, *state.depth):
                 array[:] = 0.0
             self.joint_servo.references[:] = 0.0
 

@@ -21,7 +21,7 @@ from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, Discriminator, Field, Tag
 
-from aiauv_control.laws.gait_laws import GAIT_KINDS
+from aiauv_control.laws.gait_laws import DEPTH_MODES, GAIT_KINDS
 from aiauv_control.path_following import CURRENT_COMPENSATION_OPTIONS, PathFollowingGains
 from aiauv_control.reduced_attitude import FEEDFORWARD_OPTIONS
 from aiauv_pin._internal.schema_validation import Direction, key, number, strict_config, vector
@@ -260,6 +260,16 @@ class GaitTable(BaseModel):
         "-",
         "none (thrusters idle) or surge (combined: X thrusters hold controller.u_d)",
     )
+    depth: key(
+        Literal[tuple(DEPTH_MODES)],
+        "-",
+        "depth keeping: none, joints (pitch joints; controller.alpha, q_max) or thrusters (z)",
+    )
+    depth_gain: gain(100.0, "-", "pitch PD: base angle per rad of elevation error", zero=True)
+    depth_damping: gain(100.0, "s", "pitch PD: derivative time", zero=True)
+    depth_lookahead: key(Size, "m", "vertical LOS lookahead (default: the gait's lookahead)")
+    depth_kp: gain(1.0e5, "N/m", "depth PI of the vertical thrusters: proportional", zero=True)
+    depth_ki: gain(1.0e5, "N/(m s)", "depth PI of the vertical thrusters: integral", zero=True)
 
 
 class OutputTable(BaseModel):
