@@ -198,11 +198,6 @@ def _run_simulate(args) -> int:
             "using the Pinocchio reference, about 50x slower",
             file=sys.stderr,
         )
-    # compile (or load) the kernels before the timed run: summary.json's real-time factor is the
-    # simulation's alone; the set-up time is recorded beside it
-    with compilation:
-        warm_up(vehicle, scenario)
-    timing = {"setup_time": time.perf_counter() - compile_start}
     if args.scenario is not None:
         name = args.scenario.stem
     elif scenario.vehicle is not None:
@@ -211,7 +206,7 @@ def _run_simulate(args) -> int:
         name = scenario.case
     out = args.out if args.out is not None else Path("results") / name
     title = Path(out).resolve().name or name  # the figures' titles name the folder
-    check_output_folder(out)  # refuse a file or a foreign folder before simulating
+    check_output_folder(out)  # refuse a file or a foreign folder before compiling or simulating
     if not args.no_html:  # a shape the playback cannot draw: say so before the run, not after it
         from aiauv_pin.results.viewer import vehicle_visuals
 
@@ -221,6 +216,11 @@ def _run_simulate(args) -> int:
             raise AiauvError(
                 f"{' '.join(str(exc).split())}; --no-html runs without the playback"
             ) from None
+    # compile (or load) the kernels before the timed run: summary.json's real-time factor is the
+    # simulation's alone; the set-up time is recorded beside it
+    with compilation:
+        warm_up(vehicle, scenario)
+    timing = {"setup_time": time.perf_counter() - compile_start}
     on_log = None
     if args.view:
         from aiauv_pin.results.viewer import live_view

@@ -157,3 +157,21 @@ def test_short_runs_write_what_fits_them(tmp_path, capsys):
         assert {name: units[name] for name in ("p_x", "p_y", "p_z")} == dict.fromkeys(
             ("p_x", "p_y", "p_z"), "m"
         )
+
+
+def test_a_refused_output_folder_costs_no_warm_up(tmp_path, monkeypatch, capsys):
+    """The output folder and the playback's shapes are checked before the kernels are compiled or
+    loaded: a refused ``--out`` is one line, at once (the campaign of issue 29 saw it come after
+    the warm-up, which compiles in a new installation)."""
+    import aiauv_pin.scenario.definition as definition
+
+    calls = []
+    monkeypatch.setattr(definition, "warm_up", lambda *a, **k: calls.append(a))
+    foreign = tmp_path / "thesis"
+    foreign.mkdir()
+    (foreign / "thesis.tex").write_text("not ours", encoding="utf-8")
+    status = main(["simulate", "--duration", "0.1", "--no-html", "--quiet", "--out", str(foreign)])
+    error = capsys.readouterr().err.strip().splitlines()
+    assert status != 0 and len(error) == 1 and error[0].startswith("aiauv: error: refusing")
+    assert calls == []
+    assert (foreign / "thesis.tex").read_text(encoding="utf-8") == "not ours"
