@@ -19,7 +19,7 @@ import numpy as np
 from aiauv_control.laws.gait_laws import GaitBuffers, GaitGains, gait_command
 from aiauv_control.laws.paper_laws import GuidanceState, SurgeState, joint_pd_torque
 from aiauv_hydro.numerics.jit import compiled
-from aiauv_pin.controllers.paper_compiled import thruster_power_into
+from aiauv_pin.controllers.paper_compiled import thrusts_and_power_into
 from aiauv_pin.kernels.articulated_body import kinematics, restoring_into, thrust_into
 
 
@@ -187,12 +187,7 @@ def serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info):
     for j in range(n):
         info[o + j] = out.joint_references[j]
     o += n
-    m = out.thrusts.shape[0]
-    for k in range(m):
-        info[o + k] = out.thrusts[k]
-    o += m
-    thruster_power_into(model, W, out.thrusts, info, o)
-    o += m
+    o = thrusts_and_power_into(model, W, out.thrusts, info, o)
     for j in range(n):
         info[o + j] = joint_pd_torque(
             q[7 + j],

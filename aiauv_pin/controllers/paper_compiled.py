@@ -111,6 +111,18 @@ def thruster_power_into(model, W, thrusts, info, offset):
         info[offset + k] = thruster_power(speed, thrusts[k])
 
 
+@compiled(borrows_only=True)
+def thrusts_and_power_into(model, W, thrusts, info, offset):
+    """The info row's ``thrust`` [N] and ``thruster_power`` [W] fields, ``m`` floats each, from
+    ``info[offset]`` (after kinematics); returns the offset after them. Every built-in controller
+    logs its thrusters this way."""
+    m = thrusts.shape[0]
+    for k in range(m):
+        info[offset + k] = thrusts[k]
+    thruster_power_into(model, W, thrusts, info, offset + m)
+    return offset + 2 * m
+
+
 class PaperParameters(NamedTuple):
     """What :func:`paper_path_following` needs besides the state (built in Python once)."""
 
@@ -230,12 +242,7 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
         info[o + i] = out.x_ref[i]
         info[o + 3 + i] = R[i, 0]
     o += 6
-    m = out.thrusts.shape[0]
-    for k in range(m):
-        info[o + k] = out.thrusts[k]
-    o += m
-    thruster_power_into(model, W, out.thrusts, info, o)
-    o += m
+    o = thrusts_and_power_into(model, W, out.thrusts, info, o)
     for j in range(n):
         info[o + j] = out.joint_torques[j]
     o += n

@@ -18,7 +18,7 @@ from aiauv_hydro.numerics.jit import compiled
 from aiauv_pin.controllers.paper_compiled import (
     FrameMeasurement,
     measure_end_effector,
-    thruster_power_into,
+    thrusts_and_power_into,
 )
 from aiauv_pin.kernels.articulated_body import thrust_into
 
@@ -150,12 +150,7 @@ def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
     info[o + 1] = out.moments[1]
     info[o + 2] = out.saturation_scale[0]
     o += 3
-    m = out.thrusts.shape[0]
-    for k in range(m):
-        info[o + k] = out.thrusts[k]
-    o += m
-    thruster_power_into(model, W, out.thrusts, info, o)
-    o += m
+    o = thrusts_and_power_into(model, W, out.thrusts, info, o)
     for j in range(n):
         info[o + j] = joint_pd_torque(
             q[7 + j], v[6 + j], 0.0, g[6 + j], P.joint_stiffness[j], P.joint_damping[j]

@@ -120,6 +120,24 @@ def _plain(array, size: int) -> bool:
     )
 
 
+def _float64_vectors(q, v, tau) -> bool:
+    """Whether ``q, v, tau`` are 1-D float64 arrays (native order): what the fast paths check in
+    Python before their compiled call checks sizes, contiguity and values
+    (:func:`aiauv_pin.kernels.handle.state_verdict`); numba's unboxing needs the dtype and the
+    number of dimensions right (a 2-D array would overflow a 1-D record)."""
+    try:
+        return (
+            q.dtype is _FLOAT64
+            and v.dtype is _FLOAT64
+            and tau.dtype is _FLOAT64
+            and q.ndim == 1
+            and v.ndim == 1
+            and tau.ndim == 1
+        )
+    except AttributeError:  # not an array
+        return False
+
+
 def _entry_point(dispatcher, args):
     """The compiled entry point of ``dispatcher`` for the types of ``args``, or ``dispatcher``.
 
@@ -299,18 +317,8 @@ class FastModel:
         means "not taken": the arguments were of another kind or the compiled check refused them,
         and the caller's own checks then name the problem.
         """
-        # the hottest entry point (benchmarks/entry_checks.py): no helper calls, no tuples
-        try:
-            if not (
-                q.dtype is _FLOAT64
-                and v.dtype is _FLOAT64
-                and tau.dtype is _FLOAT64
-                and q.ndim == 1
-                and v.ndim == 1
-                and tau.ndim == 1
-            ):
-                return None
-        except AttributeError:  # not an array
+        # the hottest entry point (benchmarks/entry_checks.py): one helper call, no tuples
+        if not _float64_vectors(q, v, tau):
             return None
         if type(t) is not float:
             if type(t) is not int or not -MAX_EXACT_INT <= t <= MAX_EXACT_INT:
@@ -419,19 +427,7 @@ class FastModel:
             and (type(t) is float or (type(t) is int and -MAX_EXACT_INT <= t <= MAX_EXACT_INT))
         ):
             code = METHOD_CODES.get(method) if type(method) is str else None
-            try:
-                plain = (
-                    code is not None
-                    and q.dtype is _FLOAT64
-                    and v.dtype is _FLOAT64
-                    and tau.dtype is _FLOAT64
-                    and q.ndim == 1
-                    and v.ndim == 1
-                    and tau.ndim == 1
-                )
-            except AttributeError:  # not an array
-                plain = False
-            if plain:
+            if code is not None and _float64_vectors(q, v, tau):
                 local = self._local
                 handle, entry, q_unit = local.handle, self._checked_step_entry, local.q_unit
                 q_out, v_out = np.empty(self.nq), np.empty(self.nv)
