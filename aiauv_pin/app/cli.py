@@ -106,6 +106,9 @@ def _add_simulate(subparsers) -> None:
     parser.add_argument("--out", type=Path, default=None, help="output folder (results/<name>/)")
     parser.add_argument("--no-html", action="store_true", help="do not write playback.html")
     parser.add_argument(
+        "--no-figures", action="store_true", help="do not draw figures/ (data files only)"
+    )
+    parser.add_argument(
         "--feedforward",
         choices=("exact", "paper"),
         default=None,
@@ -234,7 +237,7 @@ def _run_simulate(args) -> int:
                 scenario,
                 progress=not args.quiet,
                 on_log=on_log,
-                after_first_chunk=preload_plotting,
+                after_first_chunk=None if args.no_figures else preload_plotting,
             )
     except SimulationDiverged as exc:
         timing["compiled_now"] = compilation.compiled_now
@@ -260,6 +263,7 @@ def _run_simulate(args) -> int:
                 {"vehicle": str(path), **timing},
                 figure_format=args.figure_format,
                 vehicle_name=title,
+                figures=not args.no_figures,
             )
         raise AiauvError(
             f"simulation diverged: {cause}; partial results up to t = {partial.t[-1]:.6g} s "
@@ -288,6 +292,7 @@ def _run_simulate(args) -> int:
             figure_format=args.figure_format,
             also=also,
             vehicle_name=title,
+            figures=not args.no_figures,
         )
     print(
         f"{name}: {content['simulated_time']:.1f} s simulated (set-up {timing['setup_time']:.1f} s, "

@@ -979,6 +979,7 @@ def write_results(
     path_points: np.ndarray | None = None,
     also: Sequence[Callable[[], object]] = (),
     parallel: bool = True,
+    figures: bool = True,
 ) -> dict:
     """Write every result file of a run into ``out_dir``; return the summary.
 
@@ -997,8 +998,11 @@ def write_results(
         also: More tasks that write files (zero-argument callables), run beside the figures,
             in this process or in the forked one (so only their files count).
         parallel: See :func:`write_figures`.
+        figures: Draw ``figures/`` (``False``: only the data files and ``also``; matplotlib is
+            then not imported).
     """
-    _prepare_figures(figure_format)
+    if figures:
+        _prepare_figures(figure_format)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     if vehicle_name is None and extra and extra.get("vehicle"):
@@ -1006,7 +1010,7 @@ def write_results(
     drawing = {"vehicle_name": vehicle_name, "path_points": path_points}
     tasks = [
         *also,
-        *_figure_tasks(result, out_dir / "figures", figure_format, drawing),
+        *(_figure_tasks(result, out_dir / "figures", figure_format, drawing) if figures else ()),
         functools.partial(write_timeseries, result, out_dir / "timeseries.csv"),
     ]
     return _run_tasks(

@@ -213,10 +213,13 @@ def throughput(
 
 
 # ---------------------------------------------------------------------- end to end
-def _simulate_command(case: str, duration: float, out: Path, html: bool) -> list[str]:
+def _simulate_command(
+    case: str, duration: float, out: Path, html: bool, figures: bool = True
+) -> list[str]:
     command = [sys.executable, "-m", "aiauv_pin.app.cli", "simulate", "--case", case]
     command += ["--duration", f"{duration:g}", "--quiet", "--out", str(out)]
-    return command if html else [*command, "--no-html"]
+    command += [] if html else ["--no-html"]
+    return command if figures else [*command, "--no-figures"]
 
 
 #: A fresh process that starts numba and calls one trivial function from its warm on-disk cache:
@@ -240,9 +243,10 @@ total(numpy.ones(3))
 
 def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5) -> dict:
     """Wall time of fresh ``aiauv simulate`` processes (warm cache), with and without playback,
-    interleaved; plus a fresh ``python -c "import aiauv_pin"`` for the import share, and two
-    floors: a fresh ``python -c "import numpy"``, and a fresh process that calls one trivial
-    numba function from its warm cache (numba's own start: its import and the set-up of its
+    and without playback and figures (``--no-figures``), interleaved; plus a fresh
+    ``python -c "import aiauv_pin"`` for the import share, and two floors: a fresh
+    ``python -c "import numpy"``, and a fresh process that calls one trivial numba function from
+    its warm cache (numba's own start: its import and the set-up of its
     compiler target, which loading any cached function needs).
 
     ``breakdown`` splits each run's wall time with its own ``summary.json``: ``setup_s`` (vehicle
@@ -255,21 +259,26 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
 
     walls: dict[str, list[float]] = {
         "no_html": [],
+        "no_figures": [],
         "with_html": [],
         "import_only": [],
         "numpy_floor": [],
         "numba_floor": [],
     }
     parts: dict[str, dict[str, list[float]]] = {
-        name: {"setup_s": [], "simulation_s": [], "rest_s": []} for name in ("no_html", "with_html")
+        name: {"setup_s": [], "simulation_s": [], "rest_s": []}
+        for name in ("no_html", "no_figures", "with_html")
     }
     with tempfile.TemporaryDirectory() as folder:
         base = Path(folder)
-        outs = {"no_html": base / "a", "with_html": base / "b"}
+        outs = {"no_html": base / "a", "with_html": base / "b", "no_figures": base / "c"}
         floor_script = base / "numba_floor.py"
         floor_script.write_text(_NUMBA_FLOOR_SCRIPT, encoding="utf-8")
         commands = {
             "no_html": _simulate_command(case, duration, outs["no_html"], html=False),
+            "no_figures": _simulate_command(
+                case, duration, outs["no_figures"], html=False, figures=False
+            ),
             "with_html": _simulate_command(case, duration, outs["with_html"], html=True),
             "import_only": [sys.executable, "-c", "import aiauv_pin.app.cli"],
             "numpy_floor": [sys.executable, "-c", "import numpy"],
@@ -303,6 +312,11 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
         },
         "numba_floor_script": _NUMBA_FLOOR_SCRIPT,
         **{f"{name}_wall_s": _spread(w) for name, w in walls.items()},
+        # each run over the floor of its own round (the runs are interleaved)
+        "ratio_to_numba_floor": {
+            name: _spread([w / f for w, f in zip(walls[name], walls["numba_floor"], strict=True)])
+            for name in ("no_html", "no_figures", "with_html")
+        },
         "breakdown": {
             name: {part: _spread(values) for part, values in split.items()}
             for name, split in parts.items()
@@ -651,12 +665,21 @@ def format_parts(results: dict) -> list[str]:
     e2e = results.get("end_to_end")
     if e2e:
         spread("fresh 'aiauv simulate --no-html' wall", e2e["no_html_wall_s"], "s")
+        if "no_figures_wall_s" in e2e:
+            spread("fresh '... --no-html --no-figures' wall", e2e["no_figures_wall_s"], "s")
         spread("fresh 'aiauv simulate' (with playback) wall", e2e["with_html_wall_s"], "s")
         spread("fresh 'import aiauv_pin.app.cli' wall", e2e["import_only_wall_s"], "s")
         if "numba_floor_wall_s" in e2e:
             spread("floor: fresh 'import numpy' wall", e2e["numpy_floor_wall_s"], "s")
             spread("floor: fresh numba, one cached function", e2e["numba_floor_wall_s"], "s")
-        for name, label in (("no_html", "--no-html"), ("with_html", "with playback")):
+        for name, ratio in e2e.get("ratio_to_numba_floor", {}).items():
+            spread(f"  {name} / numba floor (per round)", ratio, "x")
+        labels = (
+            ("no_html", "--no-html"),
+            ("no_figures", "--no-figures"),
+            ("with_html", "playback"),
+        )
+        for name, label in labels:
             for part, values in e2e.get("breakdown", {}).get(name, {}).items():
                 spread(f"  {label}: {part[:-2]}", values, "s")
     first = results.get("first_run")

@@ -159,6 +159,26 @@ def test_short_runs_write_what_fits_them(tmp_path, capsys):
         )
 
 
+def test_no_figures_writes_the_data_files_and_no_figure(tmp_path, capsys):
+    """``--no-figures``: ``summary.json`` and ``timeseries.csv`` as with figures, no ``figures/``,
+    and the data files' numbers equal to a run that draws them."""
+    path = tmp_path / "issue.toml"
+    path.write_text(ISSUE_TOML)
+    argv = ["simulate", str(path), "--duration", "0.3", "--no-html", "--quiet"]
+    bare, drawn = tmp_path / "bare", tmp_path / "drawn"
+    assert main([*argv, "--no-figures", "--out", str(bare)]) == 0
+    assert main([*argv, "--out", str(drawn)]) == 0
+    assert sorted(p.name for p in bare.iterdir()) == [
+        ".aiauv-run.json",
+        "summary.json",
+        "timeseries.csv",
+    ]
+    assert (drawn / "figures").is_dir()
+    assert (bare / "timeseries.csv").read_bytes() == (drawn / "timeseries.csv").read_bytes()
+    final = [json.loads((out / "summary.json").read_text())["final"] for out in (bare, drawn)]
+    assert final[0] == final[1]
+
+
 def test_a_refused_output_folder_costs_no_warm_up(tmp_path, monkeypatch, capsys):
     """The output folder and the playback's shapes are checked before the kernels are compiled or
     loaded: a refused ``--out`` is one line, at once (the campaign of issue 29 saw it come after

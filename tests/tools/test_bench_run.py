@@ -65,9 +65,13 @@ def test_format_parts_prints_medians_and_ranges():
             "import_only_wall_s": _spread(0.7),
             "numpy_floor_wall_s": _spread(0.08),
             "numba_floor_wall_s": _spread(0.75),
+            "no_figures_wall_s": _spread(1.1),
+            "ratio_to_numba_floor": {"no_figures": _spread(1.47)},
         },
     }
     lines = bench_run.format_parts(results)
+    assert any("--no-figures' wall" in line and "1.10" in line for line in lines)
+    assert any("no_figures / numba floor" in line and "1.47" in line for line in lines)
     assert any(
         "rollout()" in line and "150.00" in line and "(135.00-165.00)" in line for line in lines
     )
