@@ -76,6 +76,25 @@ MIN_SHAPE_SIZE = 1e-4
 URDF_PRIMITIVES = ("box", "cylinder", "sphere")
 
 
+#: What is dropped, said once for all the elements it concerns.
+GROUPED_DROPS = {
+    "lift": "Kutta and Magnus lift (fluidcoef[3:5]) dropped: no form in our per-link model",
+    "joint damping": "joint damping dropped",
+    "joint armature": "joint armature dropped",
+    "joint frictionloss": "joint frictionloss dropped",
+    "joint stiffness": "joint stiffness dropped",
+    "joint actuator": "actuators on joints left out: the joint torques are the vehicle's inputs",
+    "scenery": "bodies welded to the world (scenery) left out",
+    "asymmetric": "thrust limits made symmetric (the largest of |ctrlrange| kept)",
+}
+
+
+def _some(names: list[str]) -> str:
+    """``'a', 'b', 'c' and 4 more``: the first names of a list, on one short line."""
+    shown = ", ".join(f"'{name}'" for name in names[:3])
+    return shown + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+
+
 class MjcfDroppedWarning(UserWarning):
     """Something in an MJCF file that our model does not carry (one line: what and where)."""
 
@@ -153,7 +172,7 @@ class _Reader:
         self.path = path
         self.mujoco, self.model = _compile(path)
         self.dropped: list[str] = []
-        self.lifting: list[str] = []  # geoms whose Kutta or Magnus lift is dropped
+        self.grouped: dict[str, list[str]] = {}  # what is dropped -> where (one line each)
 
     def fail(self, message: str) -> VehicleLoadError:
         return VehicleLoadError(f"{self.path}: {message}")
@@ -212,7 +231,7 @@ class _Reader:
             )
         for other in range(1, model.nbody):
             if int(model.body_parentid[other]) == 0 and other != root:
-                self.drop(f"body '{self.body_name(other)}' is welded to the world: left out")
+                self.grouped.setdefault("scenery", []).append(self.body_name(other))
         return root
 
     def joint_of(self, body: int) -> int | None:
@@ -232,16 +251,15 @@ class _Reader:
             raise self.fail(f"ball joint '{name}': not supported (hinge, slide, free root)")
         if kind == mj.mjtJoint.mjJNT_FREE:
             raise self.fail(f"free joint '{name}' below the root: not supported")
-        for attribute, what in (
-            ("dof_damping", "damping"),
-            ("dof_armature", "armature"),
-            ("dof_frictionloss", "frictionloss"),
+        dof = int(model.jnt_dofadr[joint])
+        for values, what in (
+            (model.dof_damping, "damping"),
+            (model.dof_armature, "armature"),
+            (model.dof_frictionloss, "frictionloss"),
+            (model.jnt_stiffness, "stiffness"),
         ):
-            value = float(getattr(model, attribute)[int(model.jnt_dofadr[joint])])
-            if value != 0.0:
-                self.drop(f"joint '{name}': {what} {value:g} dropped")
-        if float(model.jnt_stiffness[joint]) != 0.0:
-            self.drop(f"joint '{name}': stiffness {float(model.jnt_stiffness[joint]):g} dropped")
+            if float(values[joint if what == "stiffness" else dof]) != 0.0:
+                self.grouped.setdefault(f"joint {what}", []).append(name)
         return joint
 
     # -- writing -----------------------------------------------------------------------------------
@@ -288,12 +306,8 @@ class _Reader:
             block.append(fossen_link_element(hydro))
         for element in self.thrusters(set(bodies), shift):
             block.append(element)
-        if self.lifting:
-            self.drop(
-                f"Kutta and Magnus lift of {len(self.lifting)} fluid geom(s) dropped "
-                f"('{self.lifting[0]}'{', ...' if len(self.lifting) > 1 else ''}): no form in "
-                "our per-link model"
-            )
+        for what, names in self.grouped.items():
+            self.drop(f"{GROUPED_DROPS[what]}: {_some(names)}")
         indent(robot, space="  ")
         for line in self.dropped:
             warnings.warn(MjcfDroppedWarning(f"{self.path}: {line}"), stacklevel=4)
@@ -398,7 +412,8 @@ class _Reader:
                     )
                 )
                 if density > 0.0 and any(coefficients[3:]):
-                    self.lifting.append(self.name(mj.mjtObj.mjOBJ_GEOM, geom, "geom"))
+                    geom_name = self.name(mj.mjtObj.mjOBJ_GEOM, geom, "geom")
+                    self.grouped.setdefault("lift", []).append(geom_name)
             if not fluid_geoms:
                 parts.append(
                     inertia_box_hydrodynamics(
@@ -472,9 +487,7 @@ class _Reader:
             name = self.name(mj.mjtObj.mjOBJ_ACTUATOR, actuator, "actuator")
             transmission = int(model.actuator_trntype[actuator])
             if transmission in (mj.mjtTrn.mjTRN_JOINT, mj.mjtTrn.mjTRN_JOINTINPARENT):
-                self.drop(
-                    f"actuator '{name}' drives a joint: joint torques are the vehicle's inputs here"
-                )
+                self.grouped.setdefault("joint actuator", []).append(name)
                 continue
             if transmission != mj.mjtTrn.mjTRN_SITE:
                 kind = mj.mjtTrn(transmission).name[len("mjTRN_") :].lower()
@@ -506,7 +519,7 @@ class _Reader:
             if bool(model.actuator_ctrllimited[actuator]):
                 limits.append(abs(gain) * float(np.max(np.abs(model.actuator_ctrlrange[actuator]))))
                 if model.actuator_ctrlrange[actuator][0] != -model.actuator_ctrlrange[actuator][1]:
-                    self.drop(f"actuator '{name}': ctrlrange made symmetric")
+                    self.grouped.setdefault("asymmetric", []).append(name)
             if bool(model.actuator_forcelimited[actuator]):
                 limits.append(float(np.max(np.abs(model.actuator_forcerange[actuator]))))
             if min(limits) == math.inf:

@@ -151,8 +151,11 @@ def test_what_is_dropped_is_said(tmp_path):
     assert len(record) == len(dropped)
     said = "\n".join(dropped)
     assert "wind 0 1.0 0 m/s: give it as the scenario's current" in said
-    assert "joint 'j1': damping 0.5 dropped" in said
-    assert "actuator 'j1_motor' drives a joint" in said
+    assert "joint damping dropped: 'j1'" in said
+    assert (
+        "actuators on joints left out: the joint torques are the vehicle's inputs: 'j1_motor'"
+        in said
+    )
     assert all("\n" not in line for line in dropped)
 
 

@@ -119,3 +119,29 @@ def test_semi_axes_follow_mujoco():
     assert list(geom_semi_axes("cylinder", [0.1, 0.3, 0.0])) == [0.1, 0.1, 0.3]
     assert list(geom_semi_axes("sphere", [0.2, 0.0, 0.0])) == [0.2, 0.2, 0.2]
     assert list(geom_semi_axes("box", [0.1, 0.2, 0.3])) == [0.1, 0.2, 0.3]
+
+
+def test_viscous_resistance_of_an_offset_geom_is_exact():
+    """With density 0 MuJoCo's ellipsoid model is Stokes' resistance alone, linear in the geom's
+    twist: moved to the body origin it is our -D_L nu for any twist, lever arms included."""
+    model = mujoco.MjModel.from_xml_string(
+        _body(
+            'type="ellipsoid" size="0.3 0.12 0.05" pos="0.4 -0.1 0.2" euler="0.3 -0.5 1.1"',
+            density=0.0,
+            viscosity=0.5,
+            fluid='fluidshape="ellipsoid"',
+        )
+    )
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    ellipsoid = Ellipsoid(
+        np.array([0.3, 0.12, 0.05]),
+        np.array(data.geom_xmat[0]).reshape(3, 3),
+        np.array(data.geom_xpos[0]),
+    )
+    hydro = fluid_ellipsoid_hydrodynamics(FluidEllipsoid(ellipsoid), 0.0, 0.5)
+    rng = np.random.default_rng(11)
+    for _ in range(10):
+        velocity = rng.normal(size=6)
+        theirs = _fluid_force(model, velocity)
+        np.testing.assert_allclose(-hydro.linear_damping @ velocity, theirs, rtol=0, atol=1e-12)
