@@ -8,11 +8,12 @@ ours. The compiled ``mjModel`` is then written as a URDF with our ``<hydrodynami
 the vehicle loader reads like any other (:func:`aiauv_pin.model.loading.load_vehicle`):
 
 * the moving body under ``<worldbody>`` with a free joint is the root link (a free-flying
-  vehicle); every body below it is a link, on a ``revolute`` (hinge) or ``prismatic`` (slide)
-  joint, or ``fixed`` without a joint. A joint's ``pos`` becomes the link origin (URDF joints turn
-  about their child's origin): the link frame is the body frame moved by it, and everything in the
-  body is written relative to it. Bodies welded to the world without a joint (scenery) are left
-  out;
+  vehicle); without one, MuJoCo's world body becomes a massless root link ``world`` with the
+  body's joint (or a weld) below it, and the vehicle has a fixed base (:attr:`MjcfVehicle.fixed_base`);
+  every body below it is a link, on a ``revolute`` (hinge) or ``prismatic`` (slide) joint, or
+  ``fixed`` without a joint. A joint's ``pos`` becomes the link origin (URDF joints turn about
+  their child's origin): the link frame is the body frame moved by it, and everything in the body
+  is written relative to it. Bodies welded to the world without a joint (scenery) are left out;
 * each body's mass, centre of mass and full inertia (``body_mass``, ``body_ipos``,
   ``body_iquat``, ``body_inertia``, which hold MuJoCo's inferred inertias);
 * primitive geoms (box, cylinder, sphere) as visuals, and the ones in the fluid as collisions
@@ -25,10 +26,9 @@ the vehicle loader reads like any other (:func:`aiauv_pin.model.loading.load_veh
   gear's force in the site frame, ``max_thrust`` from ``ctrlrange`` and ``forcerange``).
 
 What our model cannot carry is refused with one line (ball joints, several joints in one body,
-equality constraints and tendons: loops; actuators that are not forces at a site; a base fixed to
-the world, until the loader has ``fixed_base``), and what it drops is said in one
-:class:`MjcfDroppedWarning` each (the Kutta and Magnus lift, joint damping and springs, wind,
-joint actuators).
+equality constraints and tendons: loops; actuators that are not forces at a site), and what it
+drops is said in one :class:`MjcfDroppedWarning` each (the Kutta and Magnus lift, joint damping
+and springs, wind, joint actuators).
 """
 
 from __future__ import annotations
@@ -106,10 +106,14 @@ class MjcfVehicle:
     Attributes:
         urdf_text: The URDF with its ``<hydrodynamics>`` block.
         dropped: What the URDF does not carry, one line each (also issued as warnings).
+        fixed_base: The vehicle's root body is not on a free joint: it is welded or jointed to
+            MuJoCo's world body, written as the URDF's massless root link ``world``; the vehicle
+            needs a fixed base.
     """
 
     urdf_text: str
     dropped: tuple[str, ...]
+    fixed_base: bool = False
 
 
 def is_mjcf_text(text: str) -> bool:
@@ -173,6 +177,7 @@ class _Reader:
         self.mujoco, self.model = _compile(path)
         self.dropped: list[str] = []
         self.grouped: dict[str, list[str]] = {}  # what is dropped -> where (one line each)
+        self.fixed_base = False
 
     def fail(self, message: str) -> VehicleLoadError:
         return VehicleLoadError(f"{self.path}: {message}")
@@ -224,11 +229,9 @@ class _Reader:
         root = moving[0]
         joints = self.body_joints(root)
         free = [j for j in joints if int(model.jnt_type[j]) == mj.mjtJoint.mjJNT_FREE]
-        if not (len(joints) == 1 and free):
-            raise self.fail(
-                f"body '{self.body_name(root)}' is not on a free joint: "
-                "fixed-base MJCF needs fixed_base support"
-            )
+        self.fixed_base = not free
+        if free and len(joints) > 1:
+            raise self.fail(f"body '{self.body_name(root)}' has a free joint and others")
         for other in range(1, model.nbody):
             if int(model.body_parentid[other]) == 0 and other != root:
                 self.grouped.setdefault("scenery", []).append(self.body_name(other))
@@ -275,6 +278,8 @@ class _Reader:
             )
         root = self.root()
         bodies = self.subtree(root)
+        if self.fixed_base:  # MuJoCo's world body is the URDF's massless root link `world`
+            bodies = [0, *bodies]
         name = bytes(model.names).split(b"\0", 1)[0].decode()
         try:
             check_name(name, "robot")
@@ -284,7 +289,11 @@ class _Reader:
         shift: dict[int, np.ndarray] = {}
         links: list[LinkHydrodynamics] = []
         for body in bodies:
-            joint = self.joint_of(body) if body != root else None
+            if body == 0:
+                shift[0] = np.zeros(3)
+                SubElement(robot, "link", {"name": self.body_name(0)})
+                continue
+            joint = self.joint_of(body) if body != root or self.fixed_base else None
             shift[body] = np.zeros(3) if joint is None else np.array(model.jnt_pos[joint])
             link = SubElement(robot, "link", {"name": self.body_name(body)})
             self.inertial(link, body, shift[body])
@@ -292,7 +301,7 @@ class _Reader:
             hydro = self.hydrodynamics(body, shift[body], density, viscosity)
             if hydro is not None:
                 links.append(hydro)
-            if body != root:
+            if body != root or self.fixed_base:
                 self.joint(robot, body, joint, shift)
         block = SubElement(
             robot,
@@ -311,7 +320,9 @@ class _Reader:
         indent(robot, space="  ")
         for line in self.dropped:
             warnings.warn(MjcfDroppedWarning(f"{self.path}: {line}"), stacklevel=4)
-        return MjcfVehicle(tostring(robot, encoding="unicode") + "\n", tuple(self.dropped))
+        return MjcfVehicle(
+            tostring(robot, encoding="unicode") + "\n", tuple(self.dropped), self.fixed_base
+        )
 
     def inertial(self, link: Element, body: int, shift: np.ndarray) -> None:
         model = self.model

@@ -194,7 +194,13 @@ def load_vehicle(
     text = text.removeprefix("\ufeff")
     check_xml_text(text, str(source))
     if path is not None and is_mjcf_text(text):
-        text = read_mjcf(source).urdf_text  # MuJoCo compiles it; we read the URDF it is
+        mjcf = read_mjcf(source)  # MuJoCo compiles it; we read the URDF it is
+        if mjcf.fixed_base:
+            raise VehicleLoadError(
+                f"{source}: the root body is not on a free joint: "
+                "fixed-base MJCF needs fixed_base support"
+            )
+        text = mjcf.urdf_text
     try:
         root = parse_robot_text(text, str(source))
     except HydroError as exc:

@@ -230,3 +230,52 @@ def test_missing_file_gives_one_line(tmp_path):
     with pytest.raises(VehicleLoadError) as error:
         load_vehicle(tmp_path / "absent.xml")
     assert "\n" not in str(error.value)
+
+
+ARM = """<mujoco model="arm">
+  <option density="1000" viscosity="0.001"/>
+  <worldbody>
+    <body name="shoulder" pos="0.1 0.2 -0.5" euler="0.1 0.2 0.3">
+      <joint name="pan" axis="0 0 1" pos="0 0 0.05"/>
+      <geom type="cylinder" size="0.05 0.2" pos="0.2 0 0" zaxis="1 0 0" fluidshape="ellipsoid"/>
+      <body name="forearm" pos="0.4 0 0">
+        <joint name="tilt" axis="0 1 0"/>
+        <geom type="box" size="0.15 0.03 0.03" pos="0.15 0 0"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.filterwarnings("ignore::aiauv_pin.description.mjcf_reading.MjcfDroppedWarning")
+def test_a_base_fixed_to_the_world_is_a_world_link(tmp_path):
+    """Without a free joint, MuJoCo's world body is the URDF's massless root link ``world``, the
+    root body hangs on its own joint below it, and the frames are MuJoCo's; the loader refuses it
+    in one line until it has a fixed base."""
+    path = _write(tmp_path, ARM)
+    read = read_mjcf(path)
+    assert read.fixed_base
+    model = pin.buildModelFromXML(read.urdf_text)  # the world link is the root: fixed
+    assert [model.names[j] for j in range(1, model.njoints)] == ["pan", "tilt"]
+    mj = mujoco.MjModel.from_xml_path(str(path))
+    mj_data, data = mujoco.MjData(mj), model.createData()
+    for angles in ([0.0, 0.0], [0.7, -1.1], [-2.0, 0.4]):
+        mj_data.qpos[:] = angles
+        mujoco.mj_forward(mj, mj_data)
+        pin.forwardKinematics(model, data, np.array(angles))
+        pin.updateFramePlacements(model, data)
+        for body in ("shoulder", "forearm"):
+            # a link frame is its body frame moved by its joint's pos
+            mj_body = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_BODY, body)
+            placement = data.oMf[model.getFrameId(body, pin.FrameType.BODY)]
+            joint = mj.body_jntadr[mj_body]
+            expected = (
+                mj_data.xpos[mj_body] + mj_data.xmat[mj_body].reshape(3, 3) @ mj.jnt_pos[joint]
+            )
+            np.testing.assert_allclose(placement.translation, expected, atol=1e-12)
+            np.testing.assert_allclose(
+                placement.rotation, mj_data.xmat[mj_body].reshape(3, 3), atol=1e-12
+            )
+    with pytest.raises(VehicleLoadError, match=r"fixed-base MJCF needs fixed_base support$"):
+        _load(path)
