@@ -158,7 +158,12 @@ def test_mujocos_fluid_test_models_load_and_fall(name):
     assert 0.0 < drop < 0.5 * vehicle.hydro.gravity * 0.5**2  # slower than in a vacuum
 
 
+@pytest.mark.filterwarnings("ignore:.*Kutta and Magnus lift")
 def test_cli_checks_and_simulates_an_mjcf_vehicle(exported, tmp_path, capsys):
+    """The paper vehicle, as MuJoCo reads it, under the paper's controller."""
     assert main(["check", str(exported[0])]) == 0
     out = capsys.readouterr().out
     assert "OK: usable vehicle" in out and "link5_x_port" in out
+    command = ["simulate", "--vehicle", str(exported[0]), "--duration", "2", "--no-html"]
+    assert main([*command, "--quiet", "--out", str(tmp_path / "run")]) == 0
+    assert (tmp_path / "run" / "summary.json").is_file()
