@@ -52,7 +52,7 @@ def _add_simulate(subparsers) -> None:
     parser.add_argument(
         "--vehicle",
         type=Path,
-        help="URDF or .xacro file (default: the bundled paper vehicle of --case)",
+        help="URDF, .xacro or MJCF (MuJoCo) file (default: the bundled paper vehicle of --case)",
     )
     _add_description_options(parser)
     parser.add_argument(
@@ -332,7 +332,7 @@ def _add_check(subparsers) -> None:
         "usable vehicle, even with warnings (e.g. not neutrally buoyant, no surge thruster); "
         "1 with a one-line reason otherwise.",
     )
-    parser.add_argument("urdf", type=Path, help="URDF or .xacro file")
+    parser.add_argument("urdf", type=Path, help="URDF, .xacro or MJCF (MuJoCo) file")
     _add_description_options(parser)
     parser.add_argument(
         "--physics",

@@ -12,7 +12,6 @@ import pinocchio as pin
 
 from aiauv_hydro.spec import HydroError
 from aiauv_hydro.urdf.block_reader import parse_robot_text, parse_scalar, parse_vector
-from aiauv_pin.description.input_limits import read_text
 from aiauv_pin.description.urdf_validation import UrdfStructure, validate_urdf
 from aiauv_pin.interop.interop_errors import InteropError
 from aiauv_pin.model.loading import load_vehicle
@@ -97,7 +96,7 @@ def load_export_source(path: str | os.PathLike) -> ExportSource:
     """
     path = Path(path)
     vehicle = load_vehicle(path, backend="pinocchio")
-    root = parse_robot_text(read_text(path, "URDF"), str(path))
+    root = parse_robot_text(vehicle.urdf_text, str(path))  # an MJCF file's URDF, too
     structure = validate_urdf(root)
     try:
         shapes = {link.get("name"): _shapes(link) for link in root.findall("link")}

@@ -32,8 +32,10 @@ from xml.etree.ElementTree import Element, SubElement, indent, tostring
 import numpy as np
 import pinocchio as pin
 
+from aiauv_hydro.estimate.mujoco_fluid import gravity_compensation
 from aiauv_hydro.urdf.block_writer import format_number, format_numbers
 from aiauv_pin._internal.atomic import write_text as atomic_write_text
+from aiauv_pin.description.mjcf_reading import mujoco_geom_size
 from aiauv_pin.interop.export_source import ExportSource, Shape, load_export_source, rpy_to_matrix
 from aiauv_pin.interop.interop_errors import InteropError
 
@@ -56,15 +58,8 @@ def _placement_attributes(xyz, rotation) -> dict[str, str]:
 
 
 def _geom(body: Element, name: str, shape: Shape, fluid: bool) -> None:
-    if shape.shape == "box":
-        size = np.asarray(shape.size) / 2.0
-        kind = "box"
-    elif shape.shape == "cylinder":
-        size = np.array([shape.size[0], shape.size[1] / 2.0])
-        kind = "cylinder"
-    else:
-        size = np.array(shape.size)
-        kind = "sphere"
+    kind = shape.shape if shape.shape in ("box", "cylinder") else "sphere"
+    size = mujoco_geom_size(kind, shape.size)
     attributes = {
         "name": name,
         "type": kind,
@@ -170,7 +165,9 @@ def mjcf_text(source: ExportSource) -> str:
                 },
             )
             if link_hydro is not None and link_hydro.volume > 0.0:
-                buoyancy = hydro.fluid_density * link_hydro.volume / inertial.mass
+                buoyancy = gravity_compensation(
+                    link_hydro.volume, inertial.mass, hydro.fluid_density
+                )
                 body.set("gravcomp", format_number(buoyancy))
         if link_hydro is not None:
             shapes = [s for s in source.shapes[link] if s.kind == "collision"]

@@ -31,6 +31,7 @@ from aiauv_hydro.spec import HydroError
 from aiauv_hydro.urdf.block_reader import parse_robot_text, read_hydrodynamics
 from aiauv_hydro.urdf.uuv_simulator import freeze_thruster_joints
 from aiauv_pin.description.input_limits import MAX_FILE_BYTES, check_xml_text, read_text
+from aiauv_pin.description.mjcf_reading import is_mjcf_text, read_mjcf
 from aiauv_pin.description.safe_names import check_name
 from aiauv_pin.description.urdf_validation import UrdfStructure, validate_urdf
 from aiauv_pin.description.xacro_loading import read_description
@@ -151,10 +152,11 @@ def load_vehicle(
 
     The URDF may also carry UUV Simulator hydrodynamic blocks
     (:mod:`aiauv_hydro.urdf.uuv_simulator`); they are
-    read with it.
+    read with it. A MuJoCo MJCF file (root ``<mujoco>``) is compiled by MuJoCo and read as the
+    URDF it is (:mod:`aiauv_pin.description.mjcf_reading`).
 
     Args:
-        path: URDF file; ``None`` loads the bundled paper vehicle with uniform density.
+        path: URDF, ``.xacro`` or MJCF file; ``None`` loads the bundled paper vehicle with uniform density.
         added_mass: Include added mass (and its Coriolis terms).
         damping: Include linear, quadratic and crossflow damping.
         restoring: Include weight and buoyancy.
@@ -191,6 +193,14 @@ def load_vehicle(
         )
     text = text.removeprefix("\ufeff")
     check_xml_text(text, str(source))
+    if path is not None and is_mjcf_text(text):
+        mjcf = read_mjcf(source)  # MuJoCo compiles it; we read the URDF it is
+        if mjcf.fixed_base:
+            raise VehicleLoadError(
+                f"{source}: the root body is not on a free joint: "
+                "fixed-base MJCF needs fixed_base support"
+            )
+        text = mjcf.urdf_text
     try:
         root = parse_robot_text(text, str(source))
     except HydroError as exc:

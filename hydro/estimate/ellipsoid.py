@@ -178,13 +178,41 @@ class EllipsoidHydrodynamics:
     quadratic_damping: np.ndarray
 
 
+def placed_hydrodynamics(
+    ellipsoid: Ellipsoid, added_mass, linear_damping, quadratic_damping
+) -> EllipsoidHydrodynamics:
+    """Diagonal coefficients given in an ellipsoid's frame, moved to the link origin.
+
+    Added mass and linear damping (linear laws) move exactly with the motion transform ``X`` of the
+    ellipsoid frame, ``X^T diag(d) X`` (Fossen 2021, eq. (6.71)); the quadratic coefficients stay
+    diagonal in the link frame (rotated diagonals ``sum_j R_ij^2 d_j``, no lever arm: the module
+    docstring's approximation).
+
+    Args:
+        ellipsoid: Its centre and principal axes place the coefficients.
+        added_mass: ``(m_11, ..., m_66)`` in the ellipsoid frame [kg, kg m^2].
+        linear_damping: Diagonal linear damping in the ellipsoid frame [N s/m, N m s].
+        quadratic_damping: Diagonal quadratic damping in the ellipsoid frame [N s^2/m^2, N m s^2].
+    """
+    transform = motion_transform(ellipsoid.rotation, ellipsoid.center)
+    added = transform.T @ np.diag(np.asarray(added_mass, dtype=float)) @ transform
+    linear = transform.T @ np.diag(np.asarray(linear_damping, dtype=float)) @ transform
+    principal = np.asarray(quadratic_damping, dtype=float)
+    weights = ellipsoid.rotation**2  # link axis i gets sum_j R_ij^2 d_j
+    quadratic = np.concatenate((weights @ principal[:3], weights @ principal[3:]))
+    return EllipsoidHydrodynamics(
+        ellipsoid.volume,
+        ellipsoid.center.copy(),
+        0.5 * (added + added.T),
+        0.5 * (linear + linear.T),
+        quadratic,
+    )
+
+
 def ellipsoid_hydrodynamics(ellipsoid: Ellipsoid, fluid_density: float) -> EllipsoidHydrodynamics:
     """Added mass and damping of an ellipsoid, about the link origin (see the module docstring)."""
     a, b, c = ellipsoid.semi_axes
     rho = fluid_density
-    transform = motion_transform(ellipsoid.rotation, ellipsoid.center)
-    added = transform.T @ np.diag(ellipsoid_added_mass(ellipsoid.semi_axes, rho)) @ transform
-    added = 0.5 * (added + added.T)
     # quadratic drag in the ellipsoid frame: projected areas and rotating strips
     areas = math.pi * np.array([b * c, a * c, a * b])
     semi = ellipsoid.semi_axes
@@ -193,10 +221,9 @@ def ellipsoid_hydrodynamics(ellipsoid: Ellipsoid, fluid_density: float) -> Ellip
         across = sorted((semi[(k + 1) % 3], semi[(k + 2) % 3]))
         strips[k] = rho * DRAG_COEFFICIENT * 2.0 * across[0] * across[1] ** 4 / 4.0
     principal = np.concatenate((0.5 * rho * DRAG_COEFFICIENT * areas, strips))
-    linear = transform.T @ np.diag(LINEAR_DAMPING_SPEED * principal) @ transform
-    linear = 0.5 * (linear + linear.T)
-    weights = ellipsoid.rotation**2  # link axis i gets sum_j R_ij^2 d_j
-    quadratic = np.concatenate((weights @ principal[:3], weights @ principal[3:]))
-    return EllipsoidHydrodynamics(
-        ellipsoid.volume, ellipsoid.center.copy(), added, linear, quadratic
+    return placed_hydrodynamics(
+        ellipsoid,
+        ellipsoid_added_mass(ellipsoid.semi_axes, rho),
+        LINEAR_DAMPING_SPEED * principal,
+        principal,
     )
