@@ -334,9 +334,9 @@ class StationKeeping(ModelBasedBody):
         acceleration = station_acceleration(error, twist, self.integral, self.gains, self.held)
         tau, wrench, result = self.act(t, q, v, acceleration, error)
         info = self.info_row(error, twist, wrench, result)
-        info["p"] = position
+        info["frame_position"] = position
         return tau, info
 
     def info_shapes(self) -> dict[str, tuple[int, ...]]:
         """Keys and shapes of the logged diagnostics."""
-        return {**super().info_shapes(), "p": (3,)}
+        return {**super().info_shapes(), "frame_position": (3,)}

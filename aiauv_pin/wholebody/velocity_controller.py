@@ -108,9 +108,9 @@ class VelocityControl(ModelBasedBody):
         tau, wrench, result = self.act(t, q, v, acceleration, error)
         info = self.info_row(error, twist, wrench, result)
         info["target"] = target
-        info["p"] = position
+        info["frame_position"] = position
         return tau, info
 
     def info_shapes(self) -> dict[str, tuple[int, ...]]:
         """Keys and shapes of the logged diagnostics."""
-        return {**super().info_shapes(), "target": (6,), "p": (3,)}
+        return {**super().info_shapes(), "target": (6,), "frame_position": (3,)}
