@@ -177,3 +177,39 @@ def test_scenario_tables_are_checked():
         )
     scenario = scenario_from_mapping({**base, "station": {"frame": "camera", "axes": ["yaw"]}})
     assert scenario.wholebody == {"frame": "camera", "axes": ["yaw"]}
+
+
+def test_linearised_closed_loop_on_rov8_has_the_designed_roots(rov8):
+    """The closed loop (vehicle + computed torque + allocation), linearised at the target in still
+    water by central differences over (pose (tangent), twist, integral): its 18 eigenvalues are the
+    designed roots of ``s^3 + k_d s^2 + k_p s + k_i``, six times each, up to the allocation's
+    deliberate residual (relative 1e-6) and the differences' error."""
+    import pinocchio as pin
+
+    from aiauv_control.laws.station_laws import closed_loop_roots, pid_gains
+
+    gains = pid_gains(2.0, 0.7, 0.5)
+    controller = StationKeeping(rov8, [0.0, 0.0, 0.0], np.eye(3), gains=gains)
+    q_target = rov8.neutral_configuration()
+
+    def rate(x):
+        q = pin.integrate(rov8.model, q_target, x[:6])
+        v = x[6:12]
+        controller.integral, controller._last_t = x[12:].copy(), None
+        tau, info = controller(0.0, q, v)
+        dv = rov8.acceleration(q, v, tau)
+        # d/dt of the tangent coordinates: v through the inverse right Jacobian of SE(3)
+        jr = pin.Jexp6(x[:6])
+        return np.concatenate((np.linalg.solve(jr, v), dv, info["error"]))
+
+    h = 1e-6
+    A = np.empty((18, 18))
+    for k in range(18):
+        step = np.zeros(18)
+        step[k] = h
+        A[:, k] = (rate(step) - rate(-step)) / (2 * h)
+    found = np.linalg.eigvals(A)
+    roots = closed_loop_roots(gains.k_p[0], gains.k_d[0], gains.k_i[0])
+    assert len(set(np.round(roots, 6))) == 3  # three distinct roots, -0.5 and -1.4 +- 1.43 i
+    for root in roots:
+        assert np.count_nonzero(np.abs(found - root) < 1e-4) == 6, (root, found)
