@@ -42,6 +42,8 @@ def controller_from_options(vehicle: Vehicle, kind: str, options: Mapping, curre
                 q_check=q0,
             )
         elif kind == "velocity":
+            if "twist" not in table:
+                raise ArgumentError("velocity: needs a [velocity] table with a twist")
             gains = velocity_gains(table.pop("bandwidth", DEFAULT_BANDWIDTH), pole)
             built = VelocityControl(
                 vehicle,
@@ -54,6 +56,8 @@ def controller_from_options(vehicle: Vehicle, kind: str, options: Mapping, curre
             )
         else:
             raise ArgumentError(f"unknown whole-body controller {kind!r:.40}")
+    except ArgumentError:
+        raise
     except ValueError as exc:
         raise ArgumentError(f"{kind}: {' '.join(str(exc).split())}") from None
     if table:

@@ -179,6 +179,18 @@ def test_scenario_tables_are_checked():
     assert scenario.wholebody == {"frame": "camera", "axes": ["yaw"]}
 
 
+def test_options_of_a_scenario_build_the_controllers(rov8):
+    from aiauv_pin.wholebody.station_options import controller_from_options
+
+    built = controller_from_options(rov8, "station", {"frame": "camera", "axes": ["yaw"]}, None)
+    assert isinstance(built, StationKeeping) and built.held.tolist() == [0, 0, 0, 0, 0, 1]
+    with pytest.raises(ArgumentError, match=r"^velocity: needs a \[velocity\] table"):
+        controller_from_options(rov8, "velocity", {}, None)
+    paper = aiauv_pin.load_vehicle()
+    with pytest.raises(ArgumentError, match=r"^station keeping: the thrusters cannot produce roll"):
+        controller_from_options(paper, "station", {}, None)
+
+
 def test_linearised_closed_loop_on_rov8_has_the_designed_roots(rov8):
     """The closed loop (vehicle + computed torque + allocation), linearised at the target in still
     water by central differences over (pose (tangent), twist, integral): its 18 eigenvalues are the
