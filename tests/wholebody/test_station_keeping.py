@@ -262,3 +262,18 @@ def test_the_paper_vehicle_holds_its_end_effector_on_five_axes():
     assert np.degrees(np.abs(error[:, 3:]).max()) < 1.0
     _, final, _ = vehicle.frame_motion(trajectory.q[-1], np.zeros(vehicle.nv), frame)
     np.testing.assert_allclose(final, target, atol=1e-3)
+
+
+def test_velocity_of_a_named_frame(rov8):
+    """The camera frame (0.25 m ahead) driven at 0.2 m/s sideways while yawing at 0.2 rad/s (the
+    base then moves on a circle about the camera's path); still water."""
+    twist = [0.0, 0.2, 0.0, 0.0, 0.0, 0.2]
+    controller = VelocityControl(rov8, twist, frame="camera")
+    trajectory = aiauv_pin.simulate(
+        rov8, rov8.neutral_configuration(), np.zeros(6), 15.0, 0.01, controller, control_period=0.05
+    )
+    late = np.asarray(trajectory.t) >= 10.0
+    np.testing.assert_allclose(
+        trajectory.info["twist"][late], np.tile(twist, (late.sum(), 1)), atol=1e-3
+    )
+    assert not trajectory.info["saturated"].any()
