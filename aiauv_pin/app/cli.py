@@ -83,10 +83,11 @@ def _add_simulate(subparsers) -> None:
     )
     parser.add_argument(
         "--controller",
-        choices=("paper", "none", "thruster_turning", "gait"),
+        choices=("paper", "none", "thruster_turning", "gait", "station"),
         default=None,
         help="the paper's path following, none (a passive run), the thruster-turning "
-        "baseline, or a serpentine gait (the file's [gait], else its defaults) (paper)",
+        "baseline, a serpentine gait (the file's [gait], else its defaults), or station keeping "
+        "(the file's [station], else hold the start pose) (paper)",
     )
     parser.add_argument(
         "--added-mass",

@@ -271,6 +271,21 @@ def timeseries_table(result: ScenarioResult) -> list[TimeseriesColumn]:
                 TimeseriesColumn(f"{prefix}{name}", unit, values[:, k])
                 for k, (name, unit) in enumerate(owners)
             )
+    if "residual" in info and not paper:  # station keeping, velocity control
+        velocity = result.scenario.controller == "velocity"
+        error_units = ("m/s", "rad/s") if velocity else ("m", "rad")
+        for k, axis in enumerate(("surge", "sway", "heave", "roll", "pitch", "yaw")):
+            unit = error_units[k // 3]
+            table.append(TimeseriesColumn(f"error_{axis}", unit, np.asarray(info["error"])[:, k]))
+        for k, axis in enumerate(("surge", "sway", "heave", "roll", "pitch", "yaw")):
+            unit = "N" if k < 3 else "N m"
+            values = np.asarray(info["residual"])[:, k]
+            table.append(TimeseriesColumn(f"residual_{axis}", unit, values))
+        thrust = np.asarray(info["thrust"])
+        table.extend(
+            TimeseriesColumn(f"thrust_{name}", "N", thrust[:, k])
+            for k, name in enumerate(result.thruster_names)
+        )
     table.extend(
         TimeseriesColumn(name, unit, q[:, k]) for k, (name, unit) in enumerate(BASE_CONFIGURATION)
     )
@@ -505,6 +520,9 @@ PATH_FIGURES = ("fig2_cross_track.png", "path_3d.png")
 #: Figures of a run that follows no path (a passive run): the base's displacement from its start
 #: and speed against time, and the 3-D trajectories of the base and the end-effector.
 MOTION_FIGURES = ("base_motion.png", "motion_3d.png")
+#: Figures added by station keeping and velocity control (:mod:`aiauv_pin.wholebody`): the pose
+#: (or twist) errors of the held axes, and the thrusts with the residual wrench's size.
+WHOLEBODY_FIGURES = ("pose_error.png", "thrusts.png")
 
 
 def figures_of(result: ScenarioResult) -> tuple[str, ...]:
@@ -512,6 +530,8 @@ def figures_of(result: ScenarioResult) -> tuple[str, ...]:
     diagnostics, :data:`PATH_FIGURES` for another run that follows a path, else
     :data:`MOTION_FIGURES`."""
     if result.followed_path is None:
+        if "residual" in result.trajectory.info:  # station keeping, velocity control
+            return MOTION_FIGURES + WHOLEBODY_FIGURES
         return MOTION_FIGURES
     if "u" in result.trajectory.info:
         return FIGURES
@@ -710,6 +730,30 @@ def _draw(
         # the body-frame linear velocity's length is the world speed of the base origin
         _plot(ax_speed, t, np.linalg.norm(v[:, :3], axis=1))
         ax_speed.set(xlabel="t [s]", ylabel="speed [m/s]")
+    elif name == "pose_error.png":
+        velocity = result.scenario.controller == "velocity"
+        kind = "Twist" if velocity else "Pose"
+        fig, ax, ax_log = _error_axes(plt, f"{kind} errors of the held axes ({case})")
+        error = np.asarray(info["error"])
+        units = ("m/s", "rad/s") if velocity else ("m", "rad")
+        for k, axis in enumerate(("surge", "sway", "heave", "roll", "pitch", "yaw")):
+            if np.any(error[:, k]):
+                _plot_error(ax, ax_log, t, error[:, k], label=axis, ls="-" if k < 3 else "--")
+        ax.set_ylabel(f"error [{units[0]}, {units[1]}]")
+        ax_log.set_ylabel("|error|")
+        ax.legend(ncol=3, fontsize="small")
+    elif name == "thrusts.png":
+        fig, (ax, ax_res) = plt.subplots(2, 1, figsize=(6, 4.6), sharex=True)
+        thrust = np.asarray(info["thrust"])
+        for k, thruster in enumerate(result.thruster_names):
+            _plot(ax, t, thrust[:, k], label=thruster)
+        ax.set(ylabel="thrust [N]", title=f"Thrusts and residual wrench ({case})")
+        ax.legend(ncol=4, fontsize="small")
+        residual = np.asarray(info["residual"])
+        _plot(ax_res, t, np.linalg.norm(residual[:, :3], axis=1), label="force [N]")
+        _plot(ax_res, t, np.linalg.norm(residual[:, 3:], axis=1), label="moment [N m]")
+        ax_res.set(xlabel="t [s]", ylabel="|residual|")
+        ax_res.legend()
     elif name == "motion_3d.png":
         fig = plt.figure(figsize=(6, 4.5))
         ax = fig.add_subplot(projection="3d")
@@ -744,6 +788,8 @@ _MARGINS = {
 }
 _LAYOUT_OF = {
     "base_motion.png": "error",
+    "pose_error.png": "error",
+    "thrusts.png": "error",
     "motion_3d.png": "3d",
     "fig2_cross_track.png": "error",
     "fig4_phi_tilde.png": "error",

@@ -38,8 +38,9 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field, fields
+from typing import Any
 
 import numpy as np
 
@@ -66,8 +67,9 @@ from aiauv_pin.simulation.step_stability import warn_if_oscillating
 CASES = ("uniform", "stabilised")
 #: Controllers a scenario can name: the paper's path following (turning with the body), none
 #: (passive run), the thruster-turning baseline (:mod:`aiauv_pin.controllers.turning_controller`),
-#: or a serpentine gait (:mod:`aiauv_pin.controllers.gait_controller`).
-CONTROLLERS = ("paper", "none", "thruster_turning", "gait")
+#: a serpentine gait (:mod:`aiauv_pin.controllers.gait_controller`), station keeping or velocity
+#: control (:mod:`aiauv_pin.wholebody`).
+CONTROLLERS = ("paper", "none", "thruster_turning", "gait", "station", "velocity")
 
 
 @dataclass(frozen=True)
@@ -106,6 +108,8 @@ class Scenario:
             :mod:`aiauv_pin.dynamics.lagged_added_mass`; runs the Python controller, not the compiled loop).
         lagged_filter: The lagged scheme's filter coefficient in ``(0, 1]`` (0.3: UUV Simulator,
             1: gz-sim).
+        wholebody: The ``[station]`` or ``[velocity]`` table of ``controller = "station"`` or
+            ``"velocity"`` (:func:`aiauv_pin.wholebody.station_options.controller_from_options`).
     """
 
     case: str = "uniform"
@@ -127,6 +131,7 @@ class Scenario:
     added_mass: str = "exact"
     lagged_filter: float = UUV_SIMULATOR_FILTER
     gait: Gait | None = None
+    wholebody: Mapping[str, Any] | None = None
 
     def __post_init__(self) -> None:
         check_scheme(self.added_mass)
@@ -314,7 +319,9 @@ def followed_path(scenario: Scenario) -> Path | None:
     """The path a run of ``scenario`` follows: its path in force with a path-following controller
     (``"paper"``, ``"thruster_turning"``), ``None`` for a passive run (``controller = "none"``),
     which follows nothing and so has no path errors."""
-    return None if scenario.controller == "none" else scenario.path_to_follow
+    if scenario.controller in ("none", "station", "velocity"):
+        return None
+    return scenario.path_to_follow
 
 
 #: Position unit of each one-degree-of-freedom joint type of Pinocchio that moves along an axis
@@ -408,6 +415,15 @@ def run_scenario(
             vehicle, scenario.gait, scenario.controller_gains, path=scenario.path_to_follow
         )
         law, servo, use_compiled = gait.compiled(), gait.joint_servo, True
+    elif scenario.controller in ("station", "velocity") and controller is None:
+        from aiauv_pin.wholebody.station_options import controller_from_options
+
+        if compiled:
+            raise ValueError(f"{scenario.controller} runs as a Python controller")
+        controller = controller_from_options(
+            vehicle, scenario.controller, scenario.wholebody or {}, scenario.water, q0
+        )
+        law, servo, use_compiled = controller, controller.joint_servo, False
     elif scenario.controller == "thruster_turning" and controller is None:
         from aiauv_pin.controllers.turning_controller import VehicleThrusterTurning
 

@@ -182,8 +182,8 @@ class ControllerTable(BaseModel):
     type: key(
         Literal[CONTROLLERS],
         "-",
-        "paper (path following), none (passive: thrusters and joints idle), thruster_turning or "
-        "gait (serpentine swimming, [gait])",
+        "paper (path following), none (passive: thrusters and joints idle), thruster_turning, "
+        "gait (serpentine swimming, [gait]), station ([station]) or velocity ([velocity])",
         "paper",
     )
     u_d: gain(MAX_SPEED, "m/s", f"desired surge speed (eq. 21, 25); default {_GAINS.u_d:g}")
@@ -272,6 +272,43 @@ class GaitTable(BaseModel):
     depth_ki: gain(1.0e5, "N/(m s)", "depth PI of the vertical thrusters: integral", zero=True)
 
 
+AxisName = Literal["surge", "sway", "heave", "roll", "pitch", "yaw"]
+FrameName = Annotated[str, Field(min_length=1, max_length=200)]
+
+
+class StationTable(BaseModel):
+    """``[station]``: station keeping of ``controller.type = "station"``
+    (:class:`aiauv_pin.wholebody.station_controller.StationKeeping`)."""
+
+    model_config = strict_config("station")
+    frame: key(FrameName, "-", "frame held: a link or frame name (default: the base)")
+    position: key(Position, "m", "target position of the frame, world axes (default: its start)")
+    rpy: key(vector(-math.pi, math.pi), "rad", "target roll, pitch, yaw (zyx; default: its start)")
+    omega: key(number(0.0, 100.0, low_open=True), "rad/s", "natural frequency of every axis")
+    zeta: key(number(0.0, 10.0, low_open=True), "-", "damping ratio of every axis")
+    integral_pole: key(number(0.0, 100.0), "1/s", "integral root -a (default omega / 4)")
+    axes: key(list[AxisName], "-", "axes held (default all six); the others are left free")
+    known_current: key(bool, "-", "the model is told of the scenario's current (default true)")
+
+
+class VelocityTable(BaseModel):
+    """``[velocity]``: velocity control of ``controller.type = "velocity"``
+    (:class:`aiauv_pin.wholebody.velocity_controller.VelocityControl`)."""
+
+    model_config = strict_config("velocity")
+    frame: key(FrameName, "-", "frame controlled: a link or frame name (default: the base)")
+    twist: key(
+        vector(-MAX_SPEED, MAX_SPEED, 6),
+        "m/s, rad/s",
+        "commanded (u, v, w, p, q, r), frame axes",
+        ...,
+    )
+    bandwidth: key(number(0.0, 100.0, low_open=True), "rad/s", "velocity-loop root -bandwidth")
+    integral_pole: key(number(0.0, 100.0), "1/s", "integral root -a (default bandwidth / 4)")
+    axes: key(list[AxisName], "-", "axes controlled (default all six); the others are left free")
+    known_current: key(bool, "-", "the model is told of the scenario's current (default true)")
+
+
 class OutputTable(BaseModel):
     """``[output]``: what a run writes."""
 
@@ -325,4 +362,6 @@ class ScenarioFile(BaseModel):
     )
     controller: key(ControllerTable, "-", "the controller and its gains")
     gait: key(GaitTable, "-", "the serpentine gait (controller.type = gait)")
+    station: key(StationTable, "-", "station keeping (controller.type = station)")
+    velocity: key(VelocityTable, "-", "velocity control (controller.type = velocity)")
     output: key(OutputTable, "-", "outputs")

@@ -151,7 +151,7 @@ def _schema() -> dict[str, Parameter]:
         annotation = _plain(info.annotation)
         if isinstance(annotation, type) and issubclass(annotation, BaseModel):
             for field in annotation.model_fields:
-                sweepable = name != "output"
+                sweepable = name not in ("output", "station", "velocity")
                 out.append(_parameter(f"{name}.{field}", annotation, field, sweepable=sweepable))
             continue
         sweepable = name not in ("added_mass", "lagged_filter")
@@ -171,6 +171,8 @@ TABLES: dict[str, tuple[str, ...] | None] = {
     "current": None,
     "controller": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("controller.")),
     "gait": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("gait.")),
+    "station": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("station.")),
+    "velocity": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("velocity.")),
     "output": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("output.")),
 }
 

@@ -157,6 +157,11 @@ def scenario_from_mapping(table: Mapping[str, Any], base_dir: str | Path = ".") 
             options["gait"] = Gait(**_plain(checked.gait))
         except ValueError as exc:
             raise ScenarioFileError(" ".join(str(exc).split())) from None
+    for name in ("station", "velocity"):
+        if getattr(checked, name) is not None:
+            if options["controller"] != name:
+                raise ScenarioFileError(f"{name}: given, but controller.type is not {name!r}")
+            options["wholebody"] = _plain(getattr(checked, name))
     output = given(checked.output)
     if "csv_period" in output:
         options["csv_period"] = output["csv_period"]

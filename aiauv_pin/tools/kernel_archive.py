@@ -43,6 +43,17 @@ WORKLOADS = (
     ("simulate", "--duration", "1", "--no-html", "--controller", "none"),
     ("simulate", "--duration", "1", "--no-html", "--controller", "thruster_turning"),
     ("simulate", "--duration", "1", "--no-html", "--controller", "gait"),
+    # station keeping: a Python controller on the compiled allocator (aiauv_control.allocation)
+    (
+        "simulate",
+        "--duration",
+        "1",
+        "--no-html",
+        "--controller",
+        "station",
+        "--vehicle",
+        str(Path(__file__).resolve().parents[2] / "examples" / "vehicles" / "rov8.urdf"),
+    ),
     ("rollout",),
     ("envs",),
 )
