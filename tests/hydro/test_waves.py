@@ -25,8 +25,14 @@ import pytest
 
 from aiauv_hydro.currents import WAVES, Current, builtin_current, current_from_mapping
 from aiauv_hydro.spec import HydroError
-from aiauv_hydro.waves import Waves, wave_acceleration, wave_elevation, wave_velocity, wavenumber
-from aiauv_hydro.waves import spectra
+from aiauv_hydro.waves import (
+    Waves,
+    spectra,
+    wave_acceleration,
+    wave_elevation,
+    wave_velocity,
+    wavenumber,
+)
 from aiauv_hydro.waves.kinematics import elevation_series
 
 G = 9.81
