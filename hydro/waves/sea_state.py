@@ -13,7 +13,8 @@ Rules (each a one-line :class:`aiauv_hydro.spec.HydroError` naming the key):
 * an irregular sea with ``T_p < 3.6 sqrt(H_s)`` (below the validity of the spectra, DNV-RP-C205
   sec. 3.5.5; :data:`aiauv_hydro.waves.spectra.MIN_PERIOD_RATIO`), or a peak enhancement outside
   ``[1, 7]``;
-* a point below the sea floor (:meth:`Waves.check_point`: the scenario checks the start).
+* a point below the sea floor or above the still-water level (:meth:`Waves.check_point`: the
+  scenario checks the start).
 """
 
 from __future__ import annotations
@@ -61,6 +62,15 @@ def _number(value, name: str, *, low: float = -math.inf, low_open: bool = False)
         bound = f"{'>' if low_open else '>='} {low:g}" if low > -math.inf else "a number"
         raise HydroError(f"waves.{name}: expected {bound}, got {value!r}")
     return number
+
+
+def _whole(value, name: str) -> int:
+    """A whole number (an integral float, as sweeps and TOML numbers give, is taken)."""
+    if isinstance(value, float) and value.is_integer():
+        return int(value)
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise HydroError(f"waves.{name}: expected a whole number, got {value!r:.40}")
+    return int(value)
 
 
 @dataclass(frozen=True)
@@ -149,15 +159,14 @@ class Waves:
         )
 
     def _irregular(self, height, period, depth, gravity):
-        count = self.components
-        if isinstance(count, bool) or not isinstance(count, (int, np.integer)):
-            raise HydroError(f"waves.components: expected a whole number, got {count!r:.40}")
+        count = _whole(self.components, "components")
         if not 1 <= count <= MAX_COMPONENTS:
             raise HydroError(f"waves.components: expected 1 to {MAX_COMPONENTS}, got {count}")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)):
-            raise HydroError(f"waves.seed: expected a whole number, got {self.seed!r:.40}")
-        if self.seed < 0:
-            raise HydroError(f"waves.seed: expected a number >= 0, got {self.seed}")
+        seed = _whole(self.seed, "seed")
+        if seed < 0:
+            raise HydroError(f"waves.seed: expected a number >= 0, got {seed}")
+        object.__setattr__(self, "components", count)
+        object.__setattr__(self, "seed", seed)
         if height > 0.0 and period < spectra.MIN_PERIOD_RATIO * math.sqrt(height):
             raise HydroError(
                 f"waves.period: T_p = {period:g} s is below the spectra's validity, "
@@ -181,7 +190,7 @@ class Waves:
         if not math.isfinite(exponent) or exponent > 100.0:
             raise HydroError(f"waves.spreading_exponent: expected (0, 100], got {exponent!r}")
         amplitudes, omegas, offsets, phases = spectra.discretise(
-            height, period, gamma, count, self.seed, self.spreading, exponent
+            height, period, gamma, count, seed, self.spreading, exponent
         )
         return (
             amplitudes,
@@ -222,7 +231,13 @@ class Waves:
         return out
 
     def check_point(self, z: float, name: str = "the point") -> None:
-        """Refuse a point below the sea floor (one line)."""
+        """Refuse a point below the sea floor or above the still-water level (one line; the
+        vehicle's hydrostatics assume it submerged)."""
+        if z > self.surface_z:
+            raise HydroError(
+                f"waves.surface_z: {name} (z = {z:g} m) is above the still-water level "
+                f"(z = {self.surface_z:g} m)"
+            )
         if z < self.floor_z:
             raise HydroError(
                 f"waves.depth: the sea floor (z = {self.floor_z:g} m) is above {name} (z = {z:g} m)"

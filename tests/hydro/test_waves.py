@@ -209,3 +209,8 @@ def test_point_below_the_floor_and_unknown_key():
         sea.check_point(-26.0, "the start")
     with pytest.raises(HydroError, match=r"^waves: unknown key 'amplitude'$"):
         Waves.from_mapping({"amplitude": 1.0})
+
+
+def test_point_above_the_surface():
+    with pytest.raises(HydroError, match=r"^waves\.surface_z: the start \(z = 2 m\) is above"):
+        Waves().check_point(2.0, "the start")
