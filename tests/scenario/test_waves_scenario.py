@@ -45,7 +45,7 @@ def test_waves_add_to_a_constant_current():
     scenario = scenario_from_mapping(table)
     sea = Waves(height=1.0, period=6.0, heading=0.5, depth=40.0)
     assert scenario.waves == sea
-    expected = np.array(wave_velocity(2.0, 1.0, 1.0, -3.0, sea.parameters())) + [0.1, 0.2, 0.0]
+    expected = np.add(wave_velocity(2.0, 1.0, 1.0, -3.0, sea.parameters()), (0.1, 0.2, 0.0))
     np.testing.assert_allclose(scenario.water.velocity(2.0, (1.0, 1.0, -3.0)), expected, atol=1e-15)
     # the Python API: the same water
     api = Scenario(start_position=(0.0, 0.0, -3.0), current=(0.1, 0.2, 0.0), waves=sea)
