@@ -57,7 +57,9 @@ def figures(result, scenario) -> dict:
     last60 = t >= t[-1] - 60.0
     water = scenario.water
     p = info["p"]
-    speeds = [np.linalg.norm(water.velocity(ti, pi)) for ti, pi in zip(t[::25], p[::25])]
+    speeds = [
+        np.linalg.norm(water.velocity(ti, pi)) for ti, pi in zip(t[::25], p[::25], strict=True)
+    ]
     return {
         "status": tr.status,
         "mean_cross_track_last_60s": float(distance[last60].mean()),
