@@ -282,7 +282,7 @@ class WavesTable(BaseModel):
     type: key(
         Literal[SEA_KINDS],
         "-",
-        "regular (Airy), jonswap or pierson_moskowitz (irregular)",
+        "regular (Airy), fenton (stream function, raschii), jonswap or pierson_moskowitz",
         "regular",
     )
     height: key(
@@ -310,6 +310,7 @@ class WavesTable(BaseModel):
         number(1.0, MAX_COMPONENTS), "-", "number of components of an irregular sea (default 100)"
     )
     seed: key(number(0.0, 2.0**53), "-", "seed of the phases and directions (default 0)")
+    order: key(number(1.0, 50.0), "-", "Fourier harmonics of a fenton wave (default 10)")
 
 
 class OutputTable(BaseModel):

@@ -3,20 +3,22 @@
 A sea is a sum of regular components (one for a regular wave), each read from one flat float64
 parameter array (:data:`HEADER` numbers, then :data:`STRIDE` per component):
 
-``(V_x, V_y, V_z, surface_z, depth, N, [a_i, omega_i, k_i, cos beta_i, sin beta_i, eps_i] * N)``
+``(V_x, V_y, V_z, surface_z, depth, N, [a_i, omega_i, k_i, cos beta_i, sin beta_i, eps_i, e_i] * N)``
 
 with ``V`` [m/s] a uniform current added to the wave velocity (world axes), ``surface_z`` [m] the
 world ``z`` of the still-water level (world z up, docs/source/conventions.md), ``depth`` ``h``
 [m] the water depth (sea floor at ``surface_z - h``; a negative number: deep water), ``N`` the
 number of components, and per component the amplitude ``a`` [m], angular frequency ``omega``
 [rad/s], wavenumber ``k`` [rad/m] (from :func:`aiauv_hydro.waves.dispersion.wavenumber`), the
-direction ``beta`` the waves travel to (from the world x-axis about z) and the phase ``eps``
-[rad].
+direction ``beta`` the waves travel to (from the world x-axis about z), the phase ``eps``
+[rad] and the elevation amplitude ``e`` [m] (``e = a`` for a linear component; the harmonics of a
+nonlinear stream-function wave have kinematics and elevation of the same form with different
+amplitudes, :mod:`aiauv_hydro.waves.sea_state`).
 
 Per component, with ``theta = k (x cos beta + y sin beta) - omega t + eps`` and
 ``zeta = z - surface_z`` (DNV-RP-C205 (2010) Table 3-1; Faltinsen 1990, ch. 2, Table 2.1):
 
-* elevation ``eta = a cos(theta)``;
+* elevation ``eta = e cos(theta)`` (``e = a``);
 * horizontal velocity ``u = a omega F_c(zeta) cos(theta)`` along ``(cos beta, sin beta)``,
   vertical ``w = a omega F_s(zeta) sin(theta)``;
 * local acceleration ``du/dt = a omega^2 F_c(zeta) sin(theta)`` (horizontal), ``dw/dt =
@@ -46,7 +48,7 @@ import math
 from aiauv_hydro.numerics.jit import compiled
 
 #: Numbers before the first component, and per component, in the parameter array.
-HEADER, STRIDE = 6, 6
+HEADER, STRIDE = 6, 7
 #: Indices of the header.
 CURRENT_X, CURRENT_Y, CURRENT_Z, SURFACE_Z, DEPTH, COUNT = range(HEADER)
 
@@ -74,9 +76,9 @@ def wave_elevation(t, x, y, parameters):
     eta = 0.0
     for i in range(int(parameters[COUNT])):
         j = HEADER + STRIDE * i
-        a, omega, k = parameters[j], parameters[j + 1], parameters[j + 2]
+        omega, k = parameters[j + 1], parameters[j + 2]
         theta = k * (x * parameters[j + 3] + y * parameters[j + 4]) - omega * t + parameters[j + 5]
-        eta += a * math.cos(theta)
+        eta += parameters[j + 6] * math.cos(theta)
     return eta
 
 

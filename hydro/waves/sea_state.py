@@ -29,8 +29,9 @@ from aiauv_hydro.spec import HydroError
 from aiauv_hydro.waves import kinematics, spectra
 from aiauv_hydro.waves.dispersion import wavenumber
 
-#: Kinds of sea: a regular (Airy) wave, or an irregular sea of one of two spectra.
-KINDS = ("regular", "jonswap", "pierson_moskowitz")
+#: Kinds of sea: a regular (Airy) wave, a regular stream-function wave (raschii's Fenton wave,
+#: optional), or an irregular sea of one of two spectra.
+KINDS = ("regular", "fenton", "jonswap", "pierson_moskowitz")
 #: Directional spreading of an irregular sea (``none``: long-crested).
 SPREADINGS = ("none", "cos_n", "cos_2s")
 #: Steepest regular wave, ``H / L = MICHE tanh(k h)`` (Miche 1944; 1/7 in deep water).
@@ -51,7 +52,10 @@ WAVES_KEYS = (
     "spreading_exponent",
     "components",
     "seed",
+    "order",
 )
+#: Largest order (number of Fourier harmonics) of a stream-function wave.
+MAX_ORDER = 50
 
 
 def _number(value, name: str, *, low: float = -math.inf, low_open: bool = False) -> float:
@@ -62,6 +66,17 @@ def _number(value, name: str, *, low: float = -math.inf, low_open: bool = False)
         bound = f"{'>' if low_open else '>='} {low:g}" if low > -math.inf else "a number"
         raise HydroError(f"waves.{name}: expected {bound}, got {value!r}")
     return number
+
+
+def _check_breaking(height: float, k: float, depth: float) -> None:
+    """Refuse a regular wave steeper than Miche's limit ``H / L = 0.142 tanh(k h)``."""
+    length = 2.0 * math.pi / k
+    limit = MICHE * (math.tanh(k * depth) if math.isfinite(depth) else 1.0)
+    if height / length > limit:
+        raise HydroError(
+            f"waves.height: H / L = {height:g} / {length:.4g} m = {height / length:.3f} "
+            f"exceeds the breaking limit {limit:.3f} (Miche: 0.142 tanh(k h); 1/7 deep)"
+        )
 
 
 def _whole(value, name: str) -> int:
@@ -93,6 +108,7 @@ class Waves:
         spreading_exponent: ``n`` of ``cos_n`` or ``s`` of ``cos_2s`` [-].
         components: Number ``N`` of components of an irregular sea.
         seed: Seed of the phases (and directions) of an irregular sea.
+        order: Number ``N`` of Fourier harmonics of a ``"fenton"`` wave.
         gravity: ``g`` [m/s^2] of the dispersion relation.
     """
 
@@ -108,8 +124,9 @@ class Waves:
     spreading_exponent: float = 2.0
     components: int = 100
     seed: int = 0
+    order: int = 10
     gravity: float = 9.81
-    #: ``(a, omega, k, beta, eps)`` per component, each ``(N,)`` (built from the fields).
+    #: ``(a, omega, k, beta, eps, e)`` per component, each ``(N,)`` (built from the fields).
     table: tuple = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -132,9 +149,10 @@ class Waves:
         gravity = _number(self.gravity, "gravity", low=0.0, low_open=True)
         if not math.isfinite(height) or not math.isfinite(period) or not math.isfinite(gravity):
             raise HydroError("waves: height, period and gravity must be finite")
-        regular = self.type == "regular"
-        if regular:
+        if self.type == "regular":
             table = self._regular(height, period, depth, gravity)
+        elif self.type == "fenton":
+            table = self._fenton(height, period, depth, gravity)
         else:
             table = self._irregular(height, period, depth, gravity)
         object.__setattr__(self, "table", table)
@@ -142,13 +160,7 @@ class Waves:
     def _regular(self, height, period, depth, gravity):
         omega = 2.0 * math.pi / period
         k = float(wavenumber(omega, depth, gravity))
-        length = 2.0 * math.pi / k
-        limit = MICHE * (math.tanh(k * depth) if math.isfinite(depth) else 1.0)
-        if height / length > limit:
-            raise HydroError(
-                f"waves.height: H / L = {height:g} / {length:.4g} m = {height / length:.3f} "
-                f"exceeds the breaking limit {limit:.3f} (Miche: 0.142 tanh(k h); 1/7 deep)"
-            )
+        _check_breaking(height, k, depth)
         one = np.ones(1)
         return (
             0.5 * height * one,
@@ -156,6 +168,52 @@ class Waves:
             k * one,
             self.heading * one,
             self.phase * one,
+            0.5 * height * one,
+        )
+
+    def _fenton(self, height, period, depth, gravity):
+        """raschii's stream-function wave (Rienecker and Fenton 1981) as ``N`` harmonics.
+
+        raschii's velocity in the earth frame (``raschii/wave_fenton.py``, ``_velocity``) is
+        ``u = k sum_J J B_J cos(J k (x - c t)) cosh(J k z') / cosh(J k h)``,
+        ``w = k sum_J J B_J sin(J k (x - c t)) sinh(J k z') / cosh(J k h)`` with ``z'`` from the
+        sea floor and no mean current: harmonic ``J`` is a linear component of wavenumber
+        ``J k``, frequency ``J omega`` and amplitude ``a_J = k B_J tanh(J k h) / omega``. Its
+        elevation (``_surface_elevation``) is the cosine series ``2 / N trapz_J(E_J cos(J k (x -
+        c t)))`` above the floor: ``e_J = 2 E_J / N`` (half at ``J = N``), the constant term being
+        the still-water depth (Fenton's mean level).
+        """
+        if math.isinf(depth):
+            raise HydroError("waves.depth: a fenton wave needs a finite depth")
+        order = _whole(self.order, "order")
+        if not 1 <= order <= MAX_ORDER:
+            raise HydroError(f"waves.order: expected 1 to {MAX_ORDER}, got {order}")
+        object.__setattr__(self, "order", order)
+        _check_breaking(height, float(wavenumber(2.0 * math.pi / period, depth, gravity)), depth)
+        try:
+            import raschii
+        except ImportError:
+            raise HydroError(
+                "waves.type: a fenton wave needs the optional package raschii "
+                "(pip install 'aiauv-pin[waves]')"
+            ) from None
+        try:
+            wave = raschii.FentonWave(height, depth, period=period, N=order, g=gravity)
+        except (raschii.RaschiiError, ValueError, FloatingPointError) as exc:
+            reason = " ".join(str(exc).split())
+            raise HydroError(f"waves: raschii found no fenton wave ({reason:.120})") from None
+        k, omega = float(wave.k), float(wave.omega)
+        harmonics = np.arange(1, order + 1)
+        b = np.asarray(wave.data["B"], dtype=float)[1:]
+        elevation = 2.0 * np.asarray(wave.E, dtype=float)[1:] / order
+        elevation[-1] *= 0.5
+        return (
+            k * b * np.tanh(harmonics * k * depth) / omega,
+            harmonics * omega,
+            harmonics * k,
+            np.full(order, float(self.heading)),
+            harmonics * self.phase,
+            elevation,
         )
 
     def _irregular(self, height, period, depth, gravity):
@@ -198,6 +256,7 @@ class Waves:
             wavenumber(omegas, depth, gravity),
             self.heading + offsets,
             phases,
+            amplitudes,
         )
 
     @property
@@ -212,13 +271,13 @@ class Waves:
 
     @property
     def variance(self) -> float:
-        """Variance of the elevation, ``sum a_i^2 / 2`` [m^2] (``H_s^2 / 16`` of a sea)."""
-        return float(np.sum(self.table[0] ** 2) / 2.0)
+        """Variance of the elevation, ``sum e_i^2 / 2`` [m^2] (``H_s^2 / 16`` of a sea)."""
+        return float(np.sum(self.table[5] ** 2) / 2.0)
 
     def parameters(self, velocity=(0.0, 0.0, 0.0)) -> np.ndarray:
         """The flat parameter array of :mod:`aiauv_hydro.waves.kinematics`, with a uniform
         current ``velocity`` (3,) [m/s] added."""
-        a, omega, k, beta, eps = self.table
+        a, omega, k, beta, eps, e = self.table
         count = a.shape[0]
         out = np.empty(kinematics.HEADER + kinematics.STRIDE * count)
         out[:3] = velocity
@@ -227,7 +286,7 @@ class Waves:
         out[kinematics.COUNT] = count
         rows = out[kinematics.HEADER :].reshape(count, kinematics.STRIDE)
         rows[:, 0], rows[:, 1], rows[:, 2] = a, omega, k
-        rows[:, 3], rows[:, 4], rows[:, 5] = np.cos(beta), np.sin(beta), eps
+        rows[:, 3], rows[:, 4], rows[:, 5], rows[:, 6] = np.cos(beta), np.sin(beta), eps, e
         return out
 
     def check_point(self, z: float, name: str = "the point") -> None:
@@ -250,8 +309,10 @@ class Waves:
         if not self.deep:
             out["depth"] = float(self.depth)
         out["surface_z"] = float(self.surface_z)
-        if self.type == "regular":
+        if self.type in ("regular", "fenton"):
             out["phase"] = float(self.phase)
+            if self.type == "fenton":
+                out["order"] = int(self.order)
             return out
         if self.type == "jonswap" and self.peak_enhancement is not None:
             out["peak_enhancement"] = float(self.peak_enhancement)

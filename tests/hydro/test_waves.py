@@ -13,7 +13,10 @@ Tolerances, stated before running:
 * a 3 h record of 200 components: sample variance within 5 % of ``H_s^2 / 16`` (cross terms
   between components average out as ``1 / (d omega T)``), mean within 0.02 ``H_s``;
 * acceleration = central difference of the velocity (step 1e-4 s) to 1e-6 of ``a omega^2``; the
-  surface rises with the water, ``d eta / dt = w(z = 0)``, to the same tolerance.
+  surface rises with the water, ``d eta / dt = w(z = 0)``, to the same tolerance;
+* a stream-function (``fenton``) wave: velocity, acceleration and elevation equal to raschii's own
+  (``FentonWave.velocity``, ``acceleration``, ``surface_elevation``) to 1e-12 relative to the
+  largest value (same series, summed in another order).
 """
 
 from __future__ import annotations
@@ -175,7 +178,7 @@ def test_waves_current_dispatch_and_description():
     np.testing.assert_allclose(expected - still, [0.1, 0.0, 0.0], atol=1e-15)
     assert water.describe()["waves"] == sea.describe()
     assert Waves.from_mapping(sea.describe()) == sea
-    with pytest.raises(HydroError, match="reads 12 parameters, got 13"):
+    with pytest.raises(HydroError, match="reads 13 parameters, got 14"):
         Current(wave_velocity, np.append(water.parameters, 0.0), "waves")
     with pytest.raises(HydroError, match="unknown current type 'waves'"):
         current_from_mapping({"type": "waves"})  # waves have their own table, [waves]
@@ -214,3 +217,33 @@ def test_point_below_the_floor_and_unknown_key():
 def test_point_above_the_surface():
     with pytest.raises(HydroError, match=r"^waves\.surface_z: the start \(z = 2 m\) is above"):
         Waves().check_point(2.0, "the start")
+
+
+def test_fenton_wave_is_raschii_s():
+    raschii = pytest.importorskip("raschii")
+    height, period, depth = 2.0, 7.0, 10.0
+    sea = Waves(type="fenton", height=height, period=period, depth=depth, order=12)
+    wave = raschii.FentonWave(height, depth, period=period, N=12)
+    p = sea.parameters()
+    scale = float(np.max(np.abs(wave.velocity(np.linspace(0, wave.length, 50), depth))))
+    for x, zeta, t in ((0.0, 0.0, 0.0), (3.0, -2.0, 1.1), (-7.0, -9.0, 2.5), (20.0, -4.0, 5.0)):
+        at = (np.array([x]), np.array([zeta + depth]), t)  # raschii: z from the floor, +x
+        ours = np.array(wave_velocity(t, x, 0.0, zeta, p))[[0, 2]]
+        np.testing.assert_allclose(ours, np.ravel(wave.velocity(*at)), atol=1e-12 * scale)
+        ours = np.array(wave_acceleration(t, x, 0.0, zeta, p))[[0, 2]]
+        reference = np.ravel(wave.acceleration(*at))
+        np.testing.assert_allclose(ours, reference, atol=1e-12 * scale * sea.table[1][0])
+        eta = wave_elevation(t, x, 0.0, p)
+        assert eta == pytest.approx(wave.surface_elevation(np.array([x]), t)[0] - depth, abs=1e-12)
+    assert sea.describe() == {
+        "type": "fenton",
+        "height": 2.0,
+        "period": 7.0,
+        "heading": 0.0,
+        "depth": 10.0,
+        "surface_z": 0.0,
+        "phase": 0.0,
+        "order": 12,
+    }
+    with pytest.raises(HydroError, match=r"^waves\.depth: a fenton wave needs a finite depth$"):
+        Waves(type="fenton")

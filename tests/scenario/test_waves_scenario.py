@@ -113,3 +113,15 @@ def test_wave_parameters_round_trip_and_sweep(tmp_path):
             point.parameters["waves.period"],
         )
         assert sea.surface_z == 5.0
+
+
+def test_a_fenton_wave_from_a_file():
+    pytest.importorskip("raschii")
+    table = {
+        "start": {"position": [0.0, 0.0, -5.0]},
+        "waves": {"type": "fenton", "height": 2.0, "period": 8.0, "depth": 15.0, "order": 8},
+    }
+    scenario = scenario_from_mapping(table)
+    assert scenario.waves.order == 8 and scenario.water.parameters.size == 6 + 7 * 8
+    rebuilt = scenario_from_parameters(scenario_parameters(scenario))
+    assert rebuilt.waves == scenario.waves
