@@ -90,10 +90,11 @@ def _whole(value, name: str) -> int:
 
 @dataclass(frozen=True)
 class Waves:
-    """A regular wave or an irregular sea (linear theory).
+    """A regular wave (linear or stream-function) or an irregular sea (linear).
 
     Attributes:
-        type: ``"regular"`` (Airy), ``"jonswap"`` or ``"pierson_moskowitz"``.
+        type: ``"regular"`` (Airy), ``"fenton"`` (stream function, raschii), ``"jonswap"`` or
+            ``"pierson_moskowitz"``.
         height: Wave height ``H`` (crest to trough, regular) or significant height ``H_s``
             (irregular) [m].
         period: Period ``T`` (regular) or peak period ``T_p`` (irregular) [s].
