@@ -15,7 +15,11 @@ Built in (:class:`Current` builds them and checks their parameters):
 * :func:`tidal_current` - uniform, ``V(t) = V_0 + A sin(2 pi t / T + phi)`` (a tide or a slow
   oscillation; a real tide has ``T`` near 12.42 h);
 * :func:`shear_current` - steady, varying linearly with depth, ``V(z) = V_0 + G (z - z_0)`` (a
-  boundary-layer or wind-driven profile near a reference depth).
+  boundary-layer or wind-driven profile near a reference depth);
+* :func:`aiauv_hydro.waves.kinematics.wave_velocity` (kind ``"waves"``) - the orbital velocity of
+  linear waves, regular or irregular (:class:`aiauv_hydro.waves.sea_state.Waves`), plus a uniform
+  current; its local acceleration is
+  :func:`aiauv_hydro.waves.kinematics.wave_acceleration` (same parameters).
 
 A varying current is applied quasi-steadily (see :mod:`aiauv_pin.kernels.articulated_body`): the
 forces use the
@@ -33,6 +37,9 @@ import numpy as np
 from aiauv_hydro.numerics.function_identity import stable_uuid
 from aiauv_hydro.numerics.jit import compiled, user_or_builtin
 from aiauv_hydro.spec import HydroError
+from aiauv_hydro.waves import kinematics as wave_kinematics
+from aiauv_hydro.waves.kinematics import wave_acceleration, wave_velocity
+from aiauv_hydro.waves.sea_state import Waves
 
 
 @compiled
@@ -64,22 +71,29 @@ def shear_current(t, x, y, z, parameters):
 
 
 #: ``kind`` numbers of the built-in currents (a user's own function has none: ``-1``).
-CONSTANT, TIDAL, SHEAR = 0, 1, 2
+CONSTANT, TIDAL, SHEAR, WAVES = 0, 1, 2, 3
 #: ``kind -> (function, number of parameters it reads)`` of the built-in currents.
 BUILTIN_CURRENTS = {
     "constant": (constant_current, 3),
     "tidal": (tidal_current, 8),
     "shear": (shear_current, 7),
+    "waves": (wave_velocity, wave_kinematics.HEADER),
 }
+#: The local acceleration ``dV/dt`` [m/s^2] of the ``"waves"`` current (same parameters), for the
+#: acceleration dispatcher of the currents (``builtin_current_acceleration``, kind :data:`WAVES`).
+WAVES_ACCELERATION = wave_acceleration
 
 
 @compiled
 def builtin_current(kind, t, x, y, z, parameters):
-    """The built-in current number ``kind`` (:data:`CONSTANT`, :data:`TIDAL`, :data:`SHEAR`)."""
+    """The built-in current number ``kind`` (:data:`CONSTANT`, :data:`TIDAL`, :data:`SHEAR`,
+    :data:`WAVES`)."""
     if kind == TIDAL:
         return tidal_current(t, x, y, z, parameters)
     if kind == SHEAR:
         return shear_current(t, x, y, z, parameters)
+    if kind == WAVES:
+        return wave_velocity(t, x, y, z, parameters)
     return constant_current(t, x, y, z, parameters)
 
 
@@ -181,6 +195,14 @@ class Current:
             raise HydroError("current.parameters: expected finite numbers, got NaN or infinity")
         if self.function is tidal_current and not parameters[6] > 0.0:
             raise HydroError(f"current.period: expected a positive number, got {parameters[6]!r}")
+        if self.function is wave_velocity:
+            count = parameters[wave_kinematics.COUNT]
+            size = wave_kinematics.HEADER + wave_kinematics.STRIDE * count
+            if not (count >= 0 and count == int(count) and parameters.size == size):
+                raise HydroError(
+                    f"current.parameters: a waves current of {count:g} components reads "
+                    f"{size:g} parameters, got {parameters.size}"
+                )
 
     @classmethod
     def constant(cls, velocity) -> Current:
@@ -220,10 +242,22 @@ class Current:
         }
         return cls(shear_current, parameters, "shear", description)
 
+    @classmethod
+    def waves(cls, sea: Waves, velocity=(0.0, 0.0, 0.0)) -> Current:
+        """The water of the sea ``sea`` (:class:`aiauv_hydro.waves.sea_state.Waves`) on a uniform
+        current ``velocity`` (3,) [m/s]: the two velocities add (linear superposition, no
+        wave-current interaction)."""
+        if not isinstance(sea, Waves):
+            raise HydroError(f"current.waves: expected a Waves, got {type(sea).__name__:.40}")
+        velocity = _vector3(velocity, "current.velocity")
+        description = {"type": "waves", "velocity": velocity.tolist(), "waves": sea.describe()}
+        return cls(wave_velocity, sea.parameters(velocity), "waves", description)
+
     @property
     def kind_code(self) -> int:
         """``kind`` of :func:`builtin_current` (-1 for a user's function)."""
-        return {"constant": CONSTANT, "tidal": TIDAL, "shear": SHEAR}.get(self.kind, -1)
+        codes = {"constant": CONSTANT, "tidal": TIDAL, "shear": SHEAR, "waves": WAVES}
+        return codes.get(self.kind, -1)
 
     @property
     def user_function(self):

@@ -20,7 +20,7 @@ PACKAGES = {"hydro": "aiauv_hydro", "control": "aiauv_control", "aiauv_pin": "ai
 #: A floor is a package, a module, or a package's top-level modules ("<package>:top").
 FLOORS = [
     ["aiauv_hydro.numerics"],
-    ["aiauv_hydro:top"],  # spec, currents
+    ["aiauv_hydro:top", "aiauv_hydro.waves"],  # spec, currents; the waves currents import
     ["aiauv_hydro.laws", "aiauv_hydro.estimate"],
     ["aiauv_hydro.urdf"],
     ["aiauv_hydro"],  # the package's __init__ (its public names)

@@ -24,6 +24,7 @@ import aiauv_pin
 from aiauv_control.paths import LinePath
 from aiauv_hydro.currents import Current
 from aiauv_hydro.numerics.jit import _project_files, compiled_sources, source_hash
+from aiauv_hydro.waves import Waves
 from aiauv_pin.controllers.compiled_controller import CompiledController
 from aiauv_pin.kernels.disturbances import Disturbance
 from aiauv_pin.scenario.definition import Scenario, run_scenario
@@ -181,8 +182,20 @@ def test_passive_custom_vehicle_drifts_with_the_current(tmp_path):
     [
         Current.tidal([0.1, -0.05, 0.0], [0.2, 0.1, 0.05], period=7.0, phase=0.3),
         Current.shear([0.1, 0.0, 0.0], [0.05, -0.02, 0.0], reference_z=-1.0),
+        Current.waves(
+            Waves(
+                type="jonswap",
+                height=1.5,
+                period=8.0,
+                spreading="cos_2s",
+                components=20,
+                depth=30.0,
+                surface_z=3.0,
+            ),
+            velocity=(0.1, 0.0, 0.0),
+        ),
     ],
-    ids=["tidal", "shear"],
+    ids=["tidal", "shear", "waves"],
 )
 def test_varying_currents_agree_between_backends(current, rng):
     compiled = aiauv_pin.load_vehicle(backend="numba")

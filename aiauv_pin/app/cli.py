@@ -284,6 +284,7 @@ def _run_simulate(args) -> int:
                     result.trajectory,
                     staging / "playback.html",
                     path_points=default_path_points(result),
+                    sea=result.scenario.waves,
                 )
             )
         content = write_results(

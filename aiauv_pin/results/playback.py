@@ -15,6 +15,12 @@ camera).
 
 Frames are decimated to ``fps`` per simulated second and to at most ``max_frames`` (by default as
 many as fit a budget of about 16 MB of keyframes), so a 300 s run gives a file of about 7 MB.
+
+A run in waves (``sea``, :class:`aiauv_hydro.waves.sea_state.Waves`) also draws the sea surface
+(:func:`surface_commands`): :data:`SURFACE_STRIPS` translucent strips across the main wave
+direction over the region of the motion, each heaving with the elevation at its centre, sampled
+at :data:`SURFACE_FPS` (a long-crested picture: a short-crested sea's elevation varies along a
+strip too, which the strips do not show).
 """
 
 from __future__ import annotations
@@ -28,6 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
+from aiauv_hydro.waves.kinematics import elevation_series
+from aiauv_hydro.waves.sea_state import Waves
 from aiauv_pin._internal.atomic import atomic_path
 from aiauv_pin.model.vehicle import Vehicle
 from aiauv_pin.results.viewer import (
@@ -49,6 +57,14 @@ from aiauv_pin.results.viewer import (
     translation,
 )
 from aiauv_pin.simulation.fixed_step import Trajectory
+
+#: Node of the sea surface, strips across the main wave direction, and their frame rate [1/s].
+SURFACE = f"{ROOT}/surface"
+SURFACE_STRIPS = 48
+SURFACE_FPS = 5.0
+#: Margin of the drawn surface around the motion [m], its colour (r, g, b, opacity).
+SURFACE_MARGIN = 10.0
+SURFACE_COLOR = (0.15, 0.45, 0.85, 0.3)
 
 #: Default upper bound on the size of the keyframe data [bytes].
 KEYFRAME_BUDGET = 16_000_000
@@ -350,6 +366,77 @@ def _round(values: np.ndarray) -> list[float]:
     return rounded.tolist()
 
 
+def _strip_object(width: float, length: float) -> dict:
+    """A translucent box ``width`` (x) by ``length`` (y) by 2 cm, three.js ``Object`` JSON."""
+    r, g, b, a = SURFACE_COLOR
+    geometry = {"uuid": f"surface-{width:.4f}-{length:.4f}", "type": "BoxGeometry"}
+    geometry.update(width=width, height=length, depth=0.02)
+    material = {
+        "uuid": "surface-material",
+        "type": "MeshLambertMaterial",
+        "color": (int(r * 255) << 16) + (int(g * 255) << 8) + int(b * 255),
+        "opacity": a,
+        "transparent": True,
+        "depthWrite": False,
+    }
+    return {
+        "metadata": {"version": 4.5, "type": "Object"},
+        "geometries": [geometry],
+        "materials": [material],
+        "object": {
+            "uuid": f"surface-{width:.4f}-{length:.4f}-mesh",
+            "type": "Mesh",
+            "geometry": geometry["uuid"],
+            "material": material["uuid"],
+        },
+    }
+
+
+def surface_commands(
+    sea: Waves, low: np.ndarray, high: np.ndarray, t0: float, t1: float
+) -> tuple[list[dict], list[dict]]:
+    """The sea surface over the box ``[low, high]`` (world x, y) [m] from ``t0`` to ``t1`` [s]:
+    the ``set_object`` / ``set_transform`` commands of :data:`SURFACE_STRIPS` strips across the main
+    wave direction and their animations (position tracks at :data:`SURFACE_FPS`, times from
+    ``t0``), each strip at ``surface_z + eta(t, centre)``."""
+    heading = sea.heading
+    along = np.array([math.cos(heading), math.sin(heading)])
+    across = np.array([-along[1], along[0]])
+    corners = np.array([[x, y] for x in (low[0], high[0]) for y in (low[1], high[1])])
+    centre = 0.5 * (low[:2] + high[:2])
+    s = (corners - centre) @ along
+    r = (corners - centre) @ across
+    s0, s1 = s.min() - SURFACE_MARGIN, s.max() + SURFACE_MARGIN
+    r0, r1 = r.min() - SURFACE_MARGIN, r.max() + SURFACE_MARGIN
+    width = (s1 - s0) / SURFACE_STRIPS
+    mid_r = 0.5 * (r0 + r1)
+    times = np.arange(t0, t1 + 0.5 / SURFACE_FPS, 1.0 / SURFACE_FPS)
+    parameters = sea.parameters()
+    rotation = np.eye(4)
+    rotation[:2, :2] = [[along[0], across[0]], [along[1], across[1]]]
+    commands, animations = [], []
+    eta = np.empty_like(times)
+    strip = _strip_object(float(width), float(r1 - r0))
+    for i in range(SURFACE_STRIPS):
+        xy = centre + (s0 + (i + 0.5) * width) * along + mid_r * across
+        elevation_series(times, float(xy[0]), float(xy[1]), parameters, eta)
+        path = f"{SURFACE}/{i}"
+        positions = np.column_stack(
+            (np.full_like(times, xy[0]), np.full_like(times, xy[1]), sea.surface_z + eta)
+        )
+        matrix = rotation.copy()
+        matrix[:3, 3] = positions[0]
+        commands.extend((set_object(path, strip), set_transform(path, matrix)))
+        track = {
+            "name": ".position",
+            "type": "vector3",
+            "times": _round(times - t0),
+            "values": _round(positions),
+        }
+        animations.append({"path": path, "clip": {"fps": 1, "name": "default", "tracks": [track]}})
+    return commands, animations
+
+
 def _info_at(info: dict[str, np.ndarray], k: int) -> dict[str, np.ndarray]:
     return {key: value[k] for key, value in info.items() if key in FRAME_INFO}
 
@@ -362,6 +449,7 @@ def playback_commands(
     max_frames: int | None = None,
     urdf: str | os.PathLike | None = None,
     path_points: np.ndarray | None = None,
+    sea: Waves | None = None,
 ) -> list[dict]:
     """The meshcat commands of a playback: the scene, the first frame, and the animation.
 
@@ -378,6 +466,8 @@ def playback_commands(
         urdf: URDF with the visuals (see :func:`aiauv_pin.results.viewer.vehicle_visuals`).
         path_points: The path drawn, world points in order (N, 3) [m]; ``None`` draws no path (a
             run that follows none), the grid then lies under the box of the motion.
+        sea: The waves of the run, whose surface is drawn (:func:`surface_commands`); ``None``:
+            no surface.
 
     Raises:
         ValueError: A malformed trajectory (one line).
@@ -412,6 +502,7 @@ def playback_commands(
     times = _round(t[index] - t[0])
     links = [frames[:, :3, 3] for path, frames in poses.items() if path.startswith(LINKS)]
     points = np.stack([*links, states.trail], axis=1)  # (F, links + 1, 3)
+    motion = points.reshape(-1, 3)
     framing = camera_framing(points, centroid, scene.size, path_points)
     scene.camera_distance = framing.distance
     if path_points is None:  # no path: the grid lies under the box of the motion
@@ -433,6 +524,12 @@ def playback_commands(
     commands.append(set_transform(ROOT, translation(shift[0])))
     if show_los:
         commands.append(set_property(LOS, "visible", True))
+    surface_animations = []
+    if sea is not None:
+        surface, surface_animations = surface_commands(
+            sea, motion.min(0), motion.max(0), float(t[0]), float(t[-1])
+        )
+        commands.extend(surface)
 
     def clip(tracks: list[dict]) -> dict:
         return {"fps": 1, "name": "default", "tracks": tracks}
@@ -452,6 +549,7 @@ def playback_commands(
         animations.append({"path": path, "clip": clip([track("scale", "vector3", frames)])})
     if framing.follow:
         animations.append({"path": ROOT, "clip": clip([track("position", "vector3", shift)])})
+    animations.extend(surface_animations)
     commands.append(
         {
             "type": "set_animation",
@@ -472,6 +570,7 @@ def write_playback(
     fps: float = 25.0,
     urdf: str | os.PathLike | None = None,
     path_points: np.ndarray | None = None,
+    sea: Waves | None = None,
 ) -> Path:
     """Write a self-contained ``playback.html`` of a trajectory, animated at real-time speed.
 
@@ -487,12 +586,19 @@ def write_playback(
         fps: Frames per simulated second [1/s].
         urdf: URDF with the visuals (see :func:`aiauv_pin.results.viewer.vehicle_visuals`).
         path_points: The path drawn (N, 3) [m]; ``None`` draws none.
+        sea: The waves of the run, whose surface is drawn; ``None``: none.
 
     Returns:
         The path written.
     """
     commands = playback_commands(
-        vehicle, trajectory, fps=fps, max_frames=max_frames, urdf=urdf, path_points=path_points
+        vehicle,
+        trajectory,
+        fps=fps,
+        max_frames=max_frames,
+        urdf=urdf,
+        path_points=path_points,
+        sea=sea,
     )
     page = html_page(
         commands,

@@ -49,6 +49,7 @@ from aiauv_control.path_following import PathFollowingGains
 from aiauv_control.paths import LinePath, Path
 from aiauv_hydro.currents import Current, as_current
 from aiauv_hydro.laws.fluid_terms import UUV_SIMULATOR_FILTER
+from aiauv_hydro.waves.sea_state import Waves
 from aiauv_pin.controllers.compiled_controller import CompiledController
 from aiauv_pin.controllers.gait_controller import Gait, VehicleGait
 from aiauv_pin.controllers.paper_controller import (
@@ -110,6 +111,8 @@ class Scenario:
             1: gz-sim).
         wholebody: The ``[station]`` or ``[velocity]`` table of ``controller = "station"`` or
             ``"velocity"`` (:func:`aiauv_pin.wholebody.station_options.controller_from_options`).
+        waves: Linear waves (:class:`aiauv_hydro.waves.sea_state.Waves`) on the current, which
+            must then be constant: the two velocities add (:meth:`Current.waves`); ``None``: none.
     """
 
     case: str = "uniform"
@@ -132,6 +135,7 @@ class Scenario:
     lagged_filter: float = UUV_SIMULATOR_FILTER
     gait: Gait | None = None
     wholebody: Mapping[str, Any] | None = None
+    waves: Waves | None = None
 
     def __post_init__(self) -> None:
         check_scheme(self.added_mass)
@@ -194,6 +198,17 @@ class Scenario:
             len(self.current) != 3 or not all(map(math.isfinite, self.current))
         ):
             raise ValueError("current must be three finite numbers [m/s] or a Current")
+        if self.waves is not None:
+            if not isinstance(self.waves, Waves):
+                raise ValueError(
+                    f"waves must be a aiauv_hydro.waves.Waves, got {type(self.waves).__name__:.40}"
+                )
+            if as_current(self.current).kind != "constant":
+                raise ValueError(
+                    "waves: add to a constant current only, got a "
+                    f"{as_current(self.current).kind} current"
+                )
+            self.waves.check_point(float(self.start[2]), "the start (end-effector)")
 
     @property
     def steps_per_control(self) -> int:
@@ -216,8 +231,12 @@ class Scenario:
 
     @property
     def water(self) -> Current:
-        """The current as a :class:`aiauv_hydro.currents.Current`."""
-        return as_current(self.current)
+        """The water's motion as a :class:`aiauv_hydro.currents.Current`: the current, with the
+        waves on it when there are waves."""
+        current = as_current(self.current)
+        if self.waves is None:
+            return current
+        return Current.waves(self.waves, velocity=current.parameters[:3])
 
     @property
     def on_x_axis(self) -> bool:
@@ -559,7 +578,9 @@ def _parameters(scenario: Scenario) -> dict:
         if f.name == "path":
             value = scenario.path_to_follow.describe()
         elif f.name == "current":
-            value = scenario.water.describe()
+            value = as_current(scenario.current).describe()
+        elif f.name == "waves":
+            value = value.describe() if value is not None else None
         elif isinstance(value, tuple):
             value = list(value)
         out[f.name] = value

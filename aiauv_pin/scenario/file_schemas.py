@@ -24,6 +24,8 @@ from pydantic import BaseModel, Discriminator, Field, Tag
 from aiauv_control.laws.gait_laws import DEPTH_MODES, GAIT_KINDS
 from aiauv_control.path_following import CURRENT_COMPENSATION_OPTIONS, PathFollowingGains
 from aiauv_control.reduced_attitude import FEEDFORWARD_OPTIONS
+from aiauv_hydro.waves.sea_state import KINDS as SEA_KINDS
+from aiauv_hydro.waves.sea_state import MAX_COMPONENTS, SPREADINGS
 from aiauv_pin._internal.schema_validation import Direction, key, number, strict_config, vector
 from aiauv_pin.controllers.gait_controller import THRUST_MODES
 from aiauv_pin.dynamics.lagged_added_mass import ADDED_MASS_SCHEMES
@@ -309,6 +311,45 @@ class VelocityTable(BaseModel):
     known_current: key(bool, "-", "the model is told of the scenario's current (default true)")
 
 
+class WavesTable(BaseModel):
+    """``[waves]``: linear waves (:class:`aiauv_hydro.waves.sea_state.Waves`), added to a constant
+    ``[current]`` (docs/source/waves.md)."""
+
+    model_config = strict_config("waves")
+    type: key(
+        Literal[SEA_KINDS],
+        "-",
+        "regular (Airy), fenton (stream function, raschii), jonswap or pierson_moskowitz",
+        "regular",
+    )
+    height: key(
+        number(0.0, 30.0), "m", "wave height H (regular) or significant height H_s (irregular)", ...
+    )
+    period: key(
+        number(0.0, 100.0, low_open=True), "s", "period T (regular) or peak period T_p", ...
+    )
+    heading: key(
+        Angle, "rad", "direction the waves travel to, from world x about z (pi: head seas on +x)"
+    )
+    depth: key(
+        number(0.0, 1.2e4, low_open=True), "m", "water depth h below surface_z (default: deep)"
+    )
+    surface_z: key(Distance, "m", "world z of the still-water level (default 0)")
+    phase: key(Angle, "rad", "phase of a regular wave (0: a crest at the origin at t = 0)")
+    peak_enhancement: key(
+        number(1.0, 7.0), "-", "JONSWAP gamma (default: DNV-RP-C205's rule from T_p / sqrt(H_s))"
+    )
+    spreading: key(Literal[SPREADINGS], "-", "none (long-crested), cos_n or cos_2s (short-crested)")
+    spreading_exponent: key(
+        number(0.0, 100.0, low_open=True), "-", "n of cos_n or s of cos_2s (default 2)"
+    )
+    components: key(
+        number(1.0, MAX_COMPONENTS), "-", "number of components of an irregular sea (default 100)"
+    )
+    seed: key(number(0.0, 2.0**53), "-", "seed of the phases and directions (default 0)")
+    order: key(number(1.0, 50.0), "-", "Fourier harmonics of a fenton wave (default 10)")
+
+
 class OutputTable(BaseModel):
     """``[output]``: what a run writes."""
 
@@ -364,4 +405,5 @@ class ScenarioFile(BaseModel):
     gait: key(GaitTable, "-", "the serpentine gait (controller.type = gait)")
     station: key(StationTable, "-", "station keeping (controller.type = station)")
     velocity: key(VelocityTable, "-", "velocity control (controller.type = velocity)")
+    waves: key(WavesTable, "-", "linear waves on the current (default: none)")
     output: key(OutputTable, "-", "outputs")

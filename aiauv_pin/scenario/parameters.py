@@ -173,6 +173,7 @@ TABLES: dict[str, tuple[str, ...] | None] = {
     "gait": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("gait.")),
     "station": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("station.")),
     "velocity": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("velocity.")),
+    "waves": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("waves.")),
     "output": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("output.")),
 }
 

@@ -56,6 +56,7 @@ from pydantic.json_schema import SkipJsonSchema
 from typing_extensions import TypeAliasType
 
 from aiauv_control.path_following import PathFollowingGains
+from aiauv_hydro.currents import as_current
 from aiauv_pin._internal.schema_validation import number_text, shown, validate
 from aiauv_pin.errors import AiauvError
 from aiauv_pin.model.loading import BUNDLED_CASES, bundled_urdf
@@ -547,7 +548,7 @@ def scenario_parameters(scenario: Scenario) -> dict[str, Any]:
     out["start.surge"] = float(scenario.initial_surge)
     for section, table in (
         ("path", scenario.path_to_follow.describe()),
-        ("current", scenario.water.describe()),
+        ("current", as_current(scenario.current).describe()),
     ):
         for key, value in table.items():
             name = f"{section}.{key}"
@@ -576,6 +577,9 @@ def scenario_parameters(scenario: Scenario) -> dict[str, Any]:
         for name, value in asdict(scenario.gait).items():
             plain = value is None or isinstance(value, (str, bool))
             out[f"gait.{name}"] = value if plain else float(value)
+    if scenario.waves is not None:  # only then, as the gait
+        for name, value in scenario.waves.describe().items():
+            out[f"waves.{name}"] = value if isinstance(value, str) else float(value)
     return out
 
 
@@ -592,7 +596,7 @@ def is_parameter_column(name: str) -> bool:
     return (
         name == "vehicle_sha256"
         or name in SCHEMA
-        or section in ("start", "path", "current", "controller", "gait")
+        or section in ("start", "path", "current", "controller", "gait", "waves")
     )
 
 
@@ -628,7 +632,7 @@ def scenario_from_parameters(resolved: Mapping[str, Any]) -> Scenario:
 #: The default scenario's path and current tables, for a spec that sets one of their keys.
 _DEFAULT_TABLES = {
     "path": Scenario().path_to_follow.describe(),
-    "current": Scenario().water.describe(),
+    "current": as_current(Scenario().current).describe(),
 }
 
 

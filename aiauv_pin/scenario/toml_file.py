@@ -22,6 +22,10 @@ The format (every key optional; without a file ``aiauv simulate`` runs the paper
     direction = [1.0, 0.0, 0.0]
     [current]
     velocity = [0.0, 0.0, 0.0]   # [m/s], world (type = "tidal" or "shear": see aiauv_hydro.currents)
+    [waves]
+    type = "regular"             # linear waves on the (constant) current: regular, jonswap or
+    height = 1.0                 # pierson_moskowitz; H or H_s [m], T or T_p [s], heading [rad],
+    period = 6.0                 # depth [m], surface_z [m] (docs/source/waves.md)
     [controller]
     type = "paper"               # or "none" (passive: thrusters and joints idle), or
                                  # "thruster_turning" (straight body, tunnel thrusters turn it)
@@ -55,6 +59,7 @@ from aiauv_control.paths import PathError
 from aiauv_control.paths import from_mapping as path_from_mapping
 from aiauv_hydro.currents import current_from_mapping
 from aiauv_hydro.spec import HydroError
+from aiauv_hydro.waves.sea_state import Waves
 from aiauv_pin._internal.schema_validation import given, validate
 from aiauv_pin.controllers.gait_controller import Gait
 from aiauv_pin.errors import AiauvError
@@ -143,6 +148,8 @@ def scenario_from_mapping(table: Mapping[str, Any], base_dir: str | Path = ".") 
             options["path"] = path_from_mapping(_plain(checked.path), where="path")
         if "current" in top:
             options["current"] = current_from_mapping(_plain(checked.current), where="current")
+        if checked.waves is not None:
+            options["waves"] = Waves.from_mapping(_plain(checked.waves), where="waves")
     except (PathError, HydroError, ValueError) as exc:
         raise ScenarioFileError(" ".join(str(exc).split())) from None
     controller = _plain(checked.controller)
