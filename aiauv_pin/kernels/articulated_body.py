@@ -40,6 +40,7 @@ from aiauv_hydro.laws.fluid_terms import (
     hydrostatic_wrench,
     stacked_row_dot,
 )
+from aiauv_hydro.laws.lift import add_fin_wrenches
 from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled
 from aiauv_hydro.numerics.spatial import cross3, motion_cross, motion_to_child
 from aiauv_pin.kernels.disturbances import apply_disturbance
@@ -324,8 +325,9 @@ def body_bias(model, W):
     """Velocity- and state-dependent part of each body's equation ``f = I a + p`` (left-hand side).
 
     ``p = nu x* (I_RB nu)`` (rigid Coriolis, Featherstone 2008, eq. (2.67)) plus every fluid term of
-    :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`; after :func:`kinematics` and
-    :func:`sample_current`.
+    :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`, and the fins' lift and drag at the
+    angles ``W.fin_angle`` (:func:`aiauv_hydro.laws.lift.add_fin_wrenches`); after
+    :func:`kinematics` and :func:`sample_current`.
     """
     rigid, twist, bias = model.bodies.rigid_inertia, W.twist, W.bias
     for b in range(bias.shape[0]):
@@ -350,6 +352,7 @@ def body_bias(model, W):
     add_body_fluid_bias(
         model.fluid, W.rotation, W.twist, W.current, W.bias, W.relative, W.fluid_scratch
     )
+    add_fin_wrenches(model.fins, W.fin_angle, W.rotation, W.twist, W.current, W.bias)
 
 
 # ---------------------------------------------------------------------- articulated-body algorithm
@@ -813,8 +816,9 @@ def thrust_into(model, W, thrusts, out):
 
 
 # ---------------------------------------------------------------------- workspace
-def workspace(nb: int, nq: int, nv: int) -> Workspace:
-    """Scratch arrays of one evaluation for ``nb`` bodies (allocate once, reuse in every step).
+def workspace(nb: int, nq: int, nv: int, nf: int = 0) -> Workspace:
+    """Scratch arrays of one evaluation for ``nb`` bodies and ``nf`` fins (allocate once, reuse in
+    every step); the fin angles start at zero.
 
     Built in Python: it is only called from Python, and compiling its 34 array allocations would
     lengthen every first run (issue 15).
@@ -854,12 +858,13 @@ def workspace(nb: int, nq: int, nv: int) -> Workspace:
         np.empty(nq),
         np.empty(nq),
         np.empty((nb, 6)),
+        np.zeros(nf),
     )
 
 
 def new_workspace(model, nq: int, nv: int) -> Workspace:
     """A :class:`Workspace` for ``model`` (from Python)."""
-    return workspace(model.bodies.parent.shape[0], nq, nv)
+    return workspace(model.bodies.parent.shape[0], nq, nv, model.fins.body.shape[0])
 
 
 # ---------------------------------------------------------------------- forward dynamics

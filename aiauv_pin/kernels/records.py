@@ -2,7 +2,8 @@
 
 The kernels (:mod:`aiauv_pin.kernels.articulated_body`) take a vehicle as a :class:`Model`: the kinematic
 tree with rigid-plus-added inertias (:class:`RigidBodies`), the fluid parameters
-(:class:`aiauv_hydro.laws.fluid_terms.FluidModel`) and the thrusters (:class:`Thrusters`).
+(:class:`aiauv_hydro.laws.fluid_terms.FluidModel`), the thrusters (:class:`Thrusters`) and the fins
+(:class:`aiauv_hydro.laws.lift.FinModel`).
 Supported: a free-flyer
 root (identity placement) and 1-DOF revolute or prismatic joints below it.
 """
@@ -15,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 
 from aiauv_hydro.laws.fluid_terms import FluidModel
+from aiauv_hydro.laws.lift import FinModel
 
 FREE_FLYER, REVOLUTE, PRISMATIC = 0, 1, 2
 
@@ -67,6 +69,7 @@ class Model(NamedTuple):
     bodies: RigidBodies
     fluid: FluidModel
     thrusters: Thrusters
+    fins: FinModel
 
 
 class Servo(NamedTuple):
@@ -137,6 +140,7 @@ class Workspace(NamedTuple):
     subtree_restoring: (
         np.ndarray
     )  # (nb, 6) -hydrostatic wrench of each body's subtree (servo's g(q))
+    fin_angle: np.ndarray  # (nf,) fin angles acting on the plant [rad] (read at every stage)
 
 
 def _joint_kind_axis(joint) -> tuple[int, np.ndarray] | None:
