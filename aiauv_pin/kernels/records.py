@@ -52,15 +52,24 @@ class RigidBodies(NamedTuple):
 
 
 class Thrusters(NamedTuple):
-    """Thrusters as unit-thrust wrenches on bodies.
+    """Thrusters as unit-thrust wrenches on bodies, with their actuator dynamics.
 
     Attributes:
         body: Body of each thruster (m,).
         unit_wrench: Wrench of 1 N of thrust about the body origin, body axes (m, 6) [-, m].
+        max_thrust: Thrust limits [N] (m,).
+        time_constant: First-order lags [s] (m,) (0: none).
+        max_rate: Slew-rate limits [N/s] (m,) (``inf``: none).
+        dynamic: Whether any thruster has a lag or a rate limit: then the compiled loop carries
+            the produced thrusts as actuator state (:func:`aiauv_pin.kernels.articulated_body.actuators_into`).
     """
 
     body: np.ndarray
     unit_wrench: np.ndarray
+    max_thrust: np.ndarray
+    time_constant: np.ndarray
+    max_rate: np.ndarray
+    dynamic: bool
 
 
 class Model(NamedTuple):
@@ -141,6 +150,11 @@ class Workspace(NamedTuple):
         np.ndarray
     )  # (nb, 6) -hydrostatic wrench of each body's subtree (servo's g(q))
     fin_angle: np.ndarray  # (nf,) fin angles acting on the plant [rad] (read at every stage)
+    fin_command: np.ndarray  # (nf,) fin angles commanded by a compiled controller [rad]
+    thrust: np.ndarray  # (m,) thrusts produced (actuator state of dynamic thrusters) [N]
+    thrust_command: np.ndarray  # (m,) thrusts last commanded through thrust_into [N]
+    thrust_delta: np.ndarray  # (m,) produced minus commanded thrust [N]
+    tau_actuated: np.ndarray  # (nv,) the loop's held tau corrected for the thrusters' lag
 
 
 def _joint_kind_axis(joint) -> tuple[int, np.ndarray] | None:

@@ -203,8 +203,14 @@ def _thrusters(model: pin.Model, hydro: HydroSpec) -> Thrusters:
         position = placement.act(thruster.position)
         body.append(b)
         wrenches.append(np.concatenate((direction, np.cross(position, direction))))
+    thrusters = hydro.thrusters
     return Thrusters(
-        body=np.array(body, dtype=np.int64), unit_wrench=np.array(wrenches).reshape(-1, 6)
+        body=np.array(body, dtype=np.int64),
+        unit_wrench=np.array(wrenches).reshape(-1, 6),
+        max_thrust=np.array([t.max_thrust for t in thrusters], dtype=float),
+        time_constant=np.array([t.time_constant for t in thrusters], dtype=float),
+        max_rate=np.array([t.max_rate for t in thrusters], dtype=float),
+        dynamic=any(t.time_constant > 0.0 or t.max_rate != np.inf for t in thrusters),
     )
 
 
@@ -234,6 +240,9 @@ def _fins(model: pin.Model, hydro: HydroSpec) -> FinModel:
         drag_zero=column("drag_zero"),
         drag_slope=column("drag_slope"),
         stall_angle=column("stall_angle"),
+        max_angle=column("max_angle"),
+        max_rate=column("max_rate"),
+        time_constant=column("time_constant"),
     )
 
 

@@ -63,6 +63,9 @@ class FinModel(NamedTuple):
         drag_zero: ``C_D0`` (nf,).
         drag_slope: ``C_D_alpha2`` (nf,) [1/rad^2].
         stall_angle: ``alpha_stall`` (nf,) [rad] (``inf``: none).
+        max_angle: Angle limits [rad] (nf,).
+        max_rate: Rate limits [rad/s] (nf,) (``inf``: none).
+        time_constant: First-order lags of the angle [s] (nf,) (0: none).
     """
 
     body: np.ndarray
@@ -74,6 +77,9 @@ class FinModel(NamedTuple):
     drag_zero: np.ndarray
     drag_slope: np.ndarray
     stall_angle: np.ndarray
+    max_angle: np.ndarray
+    max_rate: np.ndarray
+    time_constant: np.ndarray
 
 
 def no_fins() -> FinModel:
@@ -83,6 +89,9 @@ def no_fins() -> FinModel:
         np.zeros((0, 3)),
         np.zeros((0, 3)),
         np.zeros((0, 3)),
+        np.zeros(0),
+        np.zeros(0),
+        np.zeros(0),
         np.zeros(0),
         np.zeros(0),
         np.zeros(0),
