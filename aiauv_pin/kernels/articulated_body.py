@@ -34,13 +34,13 @@ import numpy as np
 
 from aiauv_control.laws.paper_laws import joint_pd_implicit_terms, joint_pd_torque
 from aiauv_hydro.currents import current_velocity
+from aiauv_hydro.laws.actuators import actuator_response
 from aiauv_hydro.laws.fluid_terms import (
     add_body_fluid_bias,
     coriolis_of_momentum,
     hydrostatic_wrench,
     stacked_row_dot,
 )
-from aiauv_hydro.laws.actuators import actuator_response
 from aiauv_hydro.laws.lift import add_fin_wrenches
 from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled
 from aiauv_hydro.numerics.spatial import cross3, motion_cross, motion_to_child

@@ -61,7 +61,8 @@ class Thrusters(NamedTuple):
         time_constant: First-order lags [s] (m,) (0: none).
         max_rate: Slew-rate limits [N/s] (m,) (``inf``: none).
         dynamic: Whether any thruster has a lag or a rate limit: then the compiled loop carries
-            the produced thrusts as actuator state (:func:`aiauv_pin.kernels.articulated_body.actuators_into`).
+            the produced thrusts as actuator state
+            (:func:`aiauv_pin.kernels.articulated_body.actuators_into`).
     """
 
     body: np.ndarray

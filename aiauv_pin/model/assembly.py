@@ -3,7 +3,8 @@
 
 :func:`assemble` packs the description once into an :class:`Assembly`: the per-body and per-link
 fluid records of :mod:`aiauv_hydro.laws.fluid_terms` (with and without the hydrostatics), the
-thrusters as unit-thrust wrenches, the fins in their bodies' frames, and the displaced-water model of the Pinocchio reference.
+thrusters as unit-thrust wrenches, the fins in their bodies' frames, and the displaced-water model
+of the Pinocchio reference.
 :func:`compiled_model` builds the compiled model (:class:`aiauv_pin.kernels.evaluation.FastModel`)
 from the same Pinocchio model and assembly. Neither reads a :class:`aiauv_pin.model.vehicle.Vehicle`:
 the vehicle holds what they build (``Vehicle.fast`` is :func:`compiled_model`'s result), so both

@@ -42,8 +42,8 @@ the link's own axes. Axis components below 1e-6 are set to zero (URDF files writ
 frame is the link frame.
 
 UUV Simulator blocks (``<gazebo><plugin>`` with ``<link><hydrodynamic_model>``) in the same file are
-read too (:mod:`aiauv_hydro.urdf.uuv_simulator`), and so are its thruster and fin plugins; for a link (or a thruster
-or fin name) given in both, this block wins. Fluid density:
+read too (:mod:`aiauv_hydro.urdf.uuv_simulator`), and so are its thruster and fin plugins; for a
+link (or a thruster or fin name) given in both, this block wins. Fluid density:
 this block's ``fluid_density`` attribute if given, else the UUV Simulator plugin's
 ``<fluid_density>`` (UUV Simulator's default 1028 if the plugin has UUV links but no density), else
 1025.

@@ -95,7 +95,10 @@ def hydrodynamics_element(spec: HydroSpec) -> Element:
     thrusters and fins, in order; reading it back gives ``spec`` again (crossflow terms aside)."""
     block = Element(
         "hydrodynamics",
-        {"fluid_density": format_number(spec.fluid_density), "gravity": format_number(spec.gravity)},
+        {
+            "fluid_density": format_number(spec.fluid_density),
+            "gravity": format_number(spec.gravity),
+        },
     )
     for link in spec.links:
         block.append(fossen_link_element(link))

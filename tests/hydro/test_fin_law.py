@@ -115,8 +115,19 @@ def test_same_force_as_uuv_simulator_quadratic():
         turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])  # fin link at angle delta
         theirs = turn @ uuv_quadratic(turn.T @ v, lift_constant, drag_constant)
         ours = fin_force(
-            delta, 0, 0, 1, 1, 0, 0, *v, 0.5 * rho, 2 * lift_constant / rho, 0.0,
-            2 * drag_constant / rho, math.inf,
+            delta,
+            0,
+            0,
+            1,
+            1,
+            0,
+            0,
+            *v,
+            0.5 * rho,
+            2 * lift_constant / rho,
+            0.0,
+            2 * drag_constant / rho,
+            math.inf,
         )
         np.testing.assert_allclose(ours, theirs, rtol=1e-12, atol=1e-12)
 

@@ -7,10 +7,10 @@ import math
 
 import numpy as np
 import pytest
+from conftest import single_body_urdf
 
 import aiauv_pin
 from aiauv_pin.errors import ArgumentError
-from conftest import single_body_urdf
 
 FIN_BLOCK = """
     <fin name="rudder" link="hull" xyz="-0.4 0.02 0.05" axis="0 0 1" chord="1 0 0" area="0.01"
