@@ -135,3 +135,50 @@ def test_refusals_are_one_line(tmp_path):
     plain = aiauv_pin.load_vehicle(_finned_body(tmp_path, False)[0])
     with pytest.raises(ArgumentError, match="fin_angles"):
         plain.acceleration(q, v, np.zeros(6), fin_angles=[0.1])
+
+
+UUV_FIN_ON_ITS_LINK = """
+  <link name="fin1"/>
+  <joint name="fin1_joint" type="fixed">
+    <origin xyz="-0.4 -0.04 0" rpy="1.5707963267948966 0 0"/>
+    <parent link="hull"/><child link="fin1"/>
+  </joint>
+  <gazebo>
+    <plugin name="fin1_model" filename="libuuv_fin_ros_plugin.so">
+      <dynamics><type>FirstOrder</type><timeConstant>0.2</timeConstant></dynamics>
+      <liftdrag><type>Quadratic</type><lift_constant>9.8688</lift_constant>
+        <drag_constant>6.513408</drag_constant></liftdrag>
+      <fin_id>1</fin_id><link_name>fin1</link_name><joint_name>fin1_joint</joint_name>
+    </plugin>
+  </gazebo>
+</robot>"""
+
+
+def test_uuv_fin_on_its_own_link_acts_as_the_same_fin_on_the_parent(tmp_path):
+    """LAUV's fin 1 (lauv_gazebo actuators.xacro: origin -0.4 -0.04 0, rpy pi/2 0 0) on its own
+    link behind a fixed joint equals our <fin> on the parent at the joint's pose: axis R z =
+    (0, -1, 0), chord R x = (1, 0, 0)."""
+    text, params = single_body_urdf()
+    on_link = tmp_path / "on_link.urdf"
+    on_link.write_text(text.replace("\n</robot>", UUV_FIN_ON_ITS_LINK))
+    rho = params["rho"]
+    on_parent = tmp_path / "on_parent.urdf"
+    on_parent.write_text(
+        text.replace(
+            "\n  </hydrodynamics>",
+            f'<fin name="fin1_model" link="hull" xyz="-0.4 -0.04 0" axis="0 -1 0" chord="1 0 0" '
+            f'area="1" lift_slope="{2 * 9.8688 / rho!r}" drag_slope="{2 * 6.513408 / rho!r}" '
+            f'max_angle="1.5707963267948966" time_constant="0.2"/>\n  </hydrodynamics>',
+        )
+    )
+    a = aiauv_pin.load_vehicle(on_link)
+    b = aiauv_pin.load_vehicle(on_parent)
+    assert a.fin_names == b.fin_names == ["fin1_model"]
+    q = a.neutral_configuration()
+    v = np.array([1.0, 0.2, -0.3, 0.1, 0.2, -0.1])
+    np.testing.assert_allclose(
+        a.acceleration(q, v, np.zeros(6), fin_angles=[0.2]),
+        b.acceleration(q, v, np.zeros(6), fin_angles=[0.2]),
+        rtol=1e-12,
+        atol=1e-12,
+    )
