@@ -11,6 +11,7 @@ parameters cannot drift after it has been loaded.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -143,6 +144,9 @@ class Thruster:
         position: Point of action in the link frame [m].
         direction: Unit direction of positive thrust in the link frame.
         max_thrust: Thrust magnitude limit [N]; commands are saturated to ``[-max, max]``.
+        time_constant: First-order lag of the produced thrust behind the command [s]; 0 (the
+            default) is instantaneous (:func:`aiauv_hydro.laws.actuators.actuator_response`).
+        max_rate: Slew-rate limit of the produced thrust [N/s]; ``inf`` (the default) is none.
     """
 
     name: str
@@ -150,6 +154,8 @@ class Thruster:
     position: np.ndarray
     direction: np.ndarray
     max_thrust: float
+    time_constant: float = 0.0
+    max_rate: float = math.inf
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -169,6 +175,99 @@ class Thruster:
                 f"thruster '{self.name}': max_thrust must be positive, got {self.max_thrust}"
             )
         object.__setattr__(self, "max_thrust", float(self.max_thrust))
+        _check_dynamics(self, f"thruster '{self.name}'")
+
+
+def _check_dynamics(record, what: str) -> None:
+    """Refuse a negative or non-finite ``time_constant`` and a non-positive ``max_rate``."""
+    time_constant = float(record.time_constant)
+    if not (math.isfinite(time_constant) and time_constant >= 0.0):
+        raise HydroError(f"{what}: time_constant must be >= 0 and finite, got {time_constant}")
+    max_rate = float(record.max_rate)
+    if not (max_rate > 0.0):  # inf allowed; NaN refused
+        raise HydroError(f"{what}: max_rate must be positive, got {max_rate}")
+    object.__setattr__(record, "time_constant", time_constant)
+    object.__setattr__(record, "max_rate", max_rate)
+
+
+#: Tolerance on ``|axis . chord|`` of a fin (both unit vectors): the chord must be perpendicular to
+#: the span axis. URDF files write pi/2 as 1.5707963, so directions carry errors near 1e-8.
+FIN_PERPENDICULAR_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class Fin:
+    """A control surface: lift and drag of a fin whose angle is an actuator (not a joint).
+
+    The fin turns by its angle ``delta`` about ``axis`` (right-hand rule); at ``delta = 0`` its
+    chord points along ``chord``. The law is :func:`aiauv_hydro.laws.lift.fin_force` (sign and stall
+    conventions there and on the URDF-format page).
+
+    Attributes:
+        name: Fin name (unique within a vehicle).
+        link: Name of the rigid URDF link that carries the fin.
+        position: Centre of pressure in the link frame [m].
+        axis: Unit rotation (span) axis in the link frame.
+        chord: Unit chord direction (forward, leading edge) at zero angle, in the link frame,
+            perpendicular to ``axis``.
+        area: Planform area ``A`` [m^2].
+        lift_slope: Lift-curve slope ``C_L_alpha`` [1/rad].
+        drag_zero: Drag coefficient at zero angle of attack ``C_D0`` [-].
+        drag_slope: Quadratic drag coefficient ``C_D_alpha2`` [1/rad^2].
+        stall_angle: Angle of attack [rad] beyond which the lift coefficient stays at its stall
+            value ``C_L_alpha * stall_angle`` (``inf``: no stall).
+        max_angle: Angle limit [rad]: commands are clipped to ``[-max_angle, max_angle]``.
+        max_rate: Rate limit of the fin angle [rad/s] (``inf``: none).
+        time_constant: First-order lag of the angle behind the command [s] (0: none; UUV
+            Simulator's fin ``FirstOrder`` dynamics).
+    """
+
+    name: str
+    link: str
+    position: np.ndarray
+    axis: np.ndarray
+    chord: np.ndarray
+    area: float
+    lift_slope: float
+    drag_zero: float = 0.0
+    drag_slope: float = 0.0
+    stall_angle: float = math.inf
+    max_angle: float = math.pi / 2
+    max_rate: float = math.inf
+    time_constant: float = 0.0
+
+    def __post_init__(self) -> None:
+        what = f"fin '{self.name}'"
+        object.__setattr__(self, "position", _frozen_array(self.position, (3,), f"{what}: xyz"))
+        for name in ("axis", "chord"):
+            vector = np.array(getattr(self, name), dtype=float)
+            norm = float(np.linalg.norm(vector)) if vector.shape == (3,) else 0.0
+            if not (np.isfinite(norm) and norm > 0.0):
+                raise HydroError(f"{what}: {name} must be a nonzero 3-vector")
+            object.__setattr__(self, name, _frozen_array(vector / norm, (3,), f"{what}: {name}"))
+        if abs(float(self.axis @ self.chord)) > FIN_PERPENDICULAR_TOLERANCE:
+            raise HydroError(
+                f"{what}: chord {self.chord.round(6).tolist()} is not perpendicular to axis "
+                f"{self.axis.round(6).tolist()}"
+            )
+        # the exact perpendicular part, so that the law's frame is orthonormal
+        chord = self.chord - (self.chord @ self.axis) * self.axis
+        object.__setattr__(self, "chord", _frozen_array(chord / np.linalg.norm(chord), (3,), what))
+        for name in ("area", "max_angle"):
+            value = float(getattr(self, name))
+            if not (math.isfinite(value) and value > 0.0):
+                raise HydroError(f"{what}: {name} must be positive and finite, got {value}")
+            object.__setattr__(self, name, value)
+        for name in ("lift_slope", "drag_zero", "drag_slope"):
+            value = float(getattr(self, name))
+            if not (math.isfinite(value) and value >= 0.0):
+                raise HydroError(f"{what}: {name} must be >= 0 and finite, got {value}")
+            object.__setattr__(self, name, value)
+        stall = float(self.stall_angle)
+        if not (stall > 0.0):
+            raise HydroError(f"{what}: stall_angle must be positive, got {stall}")
+        object.__setattr__(self, "stall_angle", stall)
+        _check_dynamics(self, what)
 
 
 @dataclass(frozen=True)
@@ -180,12 +279,15 @@ class HydroSpec:
         gravity: Magnitude of gravitational acceleration ``g`` [m/s^2] (acts along world -z).
         links: Per-link parameters; links not listed here have no fluid forces.
         thrusters: Thrusters, in the order of the thrust vector.
+        fins: Fins (control surfaces), in the order of the fin angles, which follow the thrusts
+            in a vehicle's actuator vector ``u = (thrusts, fin angles)``.
     """
 
     fluid_density: float = 1025.0
     gravity: float = 9.81
     links: tuple[LinkHydrodynamics, ...] = ()
     thrusters: tuple[Thruster, ...] = ()
+    fins: tuple[Fin, ...] = ()
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.fluid_density) and self.fluid_density > 0.0):
@@ -194,6 +296,11 @@ class HydroSpec:
             raise HydroError(f"gravity must be >= 0, got {self.gravity}")
         object.__setattr__(self, "links", tuple(self.links))
         object.__setattr__(self, "thrusters", tuple(self.thrusters))
+        object.__setattr__(self, "fins", tuple(self.fins))
+        fin_names = [f.name for f in self.fins]
+        duplicate = {n for n in fin_names if fin_names.count(n) > 1}
+        if duplicate:
+            raise HydroError(f"fin name '{sorted(duplicate)[0]}' used twice")
         names = [link.link for link in self.links]
         duplicate = {n for n in names if names.count(n) > 1}
         if duplicate:

@@ -22,6 +22,7 @@ that is unusual but simulable is a *warning*: the report lists it and the comman
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -78,6 +79,7 @@ class CheckReport:
         thrusters: ``(name, link, position, direction, max_thrust)`` tuples.
         smallest_mass_eigenvalue: Smallest eigenvalue of ``M(q)`` at the neutral configuration.
         warnings: One-line warnings.
+        fins: The vehicle's fins (:class:`aiauv_hydro.spec.Fin` records).
     """
 
     path: Path
@@ -93,6 +95,7 @@ class CheckReport:
     thrusters: tuple
     smallest_mass_eigenvalue: float
     warnings: tuple[str, ...]
+    fins: tuple = ()
 
 
 def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
@@ -184,6 +187,7 @@ def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
         thrusters=thrusters,
         smallest_mass_eigenvalue=smallest_eigenvalue,
         warnings=tuple(warnings),
+        fins=tuple(hydro.fins),
     )
 
 
@@ -279,6 +283,18 @@ def format_report(report: CheckReport) -> str:
             f"{name:<20} {link:<20} {_vector(position):>22} {_vector(direction):>22} "
             f"{max_thrust:>7.4g}"
         )
+    if report.fins:
+        lines += [
+            "",
+            f"fins ({len(report.fins)})",
+            f"{'fin':<20} {'link':<20} {'position m':>22} {'axis':>22} {'area m^2':>9} "
+            f"{'max deg':>7}",
+        ]
+        for fin in report.fins:
+            lines.append(
+                f"{fin.name:<20} {fin.link:<20} {_vector(fin.position):>22} "
+                f"{_vector(fin.axis):>22} {fin.area:>9.4g} {math.degrees(fin.max_angle):>7.3g}"
+            )
     lines.append("")
     lines.append(
         f"smallest eigenvalue of M(q) at q = neutral: {report.smallest_mass_eigenvalue:.4g}"

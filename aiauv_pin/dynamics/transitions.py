@@ -28,7 +28,7 @@ from aiauv_pin._internal.array_checks import (
     positive_seconds,
 )
 from aiauv_pin.errors import project_errors
-from aiauv_pin.model.derivatives import compiled_derivatives, uniform_current
+from aiauv_pin.model.derivatives import compiled_derivatives, refuse_fins, uniform_current
 
 #: Integration methods with transition Jacobians.
 METHODS = ("rk4", "euler")
@@ -82,6 +82,7 @@ def transition_jacobians(
     from aiauv_pin.kernels import articulated_body as kernels
     from aiauv_pin.kernels.step_jacobians import transition_into
 
+    refuse_fins(vehicle, "transition_jacobians")
     method = method_name(method, METHODS)
     q, v = vehicle._q(q), vehicle._v(v)
     nv, m = vehicle.nv, len(vehicle.hydro.thrusters)

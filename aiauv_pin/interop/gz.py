@@ -838,4 +838,6 @@ def export_sdf(
         )
     if source.vehicle.hydro.thrusters:
         notes.append(f"{len(source.vehicle.hydro.thrusters)} thruster(s) not exported")
+    if source.vehicle.hydro.fins:
+        notes.append(f"{len(source.vehicle.hydro.fins)} fin(s) not exported")
     return notes

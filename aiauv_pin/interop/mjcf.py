@@ -244,4 +244,6 @@ def export_mjcf(urdf: str | os.PathLike, output: str | os.PathLike) -> list[str]
             "added-mass and damping matrices replaced by MuJoCo's ellipsoid fluid model; "
             "buoyancy acts at the centres of mass (see the file's header)"
         )
+    if source.vehicle.hydro.fins:
+        notes.append(f"{len(source.vehicle.hydro.fins)} fin(s) not exported (MuJoCo has no lift)")
     return notes

@@ -34,12 +34,14 @@ import numpy as np
 
 from aiauv_control.laws.paper_laws import joint_pd_implicit_terms, joint_pd_torque
 from aiauv_hydro.currents import current_velocity
+from aiauv_hydro.laws.actuators import actuator_response
 from aiauv_hydro.laws.fluid_terms import (
     add_body_fluid_bias,
     coriolis_of_momentum,
     hydrostatic_wrench,
     stacked_row_dot,
 )
+from aiauv_hydro.laws.lift import add_fin_wrenches
 from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled
 from aiauv_hydro.numerics.spatial import cross3, motion_cross, motion_to_child
 from aiauv_pin.kernels.disturbances import apply_disturbance
@@ -324,8 +326,9 @@ def body_bias(model, W):
     """Velocity- and state-dependent part of each body's equation ``f = I a + p`` (left-hand side).
 
     ``p = nu x* (I_RB nu)`` (rigid Coriolis, Featherstone 2008, eq. (2.67)) plus every fluid term of
-    :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`; after :func:`kinematics` and
-    :func:`sample_current`.
+    :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`, and the fins' lift and drag at the
+    angles ``W.fin_angle`` (:func:`aiauv_hydro.laws.lift.add_fin_wrenches`); after
+    :func:`kinematics` and :func:`sample_current`.
     """
     rigid, twist, bias = model.bodies.rigid_inertia, W.twist, W.bias
     for b in range(bias.shape[0]):
@@ -350,6 +353,7 @@ def body_bias(model, W):
     add_body_fluid_bias(
         model.fluid, W.rotation, W.twist, W.current, W.bias, W.relative, W.fluid_scratch
     )
+    add_fin_wrenches(model.fins, W.fin_angle, W.rotation, W.twist, W.current, W.bias)
 
 
 # ---------------------------------------------------------------------- articulated-body algorithm
@@ -800,7 +804,7 @@ def restoring_into(model, W, out):
 
 
 @compiled(fastmath=True, borrows_only=True)
-def thrust_into(model, W, thrusts, out):
+def thrust_forces_into(model, W, thrusts, out):
     """``out = B(q) thrusts`` (the paper's eq. (20)) after :func:`kinematics` [N, N m]."""
     wrench = W.relative
     wrench[:, :] = 0.0
@@ -812,9 +816,70 @@ def thrust_into(model, W, thrusts, out):
     generalized_force(model.bodies, W.placement, wrench, out, W.v6[0])
 
 
+@compiled(fastmath=True, borrows_only=True)
+def thrust_into(model, W, thrusts, out):
+    """``out = B(q) thrusts`` (the paper's eq. (20)) after :func:`kinematics` [N, N m]; the
+    thrusts are recorded as the command ``W.thrust_command`` (the thrusters' actuator dynamics,
+    :func:`actuators_into`, follow it)."""
+    command = W.thrust_command
+    for k in range(command.shape[0]):
+        command[k] = thrusts[k]
+    thrust_forces_into(model, W, thrusts, out)
+
+
+@compiled(fastmath=True, borrows_only=True)
+def actuators_into(model, W, q, v, tau, dt):
+    """Advance the actuators over one step of the compiled loop; whether the step takes
+    ``W.tau_actuated`` instead of ``tau``.
+
+    Where a command reaches the plant: each fin angle ``W.fin_angle`` follows the command
+    ``W.fin_command`` (a compiled controller writes it) and, for thrusters with a lag or a rate
+    limit, each produced thrust ``W.thrust`` follows ``W.thrust_command`` (written by
+    :func:`thrust_into`), both by :func:`aiauv_hydro.laws.actuators.actuator_response` over ``dt``
+    (exact first-order response, then the rate limit, the command clipped to its limit); the value
+    reached is held over the step. The controller's ``tau`` holds ``B(q_s) T_cmd`` from its sample;
+    the step then takes ``tau + B(q) (T - T_cmd)`` at the step's ``q``.
+    Without fins or dynamic thrusters nothing changes and ``tau`` is taken as it is.
+    """
+    fins = model.fins
+    angle, command = W.fin_angle, W.fin_command
+    for k in range(angle.shape[0]):
+        angle[k] = actuator_response(
+            angle[k], command[k], fins.max_angle[k], fins.time_constant[k], fins.max_rate[k], dt
+        )
+    th = model.thrusters
+    if not th.dynamic:
+        return False
+    thrust, thrust_command, delta = W.thrust, W.thrust_command, W.thrust_delta
+    for k in range(thrust.shape[0]):
+        thrust[k] = actuator_response(
+            thrust[k],
+            thrust_command[k],
+            th.max_thrust[k],
+            th.time_constant[k],
+            th.max_rate[k],
+            dt,
+        )
+        delta[k] = thrust[k] - thrust_command[k]
+    kinematics(model.bodies, q, v, W)
+    out = W.tau_actuated
+    thrust_forces_into(model, W, delta, out)
+    for i in range(out.shape[0]):
+        out[i] += tau[i]
+    return True
+
+
+def reset_actuators(W) -> None:
+    """Fins at zero angle and thrusters at rest, commands zero: the actuators' state at the start
+    of a run (from Python)."""
+    for name in ("fin_angle", "fin_command", "thrust", "thrust_command", "thrust_delta"):
+        getattr(W, name)[:] = 0.0
+
+
 # ---------------------------------------------------------------------- workspace
-def workspace(nb: int, nq: int, nv: int) -> Workspace:
-    """Scratch arrays of one evaluation for ``nb`` bodies (allocate once, reuse in every step).
+def workspace(nb: int, nq: int, nv: int, nf: int = 0, m: int = 0) -> Workspace:
+    """Scratch arrays of one evaluation for ``nb`` bodies, ``nf`` fins and ``m`` thrusters
+    (allocate once, reuse in every step); the actuators start at rest (zero).
 
     Built in Python: it is only called from Python, and compiling its 34 array allocations would
     lengthen every first run (issue 15).
@@ -854,12 +919,24 @@ def workspace(nb: int, nq: int, nv: int) -> Workspace:
         np.empty(nq),
         np.empty(nq),
         np.empty((nb, 6)),
+        np.zeros(nf),
+        np.zeros(nf),
+        np.zeros(m),
+        np.zeros(m),
+        np.zeros(m),
+        np.zeros(nv),
     )
 
 
 def new_workspace(model, nq: int, nv: int) -> Workspace:
     """A :class:`Workspace` for ``model`` (from Python)."""
-    return workspace(model.bodies.parent.shape[0], nq, nv)
+    return workspace(
+        model.bodies.parent.shape[0],
+        nq,
+        nv,
+        model.fins.body.shape[0],
+        model.thrusters.body.shape[0],
+    )
 
 
 # ---------------------------------------------------------------------- forward dynamics

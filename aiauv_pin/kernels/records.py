@@ -2,7 +2,8 @@
 
 The kernels (:mod:`aiauv_pin.kernels.articulated_body`) take a vehicle as a :class:`Model`: the kinematic
 tree with rigid-plus-added inertias (:class:`RigidBodies`), the fluid parameters
-(:class:`aiauv_hydro.laws.fluid_terms.FluidModel`) and the thrusters (:class:`Thrusters`).
+(:class:`aiauv_hydro.laws.fluid_terms.FluidModel`), the thrusters (:class:`Thrusters`) and the fins
+(:class:`aiauv_hydro.laws.lift.FinModel`).
 Supported: a free-flyer
 root (identity placement) and 1-DOF revolute or prismatic joints below it.
 """
@@ -15,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 
 from aiauv_hydro.laws.fluid_terms import FluidModel
+from aiauv_hydro.laws.lift import FinModel
 
 FREE_FLYER, REVOLUTE, PRISMATIC = 0, 1, 2
 
@@ -50,15 +52,25 @@ class RigidBodies(NamedTuple):
 
 
 class Thrusters(NamedTuple):
-    """Thrusters as unit-thrust wrenches on bodies.
+    """Thrusters as unit-thrust wrenches on bodies, with their actuator dynamics.
 
     Attributes:
         body: Body of each thruster (m,).
         unit_wrench: Wrench of 1 N of thrust about the body origin, body axes (m, 6) [-, m].
+        max_thrust: Thrust limits [N] (m,).
+        time_constant: First-order lags [s] (m,) (0: none).
+        max_rate: Slew-rate limits [N/s] (m,) (``inf``: none).
+        dynamic: Whether any thruster has a lag or a rate limit: then the compiled loop carries
+            the produced thrusts as actuator state
+            (:func:`aiauv_pin.kernels.articulated_body.actuators_into`).
     """
 
     body: np.ndarray
     unit_wrench: np.ndarray
+    max_thrust: np.ndarray
+    time_constant: np.ndarray
+    max_rate: np.ndarray
+    dynamic: bool
 
 
 class Model(NamedTuple):
@@ -67,6 +79,7 @@ class Model(NamedTuple):
     bodies: RigidBodies
     fluid: FluidModel
     thrusters: Thrusters
+    fins: FinModel
 
 
 class Servo(NamedTuple):
@@ -137,6 +150,12 @@ class Workspace(NamedTuple):
     subtree_restoring: (
         np.ndarray
     )  # (nb, 6) -hydrostatic wrench of each body's subtree (servo's g(q))
+    fin_angle: np.ndarray  # (nf,) fin angles acting on the plant [rad] (read at every stage)
+    fin_command: np.ndarray  # (nf,) fin angles commanded by a compiled controller [rad]
+    thrust: np.ndarray  # (m,) thrusts produced (actuator state of dynamic thrusters) [N]
+    thrust_command: np.ndarray  # (m,) thrusts last commanded through thrust_into [N]
+    thrust_delta: np.ndarray  # (m,) produced minus commanded thrust [N]
+    tau_actuated: np.ndarray  # (nv,) the loop's held tau corrected for the thrusters' lag
 
 
 def _joint_kind_axis(joint) -> tuple[int, np.ndarray] | None:

@@ -3,7 +3,8 @@
 
 :func:`assemble` packs the description once into an :class:`Assembly`: the per-body and per-link
 fluid records of :mod:`aiauv_hydro.laws.fluid_terms` (with and without the hydrostatics), the
-thrusters as unit-thrust wrenches, and the displaced-water model of the Pinocchio reference.
+thrusters as unit-thrust wrenches, the fins in their bodies' frames, and the displaced-water model
+of the Pinocchio reference.
 :func:`compiled_model` builds the compiled model (:class:`aiauv_pin.kernels.evaluation.FastModel`)
 from the same Pinocchio model and assembly. Neither reads a :class:`aiauv_pin.model.vehicle.Vehicle`:
 the vehicle holds what they build (``Vehicle.fast`` is :func:`compiled_model`'s result), so both
@@ -19,6 +20,7 @@ import pinocchio as pin
 
 from aiauv_hydro.laws.crossflow import gauss_legendre_unit
 from aiauv_hydro.laws.fluid_terms import CROSSFLOW_NODES, FluidModel
+from aiauv_hydro.laws.lift import FinModel, no_fins
 from aiauv_hydro.numerics.spatial import motion_transform
 from aiauv_hydro.spec import HydroSpec
 from aiauv_pin.kernels.records import Model, Thrusters, rigid_bodies, unsupported_reason
@@ -34,6 +36,8 @@ class Assembly:
         fluid_reference: The same without hydrostatics: the Pinocchio reference computes them with
             Pinocchio (:attr:`buoyancy_model`).
         thrusters: The thrusters as unit-thrust wrenches on bodies.
+        fins: The fins in their bodies' frames (:func:`aiauv_hydro.laws.lift.add_fin_wrenches`
+            takes them; on whatever the ``added_mass``, ``damping`` and ``restoring`` switches).
         buoyancy_model: A copy of the model carrying each body's displaced mass ``rho V`` at its
             centre of buoyancy (Fossen 2021, eq. (4.6)), for the reference's buoyancy.
         has_buoyancy: Whether any link displaces water.
@@ -44,6 +48,7 @@ class Assembly:
     fluid_net: FluidModel
     fluid_reference: FluidModel
     thrusters: Thrusters
+    fins: FinModel
     buoyancy_model: pin.Model
     has_buoyancy: bool
     has_fluid: bool
@@ -162,6 +167,7 @@ def assemble(
         fluid_net=pack(buoyancy - weight),
         fluid_reference=pack(np.zeros((nb, 4))),
         thrusters=_thrusters(model, hydro),
+        fins=_fins(model, hydro),
         buoyancy_model=_buoyancy_model(model, hydro),
         has_buoyancy=any(link.volume != 0.0 for link in hydro.links),
         has_fluid=bool(added.any() or nl),
@@ -198,8 +204,46 @@ def _thrusters(model: pin.Model, hydro: HydroSpec) -> Thrusters:
         position = placement.act(thruster.position)
         body.append(b)
         wrenches.append(np.concatenate((direction, np.cross(position, direction))))
+    thrusters = hydro.thrusters
     return Thrusters(
-        body=np.array(body, dtype=np.int64), unit_wrench=np.array(wrenches).reshape(-1, 6)
+        body=np.array(body, dtype=np.int64),
+        unit_wrench=np.array(wrenches).reshape(-1, 6),
+        max_thrust=np.array([t.max_thrust for t in thrusters], dtype=float),
+        time_constant=np.array([t.time_constant for t in thrusters], dtype=float),
+        max_rate=np.array([t.max_rate for t in thrusters], dtype=float),
+        dynamic=any(t.time_constant > 0.0 or t.max_rate != np.inf for t in thrusters),
+    )
+
+
+def _fins(model: pin.Model, hydro: HydroSpec) -> FinModel:
+    """The fins with their centre of pressure, span axis and chord in their body's frame."""
+    if not hydro.fins:
+        return no_fins()
+    body, position, axis, chord = [], [], [], []
+    for fin in hydro.fins:
+        b, placement = body_of(model, fin.link)
+        body.append(b)
+        position.append(placement.act(fin.position))
+        axis.append(placement.rotation @ fin.axis)
+        chord.append(placement.rotation @ fin.chord)
+    rho = hydro.fluid_density
+
+    def column(name: str) -> np.ndarray:
+        return np.array([float(getattr(fin, name)) for fin in hydro.fins])
+
+    return FinModel(
+        body=np.array(body, dtype=np.int64),
+        position=np.ascontiguousarray(position, dtype=float),
+        axis=np.ascontiguousarray(axis, dtype=float),
+        chord=np.ascontiguousarray(chord, dtype=float),
+        half_rho_area=0.5 * rho * column("area"),
+        lift_slope=column("lift_slope"),
+        drag_zero=column("drag_zero"),
+        drag_slope=column("drag_slope"),
+        stall_angle=column("stall_angle"),
+        max_angle=column("max_angle"),
+        max_rate=column("max_rate"),
+        time_constant=column("time_constant"),
     )
 
 
@@ -217,7 +261,10 @@ def packed_records(model: pin.Model, assembly: Assembly) -> Model:
         raise ValueError(f"fast backend: {reason}")
     fluid = assembly.fluid_net
     return Model(
-        bodies=rigid_bodies(model, fluid.added_mass), fluid=fluid, thrusters=assembly.thrusters
+        bodies=rigid_bodies(model, fluid.added_mass),
+        fluid=fluid,
+        thrusters=assembly.thrusters,
+        fins=assembly.fins,
     )
 
 

@@ -228,8 +228,10 @@ def acceleration_derivatives(
         backend: ``"numba"``, ``"pinocchio"`` or ``None`` (the vehicle's active backend).
 
     Raises:
-        ArgumentError: Bad shapes, a non-uniform current, or an unknown or unavailable backend.
+        ArgumentError: Bad shapes, a non-uniform current, an unknown or unavailable backend, or a
+            vehicle with fins (their lift and drag have no derivatives here yet).
     """
+    refuse_fins(vehicle, "acceleration_derivatives")
     q, v, tau = vehicle._q(q), vehicle._v(v), vehicle._v(tau, "tau")
     t = finite_time(t)
     velocity = uniform_current(current, t)
@@ -242,6 +244,16 @@ def acceleration_derivatives(
     if backend != "numba":
         raise ArgumentError(f"unknown backend {backend!r:.40} (expected numba or pinocchio)")
     return compiled_derivatives(vehicle)(q, v, tau, velocity, t)[0]
+
+
+def refuse_fins(vehicle, what: str) -> None:
+    """One line refusing derivatives of a vehicle with fins (:mod:`aiauv_hydro.laws.lift` has no
+    Jacobians yet), rather than derivatives that leave the fins out."""
+    if vehicle.hydro.fins:
+        raise ArgumentError(
+            f"{what}: vehicle has {len(vehicle.hydro.fins)} fin(s), whose lift and drag have no "
+            "derivatives yet; linearise by finite differences of Vehicle.acceleration"
+        )
 
 
 def compiled_derivatives(vehicle) -> CompiledDerivatives:

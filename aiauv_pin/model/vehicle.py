@@ -47,6 +47,7 @@ import pinocchio as pin
 from aiauv_hydro.currents import Current, as_current
 from aiauv_hydro.laws.fluid_terms import FluidModel, add_body_fluid_bias
 from aiauv_hydro.laws.kirchhoff import momentum_in_world
+from aiauv_hydro.laws.lift import add_fin_wrenches
 from aiauv_hydro.spec import HydroSpec
 from aiauv_pin._internal.array_checks import (
     configuration,
@@ -175,6 +176,8 @@ class Vehicle:
         self._thrusters = parts.thrusters
         self._buoyancy_model, self._has_buoyancy = parts.buoyancy_model, parts.has_buoyancy
         self._has_fluid, self._inertia_in_body = parts.has_fluid, parts.inertia_in_body
+        self._fins = parts.fins
+        self._has_fluid = self._has_fluid or bool(hydro.fins)
         self._fast = None
         self._fast_reason: str | None = None
         self.backend = os.environ.get("AIAUV_BACKEND", "auto") if backend is None else backend
@@ -318,6 +321,27 @@ class Vehicle:
         """Thrust limits [N], one per thruster."""
         return np.array([t.max_thrust for t in self.hydro.thrusters])
 
+    @property
+    def fin_names(self) -> list[str]:
+        """Names of the fins, in the order of the fin angles."""
+        return [f.name for f in self.hydro.fins]
+
+    @property
+    def n_fins(self) -> int:
+        """Number of fins (control surfaces)."""
+        return len(self.hydro.fins)
+
+    @property
+    def max_fin_angle(self) -> np.ndarray:
+        """Fin angle limits [rad], one per fin."""
+        return np.array([f.max_angle for f in self.hydro.fins])
+
+    def _fin_angles(self, fin_angles) -> np.ndarray:
+        """``fin_angles`` checked (zeros for ``None``): finite, one per fin [rad]."""
+        if fin_angles is None:
+            return np.zeros(self.n_fins)
+        return float_array(fin_angles, "fin_angles", (self.n_fins,))
+
     def neutral_configuration(self) -> np.ndarray:
         """Base at the world origin, level, joints at zero."""
         return pin.neutral(self.model)
@@ -364,12 +388,14 @@ class Vehicle:
                 mass += jac[b].T @ added @ jac[b]
         return mass
 
-    def _hydro_terms(self, q: np.ndarray, v: np.ndarray, current, t: float):
+    def _hydro_terms(self, q: np.ndarray, v: np.ndarray, current, t: float, fin_angles=None):
         """Rigid + fluid mass matrix and left-hand-side bias (the Pinocchio reference path).
 
         Pinocchio gives the rigid part (``computeAllTerms``: CRBA, RNEA bias with the weight,
         Jacobians, bias accelerations); every fluid term comes from
-        :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`, the function the compiled kernels call.
+        :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`, the function the compiled kernels call,
+        and the fins' lift and drag at ``fin_angles`` [rad] (zeros for ``None``) from
+        :func:`aiauv_hydro.laws.lift.add_fin_wrenches`, as in the kernels.
         """
         model, data = self.model, self.data
         pin.computeAllTerms(model, data, q, v)
@@ -389,6 +415,9 @@ class Vehicle:
         add_body_fluid_bias(
             self._fluid_reference, rotation, twist, currents, fluid_bias, relative, scratch
         )
+        if self.n_fins:
+            angles = np.zeros(self.n_fins) if fin_angles is None else fin_angles
+            add_fin_wrenches(self._fins, angles, rotation, twist, currents, fluid_bias)
         jac = self._body_jacobians()
         if self.added_mass:
             # M_A times the bias acceleration J_dot v (data.a with zero dv after computeAllTerms);
@@ -407,6 +436,7 @@ class Vehicle:
         current=None,
         *,
         t: float = 0.0,
+        fin_angles=None,
     ) -> np.ndarray:
         """Forward dynamics ``dv`` [m/s^2, rad/s^2] in Pinocchio's convention.
 
@@ -418,10 +448,17 @@ class Vehicle:
             current: Water velocity: ``None`` (still water), a constant world velocity (3,) [m/s], or
                 a :class:`aiauv_hydro.currents.Current` (sampled at each body at time ``t``).
             t: Time [s] at which a time-varying current is sampled.
+            fin_angles: Angles of the fins acting now [rad] (:attr:`fin_names` order; ``None``: all
+                zero); taken as given (the limits of :attr:`max_fin_angle` apply where a command
+                reaches the plant: :meth:`step` and the simulation loops).
 
         Returns:
             ``dv`` (nv,), the time derivative of ``v``'s coordinates (Fossen's ``nu_dot`` for the base).
         """
+        if self.n_fins:
+            return self._finned_acceleration(q, v, tau, current, t, self._fin_angles(fin_angles))
+        if fin_angles is not None:
+            self._fin_angles(fin_angles)  # names the problem: this vehicle has no fins
         if self._fast is not None and current is None:
             # the arguments checked in the compiled call itself (the checks below cost more than
             # an evaluation); anything it does not take goes on to the checks, which name it
@@ -437,10 +474,22 @@ class Vehicle:
         return self._pinocchio_acceleration(q, v, tau, optional_current(current), t)
 
     @project_errors("Vehicle.acceleration")
-    def _pinocchio_acceleration(self, q, v, tau, current, t: float) -> np.ndarray:
+    def _pinocchio_acceleration(self, q, v, tau, current, t: float, fin_angles=None) -> np.ndarray:
         with single_threaded_blas(self.nv):
-            mass, bias = self._hydro_terms(q, v, current, t)
+            mass, bias = self._hydro_terms(q, v, current, t, fin_angles)
             return np.linalg.solve(mass, tau - bias)
+
+    def _finned_acceleration(self, q, v, tau, current, t, fin_angles) -> np.ndarray:
+        """:meth:`acceleration` of a vehicle with fins: the angles go into this thread's compiled
+        workspace (``W.fin_angle``, read by the kernels at every stage) or to the reference."""
+        q, v, tau = self._q(q), self._v(v), self._v(tau, "tau")
+        t = finite_time(t)
+        fast = self._fast
+        if fast is not None:
+            env = fast.environment(current)
+            fast.workspace.fin_angle[:] = fin_angles
+            return fast.acceleration_unchecked(q, v, tau, env, fast.no_servo, t)
+        return self._pinocchio_acceleration(q, v, tau, optional_current(current), t, fin_angles)
 
     @project_errors("Vehicle.acceleration_derivatives")
     def acceleration_derivatives(
@@ -519,8 +568,9 @@ class Vehicle:
 
     @property
     def n_controls(self) -> int:
-        """Size of the control vector of :meth:`step`: one thrust per thruster, one torque per joint."""
-        return len(self.hydro.thrusters) + self.nv - 6
+        """Size of the control vector of :meth:`step`: one thrust per thruster, one angle per fin,
+        one torque per joint."""
+        return len(self.hydro.thrusters) + self.n_fins + self.nv - 6
 
     def controls_to_forces(self, q: np.ndarray, controls) -> np.ndarray:
         """Generalised forces ``tau = B(q) u + (0, tau_q)`` (nv,) [N, N m] of a control vector.
@@ -528,7 +578,9 @@ class Vehicle:
         Args:
             q: Configuration (nq,).
             controls: (:attr:`n_controls`,): the thrusts ``u`` [N] in the order of
-                :attr:`thruster_names`, then the joint torques ``tau_q`` [N m] in the order of
+                :attr:`thruster_names`, then the fin angles [rad] in the order of :attr:`fin_names`
+                (not forces: they act through the dynamics, :meth:`acceleration`, and are left out
+                here), then the joint torques ``tau_q`` [N m] in the order of
                 :attr:`joint_names`. ``B(q)`` is :meth:`thrust_matrix` (the paper's eq. (20)).
 
         Raises:
@@ -538,7 +590,7 @@ class Vehicle:
         controls = float_array(controls, "controls", (self.n_controls,))
         m = len(self.hydro.thrusters)
         tau = self.thrust_matrix(q) @ controls[:m]
-        tau[6:] += controls[m:]
+        tau[6:] += controls[m + self.n_fins :]
         return tau
 
     def step(
@@ -565,7 +617,9 @@ class Vehicle:
         Args:
             q: Configuration (nq,).
             v: Velocity (nv,) [m/s, rad/s].
-            controls: Thrusts [N] then joint torques [N m], (:attr:`n_controls`,).
+            controls: Thrusts [N], fin angles [rad] (clipped to :attr:`max_fin_angle` and held
+                over the step; no rate limit in one stateless step), then joint torques [N m],
+                (:attr:`n_controls`,).
             dt: Step [s], > 0.
             method: ``"rk4"``, ``"euler"`` or ``"midpoint"``.
             current: As in :meth:`acceleration`.
@@ -583,6 +637,10 @@ class Vehicle:
                 f"{why}); aiauv_pin.rk4_step steps it"
             )
         tau = self.controls_to_forces(q, controls)
+        if self.n_fins:
+            m, limit = len(self.hydro.thrusters), self.max_fin_angle
+            angles = np.clip(np.asarray(controls, dtype=float)[m : m + self.n_fins], -limit, limit)
+            fast.workspace.fin_angle[:] = angles
         return fast.step(q, v, tau, dt, method=method, current=current, t=t)
 
     @project_errors("Vehicle.momentum_in_world")

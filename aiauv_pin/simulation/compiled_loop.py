@@ -26,7 +26,13 @@ controller):
   diagnostics); there is no sample at ``t = 0``: the first stage runs with no input (``tau = 0``),
   since a sample there would be held by a controller's integrators as if it applied over
   ``[0, dt/2]`` (a visible offset along the path on the paper's surge integral, issue 15);
-* a row is logged every ``log_every`` steps and at the last step, after the sample of that step.
+* a row is logged every ``log_every`` steps and at the last step, after the sample of that step;
+* before each step, the actuators advance over it
+  (:func:`aiauv_pin.kernels.articulated_body.actuators_into`: fin angles towards the controller's
+  ``W.fin_command``, the thrust of thrusters with a lag or a rate limit towards the command that
+  :func:`~aiauv_pin.kernels.articulated_body.thrust_into` recorded), and the value reached is held
+  over the step; the interpreted loop has no actuator state and refuses a Python controller on a
+  vehicle with fins or thruster dynamics.
 
 Which compiled controller the loop runs (:func:`run_controller`): a user's function, or a built-in
 one chosen by type. numba's on-disk cache cannot key a compiled function on an argument that is
@@ -49,6 +55,7 @@ from aiauv_pin.controllers.turning_compiled import TurningParameters, thruster_t
 from aiauv_pin.kernels.articulated_body import (
     MIDPOINT,
     MidpointMethod,
+    actuators_into,
     integrator_step,
     is_finite_state,
     midpoint_final_into,
@@ -258,7 +265,10 @@ def run_chunk(
             log_index += 1
         if act.last:
             return log_index, k - k_start
-        complete_step(method, model, env, servo, t, q, v, tau, dt, W)
+        if actuators_into(model, W, q, v, tau, dt):  # lagged thrusters: tau corrected
+            complete_step(method, model, env, servo, t, q, v, W.tau_actuated, dt, W)
+        else:
+            complete_step(method, model, env, servo, t, q, v, tau, dt, W)
         if not is_finite_state(W.q_next, W.v_next):
             return log_index, k - k_start
         q_next, v_next = W.q_next, W.v_next

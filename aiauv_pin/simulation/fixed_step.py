@@ -28,6 +28,7 @@ from aiauv_pin.controllers.compiled_controller import CompiledController, check_
 from aiauv_pin.dynamics.joint_servo import JointServo
 from aiauv_pin.dynamics.lagged_added_mass import LaggedAddedMass, check_filter, check_scheme
 from aiauv_pin.errors import ArgumentError, SimulationDiverged, bounds_checked_call
+from aiauv_pin.kernels.articulated_body import reset_actuators
 from aiauv_pin.kernels.disturbances import Disturbance
 from aiauv_pin.model.vehicle import Vehicle
 from aiauv_pin.reference.integrators import (
@@ -290,8 +291,16 @@ def simulate(
             after_first_chunk=after_first_chunk,
             compile_only=compile_only,
         )
+    if controller is not None and has_actuator_state(vehicle):
+        raise ArgumentError(
+            "this vehicle has fins or thruster dynamics, whose actuator state only the compiled "
+            "loop carries: give a CompiledController (it writes workspace.fin_command and "
+            "commands thrusts through thrust_into)"
+        )
     if compile_only:
         return None
+    if vehicle.fast is not None:
+        reset_actuators(vehicle.fast.workspace)  # fins at zero (a Vehicle.step may have set them)
     step = INTEGRATORS[method]
     q, v = q0, v0
     current = as_current(current)
@@ -533,6 +542,7 @@ def _simulate_compiled(
     tau = np.zeros(nv)
     info = np.full(width, np.nan)
     workspace = fast.workspace
+    reset_actuators(workspace)  # fins at zero, thrusters at rest
     loop = loop_for(environment, controller.loop_function, controller.parameters)
 
     def run_chunk(k: int, stop: int, logged: int) -> tuple[int, int]:
@@ -622,6 +632,14 @@ def _simulate_compiled(
     if diverged_at is not None:
         raise diverged(trajectory, diverged_at + 1, dt)
     return trajectory
+
+
+def has_actuator_state(vehicle) -> bool:
+    """Whether ``vehicle`` has fins or thrusters with a lag or a rate limit (actuator state)."""
+    hydro = vehicle.hydro
+    return bool(hydro.fins) or any(
+        t.time_constant > 0.0 or t.max_rate != math.inf for t in hydro.thrusters
+    )
 
 
 def _generalized(value, nv: int) -> np.ndarray:

@@ -12,8 +12,17 @@ The block is a top-level child of ``<robot>`` (URDF parsers ignore unknown top-l
         <linear_damping_forward_speed>6 or 36; wrench -u D_F nu</linear_damping_forward_speed>
       </link>
       <link name="link3" model="slender_cylinder" C_dC="0.9"/>
-      <thruster name="t1" link="link3" xyz="0.237 0 0" direction="0 0 1" max_thrust="50"/>
+      <thruster name="t1" link="link3" xyz="0.237 0 0" direction="0 0 1" max_thrust="50"
+                time_constant="0.2" max_rate="100"/>    <!-- both optional: [s], [N/s] -->
+      <fin name="rudder" link="tail" xyz="-0.4 0 0.05" axis="0 0 1" chord="1 0 0" area="0.01"
+           lift_slope="3.0" drag_zero="0.01" drag_slope="1.2" stall_angle="0.4"
+           max_angle="0.5" max_rate="1.0" time_constant="0.1"/>
     </hydrodynamics>
+
+A ``<fin>`` (:class:`aiauv_hydro.spec.Fin`, law :func:`aiauv_hydro.laws.lift.fin_force`) needs
+``name``, ``link``, ``axis``, ``chord``, ``area``, ``lift_slope`` and ``max_angle``; ``xyz``
+defaults to the link origin, ``drag_zero`` and ``drag_slope`` to 0, ``stall_angle``, ``max_rate`` to
+``inf`` (no stall, no rate limit) and ``time_constant`` to 0.
 
 Defaults: ``fluid_density`` 1025 kg/m^3, ``gravity`` 9.81 m/s^2; missing ``fossen`` matrices are
 zero. A ``slender_cylinder`` link takes its length and radius from the link's first ``<collision>``
@@ -33,8 +42,8 @@ the link's own axes. Axis components below 1e-6 are set to zero (URDF files writ
 frame is the link frame.
 
 UUV Simulator blocks (``<gazebo><plugin>`` with ``<link><hydrodynamic_model>``) in the same file are
-read too (:mod:`aiauv_hydro.urdf.uuv_simulator`), and so are its thruster plugins; for a link (or a thruster
-name) given in both, this block wins. Fluid density:
+read too (:mod:`aiauv_hydro.urdf.uuv_simulator`), and so are its thruster and fin plugins; for a
+link (or a thruster or fin name) given in both, this block wins. Fluid density:
 this block's ``fluid_density`` attribute if given, else the UUV Simulator plugin's
 ``<fluid_density>`` (UUV Simulator's default 1028 if the plugin has UUV links but no density), else
 1025.
@@ -42,6 +51,7 @@ this block's ``fluid_density`` attribute if given, else the UUV Simulator plugin
 
 from __future__ import annotations
 
+import math
 import os
 import warnings
 from collections.abc import Mapping
@@ -51,7 +61,7 @@ from xml.etree.ElementTree import Element
 import numpy as np
 
 from aiauv_hydro.estimate.slender_cylinder import SlenderCylinderCoefficients, slender_cylinder_link
-from aiauv_hydro.spec import HydroError, HydroSpec, LinkHydrodynamics, Thruster
+from aiauv_hydro.spec import Fin, HydroError, HydroSpec, LinkHydrodynamics, Thruster
 from aiauv_hydro.urdf import uuv_simulator
 from aiauv_hydro.urdf.xml_reading import (  # noqa: F401  (re-exported: the block's readers use them)
     AXIS_SNAP_TOLERANCE,
@@ -227,7 +237,11 @@ def _thruster(element: Element, links: dict[str, UrdfLink]) -> Thruster:
     if not name:
         raise HydroError("<hydrodynamics> <thruster> without a name")
     what = f"thruster '{name}'"
-    _check_attributes(element, ("name", "link", "xyz", "direction", "max_thrust"), what)
+    _check_attributes(
+        element,
+        ("name", "link", "xyz", "direction", "max_thrust", "time_constant", "max_rate"),
+        what,
+    )
     for child in element:
         if isinstance(child.tag, str):
             raise HydroError(f"{what}: unexpected child element <{child.tag}>")
@@ -249,7 +263,83 @@ def _thruster(element: Element, links: dict[str, UrdfLink]) -> Thruster:
         position=parse_vector(element.get("xyz", "0 0 0"), 3, f"{what} xyz"),
         direction=direction,
         max_thrust=parse_scalar(element.get("max_thrust"), f"{what} max_thrust"),
+        **_dynamics(element, what),
     )
+
+
+def _optional_scalar(element: Element, name: str, what: str, default: float) -> float:
+    """Attribute ``name`` as a float (``inf`` allowed), or ``default`` when absent."""
+    text = element.get(name)
+    if text is None:
+        return default
+    if text.strip() in ("inf", "+inf"):
+        return math.inf
+    return parse_scalar(text, f"{what} {name}")
+
+
+def _dynamics(element: Element, what: str) -> dict[str, float]:
+    """The optional ``time_constant`` [s] and ``max_rate`` of a thruster or fin."""
+    return {
+        "time_constant": _optional_scalar(element, "time_constant", what, 0.0),
+        "max_rate": _optional_scalar(element, "max_rate", what, math.inf),
+    }
+
+
+#: Plausible ranges of a fin's numbers (the table of
+#: :data:`aiauv_pin.description.plausible_ranges.PLAUSIBLE_RANGES` quotes them): areas from a
+#: centimetre square to a ship's rudder; lift slopes up to three times the thin-airfoil ``2 pi``;
+#: drag coefficients up to a flat plate's ~2, with a margin; angles up to a half turn; a time constant of
+#: at most a minute.
+FIN_RANGES = {
+    "area": (1e-6, 1e3),
+    "lift_slope": (0.0, 20.0),
+    "drag_zero": (0.0, 10.0),
+    "drag_slope": (0.0, 100.0),
+    "stall_angle": (1e-3, math.pi / 2),
+    "max_angle": (1e-3, math.pi),
+    "max_rate": (1e-6, math.inf),
+    "time_constant": (0.0, 60.0),
+}
+
+
+def _fin(element: Element, links: Mapping[str, UrdfLink]) -> Fin:
+    name = element.get("name")
+    if not name:
+        raise HydroError("<hydrodynamics> <fin> without a name")
+    what = f"fin '{name}'"
+    _check_attributes(element, ("name", "link", "xyz", "axis", "chord", *FIN_RANGES), what)
+    for child in element:
+        if isinstance(child.tag, str):
+            raise HydroError(f"{what}: unexpected child element <{child.tag}>")
+    link = element.get("link")
+    if not link:
+        raise HydroError(f"{what}: missing link attribute")
+    if link not in links:
+        raise HydroError(f"{what}: link '{link}' is not a <link> of the robot")
+    for required in ("axis", "chord", "area", "lift_slope", "max_angle"):
+        if required not in element.attrib:
+            raise HydroError(f"{what}: missing {required} attribute")
+    position = parse_vector(element.get("xyz", "0 0 0"), 3, f"{what} xyz")
+    if float(np.max(np.abs(position))) > LENGTH_RANGE[1]:
+        raise HydroError(f"{what}: xyz {position.tolist()} farther than {LENGTH_RANGE[1]:g} m")
+    vectors = {}
+    for key in ("axis", "chord"):
+        vectors[key] = parse_vector(element.get(key), 3, f"{what} {key}")
+        if not np.any(vectors[key]):
+            raise HydroError(f"{what}: {key} is the zero vector")
+    defaults = {"drag_zero": 0.0, "drag_slope": 0.0, "stall_angle": math.inf, "max_rate": math.inf}
+    values = {}
+    for key, (low, high) in FIN_RANGES.items():
+        value = _optional_scalar(element, key, what, defaults.get(key, 0.0))
+        if key == "stall_angle" and value == math.inf:
+            values[key] = value
+            continue
+        if not low <= value <= high:
+            raise HydroError(
+                f"{what}: {key} = {value:.4g} outside the plausible range [{low:g}, {high:g}]"
+            )
+        values[key] = value
+    return Fin(name=name, link=link, position=position, **vectors, **values)
 
 
 def _hydrodynamics_block(root: Element) -> Element | None:
@@ -305,6 +395,7 @@ def read_hydrodynamics(
 
     ours: list[LinkHydrodynamics] = []
     thrusters: list[Thruster] = []
+    fins: list[Fin] = []
     if block is not None:
         for element in block:
             if not isinstance(element.tag, str):
@@ -333,6 +424,8 @@ def read_hydrodynamics(
                     )
             elif element.tag == "thruster":
                 thrusters.append(_thruster(element, links))
+            elif element.tag == "fin":
+                fins.append(_fin(element, links))
             else:
                 raise HydroError(f"<hydrodynamics>: unknown element <{element.tag}>")
 
@@ -345,9 +438,16 @@ def read_hydrodynamics(
         for thruster in uuv_simulator.uuv_thrusters(root, links)
         if thruster.name not in ours_thrusters
     ]
+    ours_fins = {fin.name for fin in fins}
+    fins += [
+        fin
+        for fin in uuv_simulator.uuv_fins(root, links, fluid_density)
+        if fin.name not in ours_fins
+    ]
     return HydroSpec(
         fluid_density=fluid_density,
         gravity=gravity,
         links=(*ours, *uuv_links),
         thrusters=tuple(thrusters),
+        fins=tuple(fins),
     )

@@ -53,7 +53,25 @@ Thrusters (``<gazebo><plugin filename="libuuv_thruster_ros_plugin.so">``, Thrust
 ``thrust_efficiency * f(propeller_efficiency * gain * clamp(x, clampMin, clampMax))`` limited to
 ``[thrustMin, thrustMax]``, with ``f`` the conversion function (``Basic``: ``k x |x|``; ``Bessa``:
 dead zone; ``LinearInterp``: table); our ``max_thrust`` is its value at ``clampMax`` (or
-``thrustMax``), see :func:`uuv_thrusters`. The propeller joint (continuous) is made fixed for the
+``thrustMax``), see :func:`uuv_thrusters`. The thruster's ``<dynamics>`` (Dynamics.cc) act on the
+rotor command before the conversion: ``ZeroOrder`` becomes ``time_constant = 0`` and ``FirstOrder``
+its ``timeConstant`` as our first-order lag of the thrust: exact for a linear conversion; for
+``Basic``, ``T = k w |w|`` with ``tau w' = w_c - w`` gives ``tau T' = 2 k |w| (w_c - w) = (T_c - T) +
+O((w_c - w)^2)`` near a steady state ``w_c != 0`` (the same time constant for small steps; a step
+from rest is slower at first in UUV Simulator). The nonlinear ``Yoerger`` and ``Bessa`` rotor models
+are read as zero order with a warning.
+
+Fins (``<gazebo><plugin filename="libuuv_fin_ros_plugin.so">``, FinPlugin.cc) become our fins
+(:func:`uuv_fins`) on the plugin's ``link_name``, at that link's centre of mass, span axis ``z`` and
+chord ``x`` of that link (the plugin's lift-drag plane is normal to the link's z axis; its lift
+direction is ``-z x v`` and its angle ``atan2(v_y, v_x)``, :mod:`aiauv_hydro.laws.lift`). The
+``Quadratic`` lift-drag model's ``lift_constant`` and ``drag_constant`` are ``0.5 rho A C`` products:
+they are carried with ``area = 1`` m^2 and ``lift_slope = 2 lift_constant / rho``, ``drag_slope = 2
+drag_constant / rho`` (``rho`` our fluid density), so that the forces are the plugin's exactly;
+``drag_zero = 0``, no stall. ``max_angle`` is the fin joint's limit (the plugin clips the command to
+it), ``time_constant`` the ``FirstOrder`` dynamics' ``timeConstant``. ``TwoLines`` (drag linear in
+the angle) has no form here and is left out with a warning.
+The propeller joint (continuous) is made fixed for the
 dynamics (:func:`freeze_thruster_joints`): UUV Simulator drives its speed kinematically and its
 link is a placeholder of 1 g.
 
@@ -79,7 +97,7 @@ from xml.etree.ElementTree import Element
 import numpy as np
 
 from aiauv_hydro.numerics.spatial import motion_transform
-from aiauv_hydro.spec import HydroError, HydroSpec, LinkHydrodynamics, Thruster
+from aiauv_hydro.spec import Fin, HydroError, HydroSpec, LinkHydrodynamics, Thruster
 from aiauv_hydro.urdf.xml_reading import (
     DEFAULT_GRAVITY,
     MATRIX_TOLERANCE,
@@ -705,6 +723,132 @@ def uuv_thrusters(root: Element, links: dict[str, UrdfLink]) -> list[Thruster]:
                 position=links[link].inertial_origin,
                 direction=axis,
                 max_thrust=forward,
+                time_constant=thruster_time_constant(plugin.find("dynamics"), what),
+            )
+        )
+    return result
+
+
+def thruster_time_constant(dynamics: Element | None, what: str) -> float:
+    """Our first-order time constant [s] of a UUV Simulator ``<dynamics>`` element.
+
+    ``ZeroOrder`` (or none) is 0; ``FirstOrder`` is its ``timeConstant`` (Dynamics.cc line 104 reads
+    ``timeConstant``; ``time_constant``, the name its error message gives, is accepted too). For a
+    thruster the plugin's dynamics filter the rotor command, not the thrust: see the module
+    docstring for how far the two agree. ``Yoerger`` and ``Bessa`` are read as 0 with a warning.
+
+    Raises:
+        HydroError: An unknown type, or a missing or negative time constant.
+    """
+    if dynamics is None:
+        return 0.0
+    kind = (dynamics.findtext("type") or "").strip()
+    if kind == "ZeroOrder":
+        return 0.0
+    if kind == "FirstOrder":
+        text = dynamics.findtext("timeConstant")
+        if text is None:
+            text = dynamics.findtext("time_constant")
+        if text is None:
+            raise HydroError(f"{what}: FirstOrder dynamics without <timeConstant>")
+        value = parse_scalar(text, f"{what} timeConstant")
+        if value < 0.0:
+            raise HydroError(f"{what}: timeConstant must be >= 0, got {value}")
+        return value
+    if kind in ("Yoerger", "Bessa"):
+        warnings.warn(
+            f"{what}: {kind} rotor dynamics have no form here; read as zero order (no lag)",
+            stacklevel=4,
+        )
+        return 0.0
+    raise HydroError(
+        f"{what}: dynamics type '{kind}' is not supported (ZeroOrder, FirstOrder, Yoerger, Bessa)"
+    )
+
+
+# Fins
+# --------------------------------------------------------------------------------------------------
+
+
+def fin_plugins(root: Element) -> list[Element]:
+    """The UUV Simulator fin plugin elements of a ``<robot>`` (``<liftdrag>`` and ``<link_name>``)."""
+    return [
+        plugin
+        for plugin in root.findall("gazebo/plugin")
+        if plugin.find("liftdrag") is not None and plugin.find("link_name") is not None
+    ]
+
+
+def _fin_limit(joint: Element | None, what: str) -> float:
+    """The symmetric angle limit [rad] of a fin joint's ``<limit>`` (``pi/2`` without one)."""
+    limit = None if joint is None else joint.find("limit")
+    if limit is None or ("lower" not in limit.attrib and "upper" not in limit.attrib):
+        return 0.5 * math.pi
+    lower = parse_scalar(limit.get("lower", "0"), f"{what} joint lower limit")
+    upper = parse_scalar(limit.get("upper", "0"), f"{what} joint upper limit")
+    bound = min(-lower, upper)
+    if not bound > 0.0:
+        raise HydroError(f"{what}: joint limits [{lower}, {upper}] do not contain zero")
+    if abs(-lower - upper) > 1e-9 * max(1.0, bound):
+        warnings.warn(
+            f"{what}: joint limits [{lower:.4g}, {upper:.4g}] are not symmetric; using +-{bound:.4g}",
+            stacklevel=4,
+        )
+    return min(bound, math.pi)
+
+
+def uuv_fins(root: Element, links: dict[str, UrdfLink], fluid_density: float) -> list[Fin]:
+    """Fins of the UUV Simulator fin plugins, as this package's fins (see the module docstring).
+
+    Args:
+        root: The ``<robot>`` element.
+        links: Its links (:func:`robot_links`).
+        fluid_density: The vehicle's fluid density [kg/m^3] (the constants are divided by it).
+
+    Raises:
+        HydroError: Unknown link, missing constants, bad joint limits or dynamics.
+    """
+    joints = {joint.get("name"): joint for joint in root.findall("joint")}
+    result = []
+    for plugin in fin_plugins(root):
+        link = (plugin.findtext("link_name") or "").strip()
+        identifier = (plugin.findtext("fin_id") or "").strip()
+        name = plugin.get("name") or f"fin{identifier or link}"
+        what = f"UUV Simulator fin '{name}'"
+        if link not in links:
+            raise HydroError(f"{what}: link_name '{link}' is not a <link> of the robot")
+        liftdrag = plugin.find("liftdrag")
+        kind = (liftdrag.findtext("type") or "").strip()
+        if kind != "Quadratic":
+            warnings.warn(
+                f"{what}: liftdrag type '{kind}' has no form here (Quadratic only); left out",
+                stacklevel=3,
+            )
+            continue
+        constants = {}
+        for tag in ("lift_constant", "drag_constant"):
+            text = liftdrag.findtext(tag)
+            if text is None:
+                raise HydroError(f"{what}: Quadratic liftdrag needs <{tag}>")
+            constants[tag] = parse_scalar(text, f"{what} {tag}")
+            if constants[tag] < 0.0:
+                raise HydroError(f"{what}: {tag} must be >= 0, got {constants[tag]}")
+        joint_name = (plugin.findtext("joint_name") or "").strip()
+        joint = joints.get(joint_name)
+        if joint_name and joint is None:
+            raise HydroError(f"{what}: joint_name '{joint_name}' is not a <joint> of the robot")
+        result.append(
+            Fin(
+                name=name,
+                link=link,
+                position=links[link].inertial_origin,
+                axis=(0.0, 0.0, 1.0),
+                chord=(1.0, 0.0, 0.0),
+                area=1.0,
+                lift_slope=2.0 * constants["lift_constant"] / fluid_density,
+                drag_slope=2.0 * constants["drag_constant"] / fluid_density,
+                max_angle=_fin_limit(joint, what),
+                time_constant=thruster_time_constant(plugin.find("dynamics"), what),
             )
         )
     return result
