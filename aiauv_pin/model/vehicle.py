@@ -130,6 +130,10 @@ class Vehicle:
         hydro: The hydrodynamic parameters read from the URDF.
         name: Robot name from the URDF.
         added_mass, damping, restoring: Which fluid effects are on.
+        fixed_base: The root link is fixed to the world: ``q`` and ``v`` keep the free-flyer
+            layout, the base velocity and acceleration are zero in both backends (the base
+            entries of ``v`` are read as zero, the base rows of :meth:`acceleration` are zero and
+            the joint rows solve ``M_jj ddq_j = tau_j - b_j``).
         backend: ``"auto"``, ``"numba"`` or ``"pinocchio"`` (see the module docstring); settable.
         data: Pinocchio's ``Data`` of the calling thread (each thread has its own).
 
@@ -153,8 +157,10 @@ class Vehicle:
         damping: bool = True,
         restoring: bool = True,
         backend: str | None = None,
+        fixed_base: bool = False,
     ) -> None:
         self.model = model
+        self.fixed_base = bool(fixed_base)
         self.hydro = hydro
         self.name = name
         self.added_mass = bool(added_mass)
@@ -169,7 +175,12 @@ class Vehicle:
         self._packed: Model | None = None
         # the description packed once (aiauv_pin.model.assembly): both backends evaluate it
         self._assembly = parts = assemble(
-            model, hydro, added_mass=self.added_mass, damping=self.damping, restoring=restoring
+            model,
+            hydro,
+            added_mass=self.added_mass,
+            damping=self.damping,
+            restoring=restoring,
+            fixed_base=self.fixed_base,
         )
         self._fluid_net, self._fluid_reference = parts.fluid_net, parts.fluid_reference
         self._thrusters = parts.thrusters
@@ -439,8 +450,18 @@ class Vehicle:
     @project_errors("Vehicle.acceleration")
     def _pinocchio_acceleration(self, q, v, tau, current, t: float) -> np.ndarray:
         with single_threaded_blas(self.nv):
+            if not self.fixed_base:
+                mass, bias = self._hydro_terms(q, v, current, t)
+                return np.linalg.solve(mass, tau - bias)
+            # fixed base: v_base = 0, a_base = 0; the joint rows alone,
+            # ddq_j = M_jj^-1 (tau_j - b_j) (Featherstone 2008, Sec. 6.1, a fixed-base tree)
+            v = v.copy()
+            v[:6] = 0.0
             mass, bias = self._hydro_terms(q, v, current, t)
-            return np.linalg.solve(mass, tau - bias)
+            out = np.zeros(self.nv)
+            if self.nv > 6:
+                out[6:] = np.linalg.solve(mass[6:, 6:], tau[6:] - bias[6:])
+            return out
 
     @project_errors("Vehicle.acceleration_derivatives")
     def acceleration_derivatives(
@@ -455,6 +476,10 @@ class Vehicle:
         """
         from aiauv_pin.model.derivatives import acceleration_derivatives
 
+        if self.fixed_base:
+            raise ArgumentError(
+                "derivatives: not available for a fixed-base vehicle (they are those of a free base)"
+            )
         return acceleration_derivatives(self, q, v, tau, current, t=t)
 
     @project_errors("Vehicle.fluid_forces")
@@ -583,6 +608,9 @@ class Vehicle:
                 f"{why}); aiauv_pin.rk4_step steps it"
             )
         tau = self.controls_to_forces(q, controls)
+        if self.fixed_base:  # the locked base does not move: its velocity is zero
+            v = float_array(v, "v", (self.nv,)).copy()
+            v[:6] = 0.0
         return fast.step(q, v, tau, dt, method=method, current=current, t=t)
 
     @project_errors("Vehicle.momentum_in_world")
