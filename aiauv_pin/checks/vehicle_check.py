@@ -78,6 +78,7 @@ class CheckReport:
         thrusters: ``(name, link, position, direction, max_thrust)`` tuples.
         smallest_mass_eigenvalue: Smallest eigenvalue of ``M(q)`` at the neutral configuration.
         warnings: One-line warnings.
+        fixed_base: The root link is fixed to the world.
     """
 
     path: Path
@@ -93,6 +94,7 @@ class CheckReport:
     thrusters: tuple
     smallest_mass_eigenvalue: float
     warnings: tuple[str, ...]
+    fixed_base: bool = False
 
 
 def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
@@ -184,6 +186,7 @@ def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
         thrusters=thrusters,
         smallest_mass_eigenvalue=smallest_eigenvalue,
         warnings=tuple(warnings),
+        fixed_base=vehicle.fixed_base,
     )
 
 
@@ -240,7 +243,7 @@ def format_report(report: CheckReport) -> str:
     lines = [
         f"vehicle '{s.name}' from {shown}",
         f"fluid density {report.fluid_density:g} kg/m^3, gravity {report.gravity:g} m/s^2, "
-        f"root link '{s.root}'",
+        f"root link '{s.root}'" + (" (fixed base: fixed to the world)" if report.fixed_base else ""),
         "",
         "links (link frame; margin = (rho V - m) g)",
         f"{'link':<20} {'mass kg':>9} {'V m^3':>10} {'margin N':>10} {'CG m':>22} {'CB m':>22}"

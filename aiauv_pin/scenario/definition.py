@@ -102,6 +102,7 @@ class Scenario:
         gait: The gait of ``controller = "gait"``
             (:class:`aiauv_pin.controllers.gait_controller.Gait`; ``None``: its defaults).
         vehicle: URDF file of the vehicle (``None``: the bundled vehicle of ``case``).
+        fixed_base, lenient: Load options of the vehicle (:func:`aiauv_pin.load_vehicle`).
         added_mass: ``"exact"`` or ``"lagged"`` (UUV Simulator's and gz-sim's scheme,
             :mod:`aiauv_pin.dynamics.lagged_added_mass`; runs the Python controller, not the compiled loop).
         lagged_filter: The lagged scheme's filter coefficient in ``(0, 1]`` (0.3: UUV Simulator,
@@ -124,6 +125,8 @@ class Scenario:
     heading: tuple[float, float, float] | None = None
     controller: str = "paper"
     vehicle: str | None = None
+    fixed_base: bool = False
+    lenient: bool = False
     added_mass: str = "exact"
     lagged_filter: float = UUV_SIMULATOR_FILTER
     gait: Gait | None = None
