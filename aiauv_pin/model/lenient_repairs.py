@@ -12,6 +12,8 @@ our ``<hydrodynamics>`` annotation) and what was done:
   them (joint ends, ``<gazebo reference>``, plugin ``<link name>``, ``linkName``, ``jointName``);
 * **continuous joints**: read as revolute joints without limits (the same dynamics; the angle is
   not wrapped), since the kernels take 1-DOF joints with one coordinate;
+* **placeholder collision shapes** below the plausible size (UUV Simulator's ``no_collision``,
+  a cylinder of 1e-6 m on thruster and sensor links) are dropped;
 * **joints whose limits allow no motion** (``lower == upper``: Oberon7's ``anchor`` and finger tips)
   are made fixed: Gazebo holds them at the limit;
 * **massless or inertia-less links on movable joints** (LAUV's fins on revolute joints: their mass
@@ -41,6 +43,7 @@ from xml.etree.ElementTree import Element, SubElement
 import numpy as np
 
 from aiauv_hydro.urdf.uuv_simulator import collision_centroid_or_none, uuv_plugins
+from aiauv_pin.description.plausible_ranges import PLAUSIBLE_RANGES
 from aiauv_pin.description.safe_names import MAX_NAME_LENGTH, is_safe_name, shown
 from aiauv_pin.errors import LenientRepairWarning
 from aiauv_pin.model.validation import TRIANGLE_TOLERANCE
@@ -220,6 +223,7 @@ def _joints(root: Element, source: str, repairs: LenientRepairs) -> None:
             continue
         children.setdefault(parent.get("link"), []).append((joint, child.get("link")))
         parent_of[child.get("link")] = parent.get("link")
+    held: list[str] = []
     for joint in root.findall("joint"):
         name, kind = joint.get("name"), joint.get("type")
         if kind not in ("revolute", "prismatic", "continuous"):
@@ -232,11 +236,7 @@ def _joints(root: Element, source: str, repairs: LenientRepairs) -> None:
         if kind != "continuous" and limit is not None and lower == upper:
             _lock(joint)
             repairs.locked_joints.append(name)
-            repairs.say(
-                source,
-                f"joint '{name}': its limits [{lower:g}, {upper:g}] allow no motion (the source "
-                "file's data; Gazebo holds it there): made fixed",
-            )
+            held.append(name)
             continue
         if child is not None and not _subtree_has_inertia(child, children, links):
             _lock(joint)
@@ -269,6 +269,43 @@ def _joints(root: Element, source: str, repairs: LenientRepairs) -> None:
                 f"without limits (+-{UNLIMITED_ANGLE:g} rad; the same dynamics, the angle not "
                 "wrapped)",
             )
+    if held:
+        more = f" and {len(held) - 3} more" if len(held) > 3 else ""
+        repairs.say(
+            source,
+            f"{len(held)} movable joints whose limits allow no motion (lower = upper, the source "
+            f"file's data; Gazebo holds them there: sensor mounts, locked fingers) made fixed: "
+            f"{', '.join(repr(name) for name in held[:3])}{more}",
+        )
+
+
+def _placeholder_collisions(root: Element, source: str, repairs: LenientRepairs) -> None:
+    """Drop collision shapes below the plausible geometry size: UUV Simulator's ``no_collision``
+    macro (a cylinder of 1e-6 m, ``uuv_descriptions/urdf/common.urdf.xacro``) marks a link that
+    has none."""
+    smallest = PLAUSIBLE_RANGES["geometry size"][0]
+    dropped = []
+    for link in root.findall("link"):
+        for collision in link.findall("collision"):
+            shape = next(iter(collision.find("geometry") or ()), None)
+            if shape is None or shape.tag not in ("box", "cylinder", "sphere"):
+                continue
+            if shape.tag == "box":
+                sizes = (shape.get("size") or "").split()
+            else:
+                sizes = [shape.get(key) for key in ("radius", "length") if shape.get(key)]
+            values = [_float(size, default=1.0) for size in sizes]
+            if values and max(values) < smallest:
+                link.remove(collision)
+                dropped.append(link.get("name"))
+    if dropped:
+        more = f" and {len(dropped) - 3} more" if len(dropped) > 3 else ""
+        repairs.say(
+            source,
+            f"{len(dropped)} placeholder collision shapes smaller than {smallest:g} m (the source "
+            f"file's: UUV Simulator's no_collision macro) dropped, on "
+            f"{', '.join(repr(name) for name in dropped[:3])}{more}",
+        )
 
 
 def _inertias(root: Element, source: str, repairs: LenientRepairs) -> None:
@@ -330,6 +367,7 @@ def repair(root: Element, source: str) -> LenientRepairs:
     repairs = LenientRepairs()
     _rename(root, source, repairs)
     _joints(root, source, repairs)
+    _placeholder_collisions(root, source, repairs)
     _inertias(root, source, repairs)
     _buoyancy_centres(root, source, repairs)
     return repairs
