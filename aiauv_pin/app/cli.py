@@ -463,6 +463,12 @@ def _add_annotate(subparsers) -> None:
         help="give each link the volume m / rho (neutrally buoyant link by link) instead of its "
         "shape's volume",
     )
+    parser.add_argument(
+        "--lenient",
+        action="store_true",
+        help="check that the output loads with --lenient (the robot's own data repaired; load "
+        "it with --lenient too)",
+    )
     _add_description_options(parser)
     parser.set_defaults(handler=_run_annotate)
 
@@ -478,6 +484,7 @@ def _run_annotate(args) -> int:
         args.output,
         fluid_density=args.fluid_density,
         neutral=args.neutral,
+        lenient=args.lenient,
         **_description_options(args),
     )
     from aiauv_hydro.urdf.annotate import format_annotation
