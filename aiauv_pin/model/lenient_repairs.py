@@ -129,25 +129,48 @@ def world_root(root: Element) -> bool:
     return len(below) == 1 and below[0].get("type") == "fixed"
 
 
+#: The valid principal moments ``x`` form the convex cone ``G x >= 0``: ``x_i >= 0`` and
+#: ``x_i + x_j >= x_k`` (the triangle inequality of a real body).
+_VALID_MOMENTS = np.array(
+    [[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, -1], [1, -1, 1], [-1, 1, 1]], dtype=float
+)
+
+
+def _project_moments(moments: np.ndarray) -> np.ndarray:
+    """Euclidean projection of principal moments onto the valid cone :data:`_VALID_MOMENTS`.
+
+    The projection lies on the face whose active constraints ``G_A x = 0`` hold, and is the
+    projection onto that face's span; every subset ``A`` of the six constraints is tried and the
+    nearest feasible candidate kept (a convex cone: that candidate is the projection).
+    """
+    best, best_distance = None, np.inf
+    for mask in range(64):
+        rows = _VALID_MOMENTS[[k for k in range(6) if mask >> k & 1]]
+        if len(rows):
+            candidate = moments - rows.T @ (np.linalg.pinv(rows @ rows.T) @ (rows @ moments))
+        else:
+            candidate = moments.copy()
+        scale = max(1.0, float(np.max(np.abs(moments))))
+        if np.all(_VALID_MOMENTS @ candidate >= -1e-12 * scale):
+            distance = float(np.linalg.norm(candidate - moments))
+            if distance < best_distance:
+                best, best_distance = candidate, distance
+    return np.maximum(best, 0.0)
+
+
 def nearest_valid_inertia(inertia: np.ndarray) -> np.ndarray:
     """The physically valid inertia tensor nearest ``inertia`` in the Frobenius norm.
 
-    Valid: symmetric, principal moments ``a <= b <= c`` with ``a >= 0`` and ``a + b >= c``. These
-    constraints depend only on the eigenvalues and are symmetric under their permutation, so the
-    nearest valid tensor keeps the eigenvectors and projects the eigenvalues (Lewis 1995, "The
-    convex analysis of unitarily invariant matrix functions", Thm. 2.3): negative moments are
-    raised to zero, then a broken triangle ``c > a + b`` is projected onto the plane
-    ``a + b = c``, ``d = (c - a - b) / 3``: ``(a + d, b + d, c - d)``.
+    Valid: symmetric, principal moments ``a, b, c >= 0`` with ``a + b >= c`` (and its
+    permutations). These constraints depend only on the eigenvalues and are symmetric under their
+    permutation, so the nearest valid tensor keeps the eigenvectors and projects the eigenvalues
+    onto the valid cone (Lewis 1995, "The convex analysis of unitarily invariant matrix
+    functions", J. Convex Analysis 2, Thm. 2.3; :func:`_project_moments`). For a broken triangle
+    alone, ``c > a + b``, that is ``d = (c - a - b) / 3``: ``(a + d, b + d, c - d)``.
     """
     symmetric = 0.5 * (inertia + inertia.T)
     moments, axes = np.linalg.eigh(symmetric)
-    moments = np.maximum(moments, 0.0)
-    a, b, c = moments
-    excess = c - a - b
-    if excess > 0.0:
-        d = excess / 3.0
-        moments = np.array([a + d, b + d, c - d])
-    return axes @ np.diag(moments) @ axes.T
+    return axes @ np.diag(_project_moments(moments)) @ axes.T
 
 
 def _safe_name(name: str, taken: set[str]) -> str:
