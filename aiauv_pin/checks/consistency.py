@@ -41,10 +41,9 @@ Errors are mixed absolute/relative where a check compares vectors of mixed units
 
 from __future__ import annotations
 
-import warnings
-
 import math
 import types
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from typing import NamedTuple
 

@@ -243,7 +243,8 @@ def format_report(report: CheckReport) -> str:
     lines = [
         f"vehicle '{s.name}' from {shown}",
         f"fluid density {report.fluid_density:g} kg/m^3, gravity {report.gravity:g} m/s^2, "
-        f"root link '{s.root}'" + (" (fixed base: fixed to the world)" if report.fixed_base else ""),
+        f"root link '{s.root}'"
+        + (" (fixed base: fixed to the world)" if report.fixed_base else ""),
         "",
         "links (link frame; margin = (rho V - m) g)",
         f"{'link':<20} {'mass kg':>9} {'V m^3':>10} {'margin N':>10} {'CG m':>22} {'CB m':>22}"

@@ -172,9 +172,7 @@ def unsupported_reason(model: pin.Model) -> str | None:
     return None
 
 
-def rigid_bodies(
-    model: pin.Model, added_mass: np.ndarray, fixed_base: bool = False
-) -> RigidBodies:
+def rigid_bodies(model: pin.Model, added_mass: np.ndarray, fixed_base: bool = False) -> RigidBodies:
     """The kinematic tree and inertias of a supported Pinocchio model (see :func:`unsupported_reason`).
 
     Args:

@@ -124,7 +124,9 @@ def world_root(root: Element) -> bool:
     if any(child is not None and child.get("link") == WORLD_LINK for _, _, child in ends):
         return False
     below = [
-        joint for joint, parent, _ in ends if parent is not None and parent.get("link") == WORLD_LINK
+        joint
+        for joint, parent, _ in ends
+        if parent is not None and parent.get("link") == WORLD_LINK
     ]
     return len(below) == 1 and below[0].get("type") == "fixed"
 
@@ -186,7 +188,7 @@ def _rename(root: Element, source: str, repairs: LenientRepairs) -> None:
     links = [link.get("name") for link in root.findall("link")]
     joints = [joint.get("name") for joint in root.findall("joint")]
     taken = {name for name in links + joints if isinstance(name, str)}
-    for what, names in (("link", links), ("joint", joints)):
+    for names in (links, joints):
         for name in names:
             if not isinstance(name, str) or is_safe_name(name) or name in repairs.renamed:
                 continue

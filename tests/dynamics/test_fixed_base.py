@@ -123,7 +123,9 @@ def test_world_root_fixes_the_base_and_a_flag_fixes_any(tmp_path):
     with pytest.raises(ArgumentError, match="fixed-base"):
         aiauv_pin.load_vehicle(
             aiauv_pin.bundled_urdf("uniform"), fixed_base=True
-        ).acceleration_derivatives(paper.neutral_configuration(), np.zeros(paper.nv), np.zeros(paper.nv))
+        ).acceleration_derivatives(
+            paper.neutral_configuration(), np.zeros(paper.nv), np.zeros(paper.nv)
+        )
 
 
 def test_static_equilibrium_angle_closed_form(tmp_path):
@@ -150,7 +152,9 @@ def test_damped_run_settles_at_the_closed_form_angle(tmp_path):
     )
     assert abs(trajectory.q[-1, 7] - theta) < 1e-6
     # the base never moved
-    np.testing.assert_array_equal(trajectory.q[:, :7], np.tile(trajectory.q[0, :7], (len(trajectory.q), 1)))
+    np.testing.assert_array_equal(
+        trajectory.q[:, :7], np.tile(trajectory.q[0, :7], (len(trajectory.q), 1))
+    )
     assert not np.any(trajectory.v[:, :6])
 
 
@@ -214,4 +218,6 @@ def test_step_and_simulate_hold_the_base(paper_pair, rng):
     assert not np.any(v1[:6])
     trajectory = aiauv_pin.simulate(fast, q, v, 0.5, 0.01)
     assert np.all(np.isfinite(trajectory.q))
-    np.testing.assert_allclose(trajectory.q[:, :7], np.tile(q[:7], (len(trajectory.q), 1)), atol=1e-15)
+    np.testing.assert_allclose(
+        trajectory.q[:, :7], np.tile(q[:7], (len(trajectory.q), 1)), atol=1e-15
+    )

@@ -316,7 +316,7 @@ def test_cylinder_off_the_link_axis_keeps_the_strip_integral(origin, left_out):
     (any placement); the axial / roll quadratic drag, with no exact form there, is left out and
     the table says so."""
     geometry = (
-        f'<collision><origin {origin}/>'
+        f"<collision><origin {origin}/>"
         '<geometry><cylinder length="0.4" radius="0.03"/></geometry></collision>'
     )
     annotation = annotate_robot(_one_link(geometry))
@@ -339,7 +339,7 @@ def test_annotate_says_when_the_robots_own_inertia_fails(tmp_path):
     )
     source = tmp_path / "robot.urdf"
     source.write_text(text)
-    with pytest.raises(aiauv_pin.VehicleLoadError, match="robot's own data .* not the annotation"):
+    with pytest.raises(aiauv_pin.VehicleLoadError, match=r"robot.s own data .* not the annotation"):
         annotate_file(source, tmp_path / "out.urdf")
     assert not (tmp_path / "out.urdf").exists()
     with pytest.warns(aiauv_pin.errors.LenientRepairWarning):
