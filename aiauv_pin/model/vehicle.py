@@ -167,6 +167,9 @@ class Vehicle:
         self.damping = bool(damping)
         self.restoring = bool(restoring)
         self.urdf_path: Path | None = None  # set by load_vehicle; the viewer reads visuals from it
+        # set by load_vehicle(lenient=True): the repairs made, and {merged link: its carrier}
+        self.lenient_repairs = None
+        self.merged_links: dict[str, str] = {}
         self.model.gravity = pin.Motion(
             np.array([0.0, 0.0, -hydro.gravity if restoring else 0.0]), np.zeros(3)
         )

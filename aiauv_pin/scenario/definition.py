@@ -256,9 +256,15 @@ def tip_frame(vehicle: Vehicle) -> str:
 
 def initial_state(vehicle: Vehicle, scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     """Straight vehicle at rest (or at ``initial_surge``), end-effector at the start, pointing along
-    ``heading`` (default: the path's tangent at the point closest to the start)."""
+    ``heading`` (default: the path's tangent at the point closest to the start).
+
+    A fixed-base vehicle without a ``[start]`` of its own stays where its URDF puts it (the base at
+    the world origin: a ``world`` root link is the world), at rest.
+    """
     import pinocchio as pin
 
+    if vehicle.fixed_base and scenario.start_position is None and scenario.heading is None:
+        return vehicle.neutral_configuration(), np.zeros(vehicle.nv)
     start = scenario.start
     heading = (
         np.array(scenario.heading)

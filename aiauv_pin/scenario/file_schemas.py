@@ -291,18 +291,6 @@ class ScenarioFile(BaseModel):
         "-",
         "URDF or xacro of the vehicle, relative to the file naming it",
     )
-    fixed_base: key(
-        bool,
-        "-",
-        "the vehicle's root link fixed to the world (default false; a massless 'world' root link "
-        "fixes it anyway)",
-    )
-    lenient: key(
-        bool,
-        "-",
-        "repair what published vehicle files are known to trip, each repair a warning (default "
-        "false)",
-    )
     duration: key(number(0.0, MAX_DURATION, low_open=True), "s", "simulated time (default 300)")
     # a step of more than 10 s says nothing about the vehicle (it may still diverge, which a run
     # reports); the lower bound keeps duration / dt countable
@@ -327,6 +315,18 @@ class ScenarioFile(BaseModel):
         number(0.0, 1.0, low_open=True),
         "-",
         "filter coefficient alpha of the lagged scheme: 0.3 UUV Simulator, 1 gz-sim",
+    )
+    fixed_base: key(
+        bool,
+        "-",
+        "the vehicle's root link fixed to the world (default false; a massless 'world' root link "
+        "fixes it anyway)",
+    )
+    lenient: key(
+        bool,
+        "-",
+        "repair what published vehicle files are known to trip, each repair a warning (default "
+        "false)",
     )
     start: key(StartTable, "-", "the start")
     path: key(
