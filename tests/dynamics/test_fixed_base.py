@@ -221,3 +221,16 @@ def test_step_and_simulate_hold_the_base(paper_pair, rng):
     np.testing.assert_allclose(
         trajectory.q[:, :7], np.tile(q[:7], (len(trajectory.q), 1)), atol=1e-15
     )
+
+
+def test_rollout_holds_the_base_and_matches_simulate(paper_pair, rng):
+    fast, _ = paper_pair
+    q, v, _ = _random_state(fast, rng)
+    batch = aiauv_pin.rollout(fast, q, np.stack([v, 2.0 * v]), 0.2, 0.01)
+    assert np.all(batch.status == "complete")
+    np.testing.assert_allclose(
+        batch.q[:, :, :7], np.broadcast_to(q[:7], batch.q[:, :, :7].shape), atol=1e-15
+    )
+    assert not np.any(batch.v[:, :, :6])
+    single = aiauv_pin.simulate(fast, q, v, 0.2, 0.01)
+    np.testing.assert_allclose(batch.q[0], single.q, rtol=1e-12, atol=1e-12)
