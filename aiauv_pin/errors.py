@@ -16,6 +16,8 @@ One hierarchy: everything the API raises on bad input or a failed run is an :cla
     |                                        (a singular matrix, an overflow)
     `-- SimulationDiverged (RuntimeError)    the state of a run became non-finite
 
+    LenientRepairWarning (UserWarning)       a repair made by a lenient load (not an error)
+
 Exceptions of other libraries never cross the API: where the API calls compiled code or Pinocchio,
 :func:`project_errors` turns numba's ``TypingError``, ``OverflowError``, NumPy's ``LinAlgError``,
 ``KeyError`` and Boost.Python's ``ArgumentError`` (Pinocchio's bindings given a wrong type) into
@@ -75,6 +77,12 @@ class UnsafeNameError(VehicleLoadError):
 
 class PhysicalParameterError(VehicleLoadError):
     """A non-physical or implausible vehicle parameter (:mod:`aiauv_pin.model.validation`)."""
+
+
+class LenientRepairWarning(UserWarning):
+    """A repair made by a lenient load (``load_vehicle(..., lenient=True)``, ``--lenient``) of data
+    the validation gate refuses; one line naming whose data is wrong (the source file or our
+    annotation) and the repair (:mod:`aiauv_pin.model.lenient_repairs`)."""
 
 
 def _first_line(exc: BaseException) -> str:

@@ -30,6 +30,7 @@ def annotate_file(
     xacro_args: Mapping[str, str] | None = None,
     package_path: Sequence[str | os.PathLike] = (),
     trust_xacro: bool = False,
+    lenient: bool = False,
 ) -> Annotation:
     """Annotate a URDF (or ``.xacro``) file and write the result.
 
@@ -41,6 +42,8 @@ def annotate_file(
         xacro_args: ``$(arg NAME)`` values for a xacro file.
         package_path: Folders searched for ``$(find pkg)`` and ``package://`` first.
         trust_xacro: Expand a xacro file with full xacro (see :func:`aiauv_pin.load_vehicle`).
+        lenient: Check that the output loads with ``lenient=True`` (the robot's own data
+            repaired as :mod:`aiauv_pin.model.lenient_repairs` does; load it the same way).
 
     Returns:
         The annotation (its ``links`` are the per-link table).
@@ -68,8 +71,38 @@ def annotate_file(
         raise VehicleLoadError(f"{path}: {exc}") from None
     written = write_text(output, annotation.text())
     try:
-        load_vehicle(written, package_path=package_path)
+        load_vehicle(written, package_path=package_path, lenient=lenient)
     except VehicleLoadError as exc:
         Path(written).unlink(missing_ok=True)
-        raise VehicleLoadError(f"annotated file does not load, not written: {exc}") from None
+        own = _own_data_failure(path, xacro_args, package_path, trust_xacro, lenient)
+        if own is not None:  # the robot's own data, not the annotation, is what fails
+            raise VehicleLoadError(
+                f"annotated file not written: the robot's own data fails validation, not the "
+                f"annotation: {own}"
+                + ("" if lenient else " (--lenient repairs what published files are known to trip)")
+            ) from None
+        raise VehicleLoadError(
+            f"annotated file does not load (the annotation's data), not written: {exc}"
+        ) from None
     return annotation
+
+
+def _own_data_failure(path, xacro_args, package_path, trust_xacro, lenient) -> str | None:
+    """The one-line reason the input itself (without the annotation) does not load, or ``None``."""
+    import warnings
+
+    from aiauv_pin.model.loading import load_vehicle
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            load_vehicle(
+                path,
+                xacro_args=dict(xacro_args or {}),
+                package_path=package_path,
+                trust_xacro=trust_xacro,
+                lenient=lenient,
+            )
+    except VehicleLoadError as exc:
+        return str(exc)
+    return None

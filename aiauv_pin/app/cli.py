@@ -55,6 +55,7 @@ def _add_simulate(subparsers) -> None:
         help="URDF, .xacro or MJCF (MuJoCo) file (default: the bundled paper vehicle of --case)",
     )
     _add_description_options(parser)
+    _add_load_options(parser)
     parser.add_argument(
         "--case",
         choices=("uniform", "stabilised"),
@@ -192,7 +193,7 @@ def _run_simulate(args) -> int:
     from aiauv_pin.simulation.compilation import CompilationWatch
 
     compile_start = time.perf_counter()
-    vehicle = loading.load_vehicle(path, **_description_options(args))
+    vehicle = loading.load_vehicle(path, **_load_options(args, scenario))
     # watched once the vehicle passed the validation gate: a refused file gets its one line only;
     # the notice is printed when numba starts compiling (set-up or run), and only then
     compilation = CompilationWatch()
@@ -336,6 +337,7 @@ def _add_check(subparsers) -> None:
     )
     parser.add_argument("urdf", type=Path, help="URDF, .xacro or MJCF (MuJoCo) file")
     _add_description_options(parser)
+    _add_load_options(parser)
     parser.add_argument(
         "--physics",
         action="store_true",
@@ -352,8 +354,8 @@ def _run_check(args) -> int:
     if args.physics:
         from aiauv_pin.checks.consistency import run_physics_check
 
-        return run_physics_check(args.urdf)
-    report = check_vehicle(args.urdf, **_description_options(args))
+        return run_physics_check(args.urdf, **_load_options(args))
+    report = check_vehicle(args.urdf, **_load_options(args))
     print(format_report(report))
     return 0
 
@@ -415,6 +417,31 @@ def _description_options(args) -> dict:
     }
 
 
+def _add_load_options(parser) -> None:
+    """``--fixed-base``, ``--lenient``: how ``check`` and ``simulate`` load the vehicle."""
+    parser.add_argument(
+        "--fixed-base",
+        action="store_true",
+        help="fix the vehicle's root link to the world (a manipulator on a stand, a tank rig); "
+        "a massless root link named 'world' fixes it without the flag",
+    )
+    parser.add_argument(
+        "--lenient",
+        action="store_true",
+        help="repair what published vehicle files are known to trip (names, massless moving "
+        "links, inertias breaking the triangle inequality, UUV Simulator defaults) instead of "
+        "refusing them; each repair is printed (docs: vehicles)",
+    )
+
+
+def _load_options(args, scenario=None) -> dict:
+    """:func:`_description_options` with ``fixed_base`` and ``lenient`` (flags or scenario)."""
+    options = _description_options(args)
+    options["fixed_base"] = bool(args.fixed_base or getattr(scenario, "fixed_base", False))
+    options["lenient"] = bool(args.lenient or getattr(scenario, "lenient", False))
+    return options
+
+
 def _add_annotate(subparsers) -> None:
     parser = subparsers.add_parser(
         "annotate",
@@ -443,6 +470,12 @@ def _add_annotate(subparsers) -> None:
         help="give each link the volume m / rho (neutrally buoyant link by link) instead of its "
         "shape's volume",
     )
+    parser.add_argument(
+        "--lenient",
+        action="store_true",
+        help="check that the output loads with --lenient (the robot's own data repaired; load "
+        "it with --lenient too)",
+    )
     _add_description_options(parser)
     parser.set_defaults(handler=_run_annotate)
 
@@ -458,6 +491,7 @@ def _run_annotate(args) -> int:
         args.output,
         fluid_density=args.fluid_density,
         neutral=args.neutral,
+        lenient=args.lenient,
         **_description_options(args),
     )
     from aiauv_hydro.urdf.annotate import format_annotation

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import math
 import types
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from typing import NamedTuple
 
@@ -992,8 +993,12 @@ def format_results(
     return "\n".join(lines)
 
 
-def run_physics_check(path) -> int:
+def run_physics_check(path, **load_options) -> int:
     """``aiauv check --physics PATH``: print the table; 0 if every check passed, else raise.
+
+    ``load_options`` go to :func:`aiauv_pin.load_vehicle` (``lenient``, ``fixed_base``, xacro
+    options). The checks are those of a free-floating vehicle (impulse, trim): a fixed base is
+    refused.
 
     Raises:
         AiauvError: One line naming the failed checks (the table is printed first), or the
@@ -1003,8 +1008,16 @@ def run_physics_check(path) -> int:
     from aiauv_pin.errors import AiauvError
     from aiauv_pin.model.loading import load_vehicle
 
-    check_vehicle(path)  # a usable vehicle, else its one-line reason (e.g. a singular M(q))
-    vehicle = load_vehicle(path)
+    # a usable vehicle, else its one-line reason (e.g. a singular M(q))
+    check_vehicle(path, **load_options)
+    with warnings.catch_warnings():  # the repairs were shown by check_vehicle
+        warnings.simplefilter("ignore")
+        vehicle = load_vehicle(path, **load_options)
+    if vehicle.fixed_base:
+        raise AiauvError(
+            f"{path}: --physics checks a free-floating vehicle (impulse, trim); this one has a "
+            "fixed base"
+        )
     results = run_checks(vehicle)
     title = f"vehicle '{vehicle.name}' from {path}"
     print(format_results(results, title, notes=[trim(vehicle).describe()]), flush=True)

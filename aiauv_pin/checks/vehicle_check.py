@@ -80,6 +80,7 @@ class CheckReport:
         smallest_mass_eigenvalue: Smallest eigenvalue of ``M(q)`` at the neutral configuration.
         warnings: One-line warnings.
         fins: The vehicle's fins (:class:`aiauv_hydro.spec.Fin` records).
+        fixed_base: The root link is fixed to the world.
     """
 
     path: Path
@@ -96,6 +97,7 @@ class CheckReport:
     smallest_mass_eigenvalue: float
     warnings: tuple[str, ...]
     fins: tuple = ()
+    fixed_base: bool = False
 
 
 def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
@@ -188,6 +190,7 @@ def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
         smallest_mass_eigenvalue=smallest_eigenvalue,
         warnings=tuple(warnings),
         fins=tuple(hydro.fins),
+        fixed_base=vehicle.fixed_base,
     )
 
 
@@ -244,7 +247,8 @@ def format_report(report: CheckReport) -> str:
     lines = [
         f"vehicle '{s.name}' from {shown}",
         f"fluid density {report.fluid_density:g} kg/m^3, gravity {report.gravity:g} m/s^2, "
-        f"root link '{s.root}'",
+        f"root link '{s.root}'"
+        + (" (fixed base: fixed to the world)" if report.fixed_base else ""),
         "",
         "links (link frame; margin = (rho V - m) g)",
         f"{'link':<20} {'mass kg':>9} {'V m^3':>10} {'margin N':>10} {'CG m':>22} {'CB m':>22}"

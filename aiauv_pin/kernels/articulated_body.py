@@ -45,7 +45,7 @@ from aiauv_hydro.laws.lift import add_fin_wrenches
 from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled
 from aiauv_hydro.numerics.spatial import cross3, motion_cross, motion_to_child
 from aiauv_pin.kernels.disturbances import apply_disturbance
-from aiauv_pin.kernels.records import FREE_FLYER, REVOLUTE, Workspace
+from aiauv_pin.kernels.records import FREE_FLYER, LOCKED_ROOT, REVOLUTE, Workspace
 from aiauv_pin.kernels.rotations import quaternion_rotation
 
 #: Integration methods understood by :func:`step` and :func:`run_steps`.
@@ -149,7 +149,7 @@ def kinematics(bodies, q, v, W):
     parents, kinds, q_index, v_index = bodies.parent, bodies.kind, bodies.q_index, bodies.v_index
     for b in range(parents.shape[0]):
         parent, kind, iq, iv = parents[b], kinds[b], q_index[b], v_index[b]
-        if kind == FREE_FLYER:
+        if kind == FREE_FLYER or kind == LOCKED_ROOT:
             rows = quaternion_rotation(q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6])
             for i in range(3):
                 pos_w[b, i] = q[iq + i]
@@ -158,7 +158,8 @@ def kinematics(bodies, q, v, W):
                     xform[b, i, j] = 1.0 if i == j else 0.0
                 xform[b, 3, i] = 0.0
             for i in range(6):
-                twist[b, i] = v[iv + i]
+                # a locked root (fixed base) does not move, whatever v's base entries hold
+                twist[b, i] = v[iv + i] if kind == FREE_FLYER else 0.0
                 bias_acc[b, i] = 0.0
             continue
         qj, qd = q[iq], v[iv]
@@ -687,14 +688,20 @@ def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
                 restoring,
                 parent,
             )
-    # root: free flyer (6 DOF, S = identity)
+    # root: free flyer (6 DOF, S = identity); a locked root (fixed base) has a = 0, no solve
+    # (Featherstone 2008, Table 7.1: a fixed base's a_0 is the gravity term, here in the bias)
     iv0 = v_index[0]
-    tmp = W.v6[1]
-    for i in range(6):
-        tmp[i] = tau[iv0 + i] - pa[0, i]
-    _solve_spd6(art[0], tmp, acc[0], W.m66[2], W.v6[2])
-    for i in range(6):
-        out[iv0 + i] = acc[0, i]
+    if bodies.kind[0] == LOCKED_ROOT:
+        for i in range(6):
+            acc[0, i] = 0.0
+            out[iv0 + i] = 0.0
+    else:
+        tmp = W.v6[1]
+        for i in range(6):
+            tmp[i] = tau[iv0 + i] - pa[0, i]
+        _solve_spd6(art[0], tmp, acc[0], W.m66[2], W.v6[2])
+        for i in range(6):
+            out[iv0 + i] = acc[0, i]
     for b in range(1, nb):
         parent = parents[b]
         if parent < 0:
@@ -773,7 +780,7 @@ def generalized_force(bodies, xform, body_wrench, out, tmp):
     """Generalised force ``sum_b J_b^T w_b`` of body wrenches (body frames); consumes them."""
     for b in range(bodies.parent.shape[0] - 1, -1, -1):
         iv = bodies.v_index[b]
-        if bodies.kind[b] == FREE_FLYER:
+        if bodies.kind[b] == FREE_FLYER or bodies.kind[b] == LOCKED_ROOT:
             for i in range(6):
                 out[iv + i] = body_wrench[b, i]
         else:

@@ -5,7 +5,9 @@ tree with rigid-plus-added inertias (:class:`RigidBodies`), the fluid parameters
 (:class:`aiauv_hydro.laws.fluid_terms.FluidModel`), the thrusters (:class:`Thrusters`) and the fins
 (:class:`aiauv_hydro.laws.lift.FinModel`).
 Supported: a free-flyer
-root (identity placement) and 1-DOF revolute or prismatic joints below it.
+root (identity placement) and 1-DOF revolute or prismatic joints below it. A fixed-base vehicle keeps
+the free-flyer layout of ``q`` and ``v``; its root is marked :data:`LOCKED_ROOT` (base velocity and
+acceleration zero, see :func:`aiauv_pin.kernels.articulated_body.articulated_into`).
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ from aiauv_hydro.laws.fluid_terms import FluidModel
 from aiauv_hydro.laws.lift import FinModel
 
 FREE_FLYER, REVOLUTE, PRISMATIC = 0, 1, 2
+#: The root of a fixed-base vehicle: a free flyer's coordinates, its velocity and acceleration zero.
+LOCKED_ROOT = 3
 
 _AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
 
@@ -28,7 +32,7 @@ class RigidBodies(NamedTuple):
 
     Attributes:
         parent: Parent body (-1 for the root) (nb,).
-        kind: Joint type: 0 free flyer, 1 revolute, 2 prismatic (nb,).
+        kind: Joint type: 0 free flyer, 1 revolute, 2 prismatic, 3 locked root (a fixed base) (nb,).
         q_index: First index of the joint in ``q`` (nb,).
         v_index: First index of the joint in ``v`` (nb,).
         placement: Joint placement in the parent body (nb, 4, 3): rows 0-2 rotation, row 3 translation [m].
@@ -187,12 +191,13 @@ def unsupported_reason(model: pin.Model) -> str | None:
     return None
 
 
-def rigid_bodies(model: pin.Model, added_mass: np.ndarray) -> RigidBodies:
+def rigid_bodies(model: pin.Model, added_mass: np.ndarray, fixed_base: bool = False) -> RigidBodies:
     """The kinematic tree and inertias of a supported Pinocchio model (see :func:`unsupported_reason`).
 
     Args:
         model: The Pinocchio model.
         added_mass: ``M_A`` per body (nb, 6, 6), added to the rigid inertia.
+        fixed_base: The root is locked (:data:`LOCKED_ROOT`) instead of free.
     """
     nb = model.njoints - 1
     kind = np.zeros(nb, dtype=np.int64)
@@ -211,6 +216,8 @@ def rigid_bodies(model: pin.Model, added_mass: np.ndarray) -> RigidBodies:
             else:
                 axis[b, :3] = unit
         rigid[b] = model.inertias[j].matrix()
+    if fixed_base:
+        kind[0] = LOCKED_ROOT
     return RigidBodies(
         parent=np.array([model.parents[j] - 1 for j in range(1, model.njoints)], dtype=np.int64),
         kind=kind,

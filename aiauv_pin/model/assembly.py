@@ -43,6 +43,7 @@ class Assembly:
         has_buoyancy: Whether any link displaces water.
         has_fluid: Whether any added mass or damped link is on.
         inertia_in_body: Rigid plus added inertia per body (nb, 6, 6), for the momentum.
+        fixed_base: The root body is locked to the world (base velocity and acceleration zero).
     """
 
     fluid_net: FluidModel
@@ -53,6 +54,7 @@ class Assembly:
     has_buoyancy: bool
     has_fluid: bool
     inertia_in_body: np.ndarray
+    fixed_base: bool = False
 
 
 def link_placement(model: pin.Model, link: str) -> tuple[int, pin.SE3]:
@@ -73,7 +75,13 @@ def body_of(model: pin.Model, link: str) -> tuple[int, pin.SE3]:
 
 
 def assemble(
-    model: pin.Model, hydro: HydroSpec, *, added_mass: bool, damping: bool, restoring: bool
+    model: pin.Model,
+    hydro: HydroSpec,
+    *,
+    added_mass: bool,
+    damping: bool,
+    restoring: bool,
+    fixed_base: bool = False,
 ) -> Assembly:
     """Pack a description once (see :class:`Assembly`).
 
@@ -81,6 +89,7 @@ def assemble(
         model: The Pinocchio model, its gravity already set.
         hydro: The hydrodynamic parameters.
         added_mass, damping, restoring: Which fluid effects are on.
+        fixed_base: The root body is locked to the world.
     """
     nb = model.njoints - 1
     gravity = hydro.gravity if restoring else 0.0
@@ -173,6 +182,7 @@ def assemble(
         has_fluid=bool(added.any() or nl),
         # generalised inertia per Pinocchio body (rigid plus added), for the momentum
         inertia_in_body=np.array([model.inertias[b + 1].matrix() for b in range(nb)]) + added,
+        fixed_base=bool(fixed_base),
     )
 
 
@@ -261,7 +271,7 @@ def packed_records(model: pin.Model, assembly: Assembly) -> Model:
         raise ValueError(f"fast backend: {reason}")
     fluid = assembly.fluid_net
     return Model(
-        bodies=rigid_bodies(model, fluid.added_mass),
+        bodies=rigid_bodies(model, fluid.added_mass, assembly.fixed_base),
         fluid=fluid,
         thrusters=assembly.thrusters,
         fins=assembly.fins,

@@ -262,6 +262,10 @@ def compiled_derivatives(vehicle) -> CompiledDerivatives:
     Raises:
         ArgumentError: The compiled backend is unavailable for this vehicle.
     """
+    if getattr(vehicle, "fixed_base", False):
+        raise ArgumentError(
+            "derivatives: not available for a fixed-base vehicle (they are those of a free base)"
+        )
     cached = getattr(vehicle, "_compiled_derivatives", None)
     if cached is not None:
         return cached

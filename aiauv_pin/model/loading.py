@@ -36,6 +36,7 @@ from aiauv_pin.description.safe_names import check_name
 from aiauv_pin.description.urdf_validation import UrdfStructure, validate_urdf
 from aiauv_pin.description.xacro_loading import read_description
 from aiauv_pin.errors import VehicleLoadError
+from aiauv_pin.model.lenient_repairs import repair, world_root
 from aiauv_pin.model.validation import validate_mass_matrix, validate_parameters
 from aiauv_pin.model.vehicle import Vehicle
 
@@ -147,6 +148,8 @@ def load_vehicle(
     xacro_args: dict[str, str] | None = None,
     package_path: list[str | os.PathLike] | tuple = (),
     trust_xacro: bool = False,
+    fixed_base: bool = False,
+    lenient: bool = False,
 ) -> Vehicle:
     """Load an underwater vehicle from a URDF with an optional ``<hydrodynamics>`` block.
 
@@ -169,9 +172,18 @@ def load_vehicle(
         trust_xacro: Expand a ``.xacro`` file with full xacro, whose expressions are Python
             ``eval`` and can run code: only for a file you trust. By default its expressions go
             to the safe evaluator (:mod:`aiauv_pin.description.xacro_safe_eval`).
+        fixed_base: Fix the URDF's root link to the world (a manipulator on a stand, a tank
+            rig): ``q`` and ``v`` keep the free-flyer layout, the base does not move
+            (:attr:`Vehicle.fixed_base`). A root link named ``world`` without mass, fixed to the
+            robot, makes the base fixed without it
+            (:func:`aiauv_pin.model.lenient_repairs.world_root`).
+        lenient: Repair what published files are known to trip instead of refusing them, each
+            repair one :class:`aiauv_pin.errors.LenientRepairWarning`
+            (:mod:`aiauv_pin.model.lenient_repairs`); the vehicle's ``lenient_repairs`` says what
+            was done.
 
     Returns:
-        The vehicle, with a free-flyer joint on the URDF's root link.
+        The vehicle, with a free-flyer joint on the URDF's root link (locked with a fixed base).
 
     Raises:
         VehicleLoadError: One line naming the problem (missing file, not XML, not a URDF, unsafe
@@ -205,8 +217,14 @@ def load_vehicle(
         root = parse_robot_text(text, str(source))
     except HydroError as exc:
         raise VehicleLoadError(str(exc)) from None
-    if freeze_thruster_joints(root):  # UUV Simulator propeller joints: rigid for the dynamics
+    changed = bool(freeze_thruster_joints(root))  # UUV Simulator propellers: rigid joints
+    repairs = None
+    if lenient:
+        repairs = repair(root, str(source))
+        changed = changed or bool(repairs.messages)
+    if changed:
         text = ElementTree.tostring(root, encoding="unicode")
+    fixed_base = bool(fixed_base) or world_root(root)
     try:
         structure = validate_urdf(root)
     except VehicleLoadError as exc:
@@ -248,7 +266,10 @@ def load_vehicle(
         damping=damping,
         restoring=restoring,
         backend=backend,
+        fixed_base=fixed_base,
     )
+    vehicle.lenient_repairs = repairs
+    vehicle.merged_links = dict(repairs.merged_links) if repairs is not None else {}
     vehicle.urdf_path = source
     vehicle.urdf_text = text  # the expanded description (xacro files have no URDF on disk)
     vehicle.package_path = tuple(package_path)

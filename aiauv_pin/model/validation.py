@@ -24,7 +24,7 @@ Refused (:class:`aiauv_pin.errors.PhysicalParameterError`, one line naming the p
   ``size`` the link's extent (its geometry, centre of gravity and buoyancy, and the origins of the
   joints it carries);
 * a mass matrix ``M(q)`` that is not positive definite at the neutral configuration (some body has
-  neither mass nor added mass), or not finite;
+  neither mass nor added mass), or not finite (with a fixed base, its joints' block ``M_jj``);
 * a crossflow (slender-cylinder) drag outside its range: cylinder length or radius outside
   :data:`aiauv_hydro.urdf.block_reader.LENGTH_RANGE`, a drag coefficient above
   :data:`aiauv_hydro.urdf.block_reader.MAX_DIMENSIONLESS`, or a strip coefficient times length above
@@ -216,6 +216,10 @@ def validate_mass_matrix(vehicle, where: str = "") -> float:
         PhysicalParameterError: One line.
     """
     mass_matrix = vehicle.mass_matrix(vehicle.neutral_configuration())
+    if getattr(vehicle, "fixed_base", False):  # the joints' block alone moves
+        mass_matrix = mass_matrix[6:, 6:]
+        if mass_matrix.size == 0:
+            return float("inf")
     if not np.all(np.isfinite(mass_matrix)):
         raise _refuse(where, "mass matrix M(q) is not finite at the neutral configuration")
     eigenvalues = np.linalg.eigvalsh(0.5 * (mass_matrix + mass_matrix.T))

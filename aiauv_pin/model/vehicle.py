@@ -131,6 +131,10 @@ class Vehicle:
         hydro: The hydrodynamic parameters read from the URDF.
         name: Robot name from the URDF.
         added_mass, damping, restoring: Which fluid effects are on.
+        fixed_base: The root link is fixed to the world: ``q`` and ``v`` keep the free-flyer
+            layout, the base velocity and acceleration are zero in both backends (the base
+            entries of ``v`` are read as zero, the base rows of :meth:`acceleration` are zero and
+            the joint rows solve ``M_jj ddq_j = tau_j - b_j``).
         backend: ``"auto"``, ``"numba"`` or ``"pinocchio"`` (see the module docstring); settable.
         data: Pinocchio's ``Data`` of the calling thread (each thread has its own).
 
@@ -154,14 +158,19 @@ class Vehicle:
         damping: bool = True,
         restoring: bool = True,
         backend: str | None = None,
+        fixed_base: bool = False,
     ) -> None:
         self.model = model
+        self.fixed_base = bool(fixed_base)
         self.hydro = hydro
         self.name = name
         self.added_mass = bool(added_mass)
         self.damping = bool(damping)
         self.restoring = bool(restoring)
         self.urdf_path: Path | None = None  # set by load_vehicle; the viewer reads visuals from it
+        # set by load_vehicle(lenient=True): the repairs made, and {merged link: its carrier}
+        self.lenient_repairs = None
+        self.merged_links: dict[str, str] = {}
         self.model.gravity = pin.Motion(
             np.array([0.0, 0.0, -hydro.gravity if restoring else 0.0]), np.zeros(3)
         )
@@ -170,7 +179,12 @@ class Vehicle:
         self._packed: Model | None = None
         # the description packed once (aiauv_pin.model.assembly): both backends evaluate it
         self._assembly = parts = assemble(
-            model, hydro, added_mass=self.added_mass, damping=self.damping, restoring=restoring
+            model,
+            hydro,
+            added_mass=self.added_mass,
+            damping=self.damping,
+            restoring=restoring,
+            fixed_base=self.fixed_base,
         )
         self._fluid_net, self._fluid_reference = parts.fluid_net, parts.fluid_reference
         self._thrusters = parts.thrusters
@@ -476,8 +490,18 @@ class Vehicle:
     @project_errors("Vehicle.acceleration")
     def _pinocchio_acceleration(self, q, v, tau, current, t: float, fin_angles=None) -> np.ndarray:
         with single_threaded_blas(self.nv):
+            if not self.fixed_base:
+                mass, bias = self._hydro_terms(q, v, current, t, fin_angles)
+                return np.linalg.solve(mass, tau - bias)
+            # fixed base: v_base = 0, a_base = 0; the joint rows alone,
+            # ddq_j = M_jj^-1 (tau_j - b_j) (Featherstone 2008, Sec. 6.1, a fixed-base tree)
+            v = v.copy()
+            v[:6] = 0.0
             mass, bias = self._hydro_terms(q, v, current, t, fin_angles)
-            return np.linalg.solve(mass, tau - bias)
+            out = np.zeros(self.nv)
+            if self.nv > 6:
+                out[6:] = np.linalg.solve(mass[6:, 6:], tau[6:] - bias[6:])
+            return out
 
     def _finned_acceleration(self, q, v, tau, current, t, fin_angles) -> np.ndarray:
         """:meth:`acceleration` of a vehicle with fins: the angles go into this thread's compiled
@@ -504,6 +528,10 @@ class Vehicle:
         """
         from aiauv_pin.model.derivatives import acceleration_derivatives
 
+        if self.fixed_base:
+            raise ArgumentError(
+                "derivatives: not available for a fixed-base vehicle (they are those of a free base)"
+            )
         return acceleration_derivatives(self, q, v, tau, current, t=t)
 
     @project_errors("Vehicle.fluid_forces")
@@ -641,6 +669,9 @@ class Vehicle:
             m, limit = len(self.hydro.thrusters), self.max_fin_angle
             angles = np.clip(np.asarray(controls, dtype=float)[m : m + self.n_fins], -limit, limit)
             fast.workspace.fin_angle[:] = angles
+        if self.fixed_base:  # the locked base does not move: its velocity is zero
+            v = float_array(v, "v", (self.nv,)).copy()
+            v[:6] = 0.0
         return fast.step(q, v, tau, dt, method=method, current=current, t=t)
 
     @project_errors("Vehicle.momentum_in_world")

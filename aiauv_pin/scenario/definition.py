@@ -105,6 +105,7 @@ class Scenario:
         gait: The gait of ``controller = "gait"``
             (:class:`aiauv_pin.controllers.gait_controller.Gait`; ``None``: its defaults).
         vehicle: URDF file of the vehicle (``None``: the bundled vehicle of ``case``).
+        fixed_base, lenient: Load options of the vehicle (:func:`aiauv_pin.load_vehicle`).
         added_mass: ``"exact"`` or ``"lagged"`` (UUV Simulator's and gz-sim's scheme,
             :mod:`aiauv_pin.dynamics.lagged_added_mass`; runs the Python controller, not the compiled loop).
         lagged_filter: The lagged scheme's filter coefficient in ``(0, 1]`` (0.3: UUV Simulator,
@@ -131,6 +132,8 @@ class Scenario:
     heading: tuple[float, float, float] | None = None
     controller: str = "paper"
     vehicle: str | None = None
+    fixed_base: bool = False
+    lenient: bool = False
     added_mass: str = "exact"
     lagged_filter: float = UUV_SIMULATOR_FILTER
     gait: Gait | None = None
@@ -277,9 +280,15 @@ def tip_frame(vehicle: Vehicle) -> str:
 
 def initial_state(vehicle: Vehicle, scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     """Straight vehicle at rest (or at ``initial_surge``), end-effector at the start, pointing along
-    ``heading`` (default: the path's tangent at the point closest to the start)."""
+    ``heading`` (default: the path's tangent at the point closest to the start).
+
+    A fixed-base vehicle without a ``[start]`` of its own stays where its URDF puts it (the base at
+    the world origin: a ``world`` root link is the world), at rest.
+    """
     import pinocchio as pin
 
+    if vehicle.fixed_base and scenario.start_position is None and scenario.heading is None:
+        return vehicle.neutral_configuration(), np.zeros(vehicle.nv)
     start = scenario.start
     heading = (
         np.array(scenario.heading)

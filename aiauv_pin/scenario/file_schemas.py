@@ -394,6 +394,18 @@ class ScenarioFile(BaseModel):
         "-",
         "filter coefficient alpha of the lagged scheme: 0.3 UUV Simulator, 1 gz-sim",
     )
+    fixed_base: key(
+        bool,
+        "-",
+        "the vehicle's root link fixed to the world (default false; a massless 'world' root link "
+        "fixes it anyway)",
+    )
+    lenient: key(
+        bool,
+        "-",
+        "repair what published vehicle files are known to trip, each repair a warning (default "
+        "false)",
+    )
     start: key(StartTable, "-", "the start")
     path: key(
         _tagged_union(PATH_TABLES, None), "-", "the path to follow (default: the world x-axis)"

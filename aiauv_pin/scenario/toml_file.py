@@ -4,6 +4,8 @@ The format (every key optional; without a file ``aiauv simulate`` runs the paper
 
     case = "uniform"             # bundled vehicle and its gains
     vehicle = "my.urdf"          # or your own URDF (relative to this file)
+    fixed_base = false           # its root link fixed to the world (a 'world' root link: always)
+    lenient = false              # repair what published files trip, each repair a warning
     duration = 120.0             # [s]
     dt = 0.004                   # [s]
     method = "euler"             # semi-implicit Euler, "rk4" or "midpoint"
@@ -133,7 +135,9 @@ def scenario_from_mapping(table: Mapping[str, Any], base_dir: str | Path = ".") 
         for name in ("case", "duration", "dt", "method", "control_period", "continuous_joints")
         if name in top
     }
-    options.update({k: top[k] for k in ("added_mass", "lagged_filter") if k in top})
+    options.update(
+        {k: top[k] for k in ("added_mass", "lagged_filter", "fixed_base", "lenient") if k in top}
+    )
     case = top.get("case", _DEFAULTS.case)
     if "vehicle" in top:
         options["vehicle"] = str(Path(base_dir) / top["vehicle"])

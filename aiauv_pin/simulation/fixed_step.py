@@ -186,7 +186,8 @@ def simulate(
     Args:
         vehicle: The vehicle.
         q0: Initial configuration (nq,).
-        v0: Initial velocity (nv,) [m/s, rad/s].
+        v0: Initial velocity (nv,) [m/s, rad/s]; a fixed-base vehicle's base entries are
+            taken as zero.
         duration: Simulated time [s] (> 0).
         dt: Step [s] (> 0).
         controller: ``controller(t, q, v) -> tau | (tau, info)`` (Python), a
@@ -247,6 +248,8 @@ def simulate(
     check_log_size(n_steps, log_every, model.nq, model.nv)
     q0 = configuration(q0, model.nq, "q0").copy()
     v0 = float_array(v0, "v0", (model.nv,)).copy()
+    if getattr(vehicle, "fixed_base", False):
+        v0[:6] = 0.0  # a fixed base does not move (its acceleration is zero in both backends)
     current = optional_current(current)
     if isinstance(servo, JointServo) and servo.references.shape != (model.nv - 6,):
         raise ArgumentError(

@@ -225,6 +225,9 @@ def rollout(
     nq, nv = fast.nq, fast.nv
     q_rows, n_q = _states(q0, nq, "q0", lambda row, name: configuration(row, nq, name))
     v_rows, n_v = _states(v0, nv, "v0", lambda row, name: float_array(row, name, (nv,)))
+    if getattr(vehicle, "fixed_base", False):
+        v_rows = v_rows.copy()
+        v_rows[:, :6] = 0.0  # a fixed base does not move
     laws, n_c = _controllers(controller)
     for law in laws:
         check_compiled_controller(law, nq, nv, fast.n_thrusters)

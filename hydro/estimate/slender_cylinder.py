@@ -193,6 +193,19 @@ def _is_signed_unit_row(row: np.ndarray) -> bool:
     return int(np.count_nonzero(big)) == 1 and abs(float(magnitudes[big][0]) - 1.0) < 1e-9
 
 
+def exact_axial_and_roll(rotation: np.ndarray, translation: np.ndarray) -> tuple[bool, bool]:
+    """Whether the axial (``C_d1``) and the roll (``C_d4``) quadratic drag of a cylinder placed by
+    ``rotation``/``translation`` in a link keep an exact diagonal form in the link frame.
+
+    ``-D_Q |nu_c| nu_c`` stays of that form only where the cylinder's axial speed ``u_c`` (roll
+    rate ``p_c``) is plus or minus one link velocity component: the axis parallel to a link axis
+    and through the link origin (parallel to a link axis). The transverse (crossflow) drag is a
+    strip integral evaluated by quadrature for any placement (:mod:`aiauv_hydro.laws.crossflow`).
+    """
+    transform = motion_transform(np.asarray(rotation, float), np.asarray(translation, float))
+    return _is_signed_unit_row(transform[0]), _is_signed_unit_row(transform[3])
+
+
 def slender_cylinder_link(
     name: str,
     length: float,

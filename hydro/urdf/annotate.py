@@ -4,6 +4,11 @@ Per link, from its first ``<collision>`` element with a geometry (else its first
 
 * ``<cylinder>``: the slender-cylinder model (``model="slender_cylinder"``,
   :mod:`aiauv_hydro.estimate.slender_cylinder`), which reads the same cylinder when the vehicle is loaded;
+  a cylinder off the link axis keeps its added mass, linear damping and transverse (crossflow)
+  drag, a strip integral evaluated by quadrature at any placement, while the axial or roll
+  quadratic drag, which has no exact constant form in the link frame there
+  (:func:`aiauv_hydro.estimate.slender_cylinder.exact_axial_and_roll`), is left out
+  (``C_d1="0"`` / ``C_d4="0"``, said in the table);
 * ``<box>``, ``<sphere>``: the equivalent ellipsoid (same volume and axis proportions) with Lamb's
   added-mass coefficients (``model="fossen"``, :mod:`aiauv_hydro.estimate.ellipsoid`);
 * ``<mesh>``: the ellipsoid fitted to the mesh: centroid, principal axes and axis proportions of the
@@ -37,6 +42,7 @@ from aiauv_hydro.estimate.ellipsoid import (
     inertia_equivalent_ellipsoid,
     scaled_to_volume,
 )
+from aiauv_hydro.estimate.slender_cylinder import exact_axial_and_roll
 from aiauv_hydro.spec import HydroError
 from aiauv_hydro.urdf.block_reader import (
     parse_robot,
@@ -45,6 +51,7 @@ from aiauv_hydro.urdf.block_reader import (
     read_hydrodynamics,
     rpy_matrix,
 )
+from aiauv_hydro.urdf.xml_reading import read_link
 
 #: Resolves a mesh ``filename`` (``package://...``, ``file://...`` or a path) to a file, or ``None``.
 MeshResolver = Callable[[str], "Path | None"]
@@ -336,12 +343,24 @@ def annotate_robot(
             radius = parse_scalar(shape.get("radius"), f"link '{name}' cylinder radius")
             # the reader takes the same cylinder: the first collision one, else the first visual
             element.set("model", "slender_cylinder")
+            label = f"{kind} cylinder"
+            placed = read_link(link).cylinder
+            axial, roll = exact_axial_and_roll(placed.rotation, placed.translation)
+            if not (axial and roll):
+                # off the link axis: the transverse drag stays the crossflow strip integral
+                # (quadrature, any placement); the axial / roll quadratic drag has no exact
+                # constant form in the link frame and is left out (C_d1 = 0, C_d4 = 0)
+                left_out = [c for c, exact in (("C_d1", axial), ("C_d4", roll)) if not exact]
+                for coefficient in left_out:
+                    element.set(coefficient, "0")
+                label += (
+                    " off the link axis (crossflow strip integral; "
+                    f"{'/'.join(left_out)} left out: no exact form in the link frame)"
+                )
             if neutral:
                 ET.SubElement(element, "volume").text = repr(inertial.mass / rho)
             block.append(element)
-            chosen.append(
-                (name, inertial.mass, f"{kind} cylinder", "slender_cylinder", (length, radius))
-            )
+            chosen.append((name, inertial.mass, label, "slender_cylinder", (length, radius)))
             continue
         if found is not None:
             owner, shape, kind = found

@@ -275,6 +275,18 @@ def _collision_centroid(link: Element, name: str, what: str) -> np.ndarray:
     return moment / total
 
 
+def collision_centroid_or_none(link: Element, what: str) -> np.ndarray | None:
+    """Our estimate of a missing ``center_of_buoyancy`` (:func:`_collision_centroid`), or ``None``
+    where it is refused (a non-primitive collision shape, no collision volume): there UUV
+    Simulator keeps its default, the link origin (``BuoyantObject.cc``, line 33, and
+    ``HydrodynamicModel.cc``, lines 61-66, of uuv_gazebo_plugins), which a lenient load takes
+    (:mod:`aiauv_pin.model.lenient_repairs`)."""
+    try:
+        return _collision_centroid(link, link.get("name", ""), what)
+    except HydroError:
+        return None
+
+
 #: ``<hydrodynamic_model><type>`` values read (UUV Simulator's HydrodynamicModel.cc registers these).
 UUV_MODEL_TYPES = ("fossen", "sphere", "cylinder", "spheroid", "box")
 #: Sphere drag coefficient of UUV Simulator's ``HMSphere`` (subcritical flow) [-].

@@ -176,6 +176,19 @@ def test_links_with_hydrodynamics_are_kept():
     assert annotation.fluid_density == 1000.0
 
 
+def _float_free(path):
+    """Drop a massless 'world' root and its joint (which would fix the base): a floating arm."""
+    import xml.etree.ElementTree as ET
+
+    tree = ET.parse(path)
+    root = tree.getroot()
+    for element in list(root):
+        anchored = element.tag == "joint" and element.find("parent").get("link") == "world"
+        if anchored or (element.tag == "link" and element.get("name") == "world"):
+            root.remove(element)
+    tree.write(path)
+
+
 def _linear_impulse(vehicle, q, v):
     return vehicle.momentum_in_world(q, v)[:3]
 
@@ -200,7 +213,9 @@ def test_annotated_arm_floats_passively_with_the_impulse_the_net_buoyancy_gives(
     net = (RHO * total_volume - total_mass) * G
     if neutral:
         assert abs(net) < 1e-9 * total_mass * G
+    _float_free(tmp_path / "arm.urdf")
     vehicle = aiauv_pin.load_vehicle(tmp_path / "arm.urdf", damping=False)
+    assert not vehicle.fixed_base
     q0, v0 = vehicle.neutral_configuration(), np.zeros(vehicle.nv)
     run = aiauv_pin.simulate(vehicle, q0, v0, duration=1.0, dt=0.002)
     assert run.status == "complete"
@@ -287,3 +302,46 @@ def test_cli_annotate_hostile_input_is_one_line(tmp_path, capfd, case, fragments
     assert_one_line_error(code, err, *fragments)
     assert "lollol" not in err + printed
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("origin", "left_out"),
+    [
+        ('xyz="0.128 0 0.055" rpy="0 1.5707963267948966 0"', ["C_d1"]),  # Z1's link03: offset
+        ('xyz="0 0 0" rpy="0.3 0.4 0"', ["C_d1", "C_d4"]),  # tilted: no link axis
+    ],
+)
+def test_cylinder_off_the_link_axis_keeps_the_strip_integral(origin, left_out):
+    """An off-axis cylinder keeps added mass, linear damping and the crossflow strip integral
+    (any placement); the axial / roll quadratic drag, with no exact form there, is left out and
+    the table says so."""
+    geometry = (
+        f"<collision><origin {origin}/>"
+        '<geometry><cylinder length="0.4" radius="0.03"/></geometry></collision>'
+    )
+    annotation = annotate_robot(_one_link(geometry))
+    (row,) = annotation.links
+    assert "off the link axis" in row.source and all(c in row.source for c in left_out)
+    element = annotation.root.find("hydrodynamics/link")
+    assert {c for c in ("C_d1", "C_d4") if element.get(c) == "0"} == set(left_out)
+    link = _loaded(annotation)["body"]
+    assert link.crossflow is not None and link.crossflow.length == pytest.approx(0.4)
+    assert np.linalg.eigvalsh(link.added_mass)[0] >= -1e-12
+
+
+def test_annotate_says_when_the_robots_own_inertia_fails(tmp_path):
+    """A link whose own inertia breaks the triangle inequality: the message blames the robot's
+    data, not the annotation, and --lenient annotates it."""
+    geometry = '<collision><geometry><box size="0.3 0.2 0.1"/></geometry></collision>'
+    text = _one_link(geometry).replace(
+        'ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"',
+        'ixx="0.001" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.03"',
+    )
+    source = tmp_path / "robot.urdf"
+    source.write_text(text)
+    with pytest.raises(aiauv_pin.VehicleLoadError, match=r"robot.s own data .* not the annotation"):
+        annotate_file(source, tmp_path / "out.urdf")
+    assert not (tmp_path / "out.urdf").exists()
+    with pytest.warns(aiauv_pin.errors.LenientRepairWarning):
+        annotate_file(source, tmp_path / "out.urdf", lenient=True)
+    assert (tmp_path / "out.urdf").exists()

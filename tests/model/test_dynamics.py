@@ -15,7 +15,8 @@ from aiauv_pin.description.robots import example_robot_urdf
 # every physics check runs on both backends (the compiled one and the Pinocchio reference)
 pytestmark = pytest.mark.usefixtures("backend")
 
-EXAMPLE_ROBOTS = ["ur_description/urdf/ur5_robot.urdf", "panda_description/urdf/panda.urdf"]
+# free-floating arms (ur5_robot.urdf has a massless 'world' root: a fixed base, tested below)
+EXAMPLE_ROBOTS = ["so_arm_description/urdf/so100.urdf", "panda_description/urdf/panda.urdf"]
 
 
 # The laws below are the shipped consistency checks (aiauv_pin.checks.consistency, the same functions that
@@ -47,6 +48,24 @@ def test_dry_robot_with_gravity_equals_aba(robot, rng):
     tau = rng.normal(size=model.nv)
     expected = pin.aba(model, model.createData(), q, v, tau)
     np.testing.assert_allclose(vehicle.acceleration(q, v, tau), expected, atol=1e-9)
+
+
+def test_fixed_base_robot_equals_pinocchios_fixed_base_aba(rng):
+    """UR5's 'world' root fixes its base: the joint accelerations are Pinocchio's ABA of the
+    fixed-base model (no root joint, the world link the universe), the base ones zero."""
+    path = example_robot_urdf("ur_description/urdf/ur5_robot.urdf")
+    vehicle = aiauv_pin.load_vehicle(path)
+    assert vehicle.fixed_base
+    model = pin.buildModelFromUrdf(str(path))
+    q, v = rng.uniform(-1.0, 1.0, model.nq), rng.normal(size=model.nv)
+    tau = rng.normal(size=model.nv)
+    expected = pin.aba(model, model.createData(), q, v, tau)
+    q_full = np.concatenate((vehicle.neutral_configuration()[:7], q))
+    v_full = np.concatenate((rng.normal(size=6), v))  # the locked base's velocity is read as 0
+    tau_full = np.concatenate((rng.normal(size=6), tau))
+    acceleration = vehicle.acceleration(q_full, v_full, tau_full)
+    np.testing.assert_allclose(acceleration[6:], expected, atol=1e-9, rtol=1e-9)
+    assert not np.any(acceleration[:6])
 
 
 # ---------------------------------------------------------------- 2. mass matrix and energy rate
