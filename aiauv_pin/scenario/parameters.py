@@ -171,6 +171,7 @@ TABLES: dict[str, tuple[str, ...] | None] = {
     "current": None,
     "controller": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("controller.")),
     "gait": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("gait.")),
+    "intervention": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("intervention.")),
     "output": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("output.")),
 }
 
