@@ -73,9 +73,9 @@ class InterventionGains:
         base_weight: ``W_p`` of each base acceleration [s^2/m, s^2/rad].
     """
 
-    stiffness: float = 4.0
-    damping: float = 4.0
-    integral: float = 2.0
+    stiffness: float = 9.0
+    damping: float = 6.0
+    integral: float = 6.0
     integral_limit: float = 1.0
     posture_stiffness: float = 1.0
     posture_damping: float = 2.0
@@ -208,7 +208,10 @@ class InterventionControl:
         )
         self.joint_dofs = tuple(range(6, vehicle.nv)) if self.shared_joints else ()
         self.joint_torque_limit = _limits(
-            model.effortLimit[6:] if joint_torque_limit is None else joint_torque_limit,
+            # a URDF without effort limits: Pinocchio's "none" (the largest float) as 1e9 N m
+            np.minimum(model.effortLimit[6:], 1e9)
+            if joint_torque_limit is None
+            else joint_torque_limit,
             n_joints,
             "joint_torque_limit",
         )

@@ -48,10 +48,12 @@ def _longest_run(flags: np.ndarray, dt: float) -> float:
     return longest * dt
 
 
-def test_hold_in_a_current_within_1cm_and_1deg(vehicle):
+@pytest.mark.parametrize("axis", [0, 1, 2], ids=["along", "across", "vertical"])
+def test_hold_in_a_current_within_1cm_and_1deg(vehicle, axis):
     controller = InterventionControl(vehicle)  # target: the pose at the start
+    current = np.roll(CURRENT, axis)
     run = aiauv_pin.simulate(
-        vehicle, _bent(vehicle), np.zeros(vehicle.nv), 40.0, 0.01, controller, current=CURRENT
+        vehicle, _bent(vehicle), np.zeros(vehicle.nv), 40.0, 0.01, controller, current=current
     )
     error = run.info["pose_error"]
     assert np.linalg.norm(error[:, :3], axis=1).max() < 0.01
@@ -201,3 +203,20 @@ def test_transit_switches_once_at_the_site(vehicle):
     assert controller.switched_at is None and controller.joint_servo.stiffness.min() > 0.0
     with pytest.raises(ArgumentError, match=r"intervention\.site"):
         TransitThenIntervene(vehicle, InterventionSettings())
+
+
+def test_retarget_starts_a_new_move_from_the_reference(vehicle):
+    q0 = _bent(vehicle)
+    controller = InterventionControl(vehicle, move_time=2.0)
+    controller(0.0, q0, np.zeros(vehicle.nv))
+    start = vehicle.frame_placement(q0, "end_effector")
+    new_position = start.translation + np.array([0.1, 0.0, 0.0])
+    controller.retarget(1.0, new_position, start.rotation, move_time=4.0)
+    p, _, twist, _ = controller.reference(1.0)
+    np.testing.assert_allclose(p, start.translation, atol=1e-12)  # continuous at the retarget
+    np.testing.assert_allclose(twist, 0.0, atol=1e-12)
+    p, R, _, _ = controller.reference(5.0)
+    np.testing.assert_allclose(p, new_position, atol=1e-12)
+    np.testing.assert_allclose(R, start.rotation, atol=1e-12)
+    p_mid = controller.reference(3.0)[0]
+    np.testing.assert_allclose(p_mid, start.translation + np.array([0.05, 0.0, 0.0]), atol=1e-12)
