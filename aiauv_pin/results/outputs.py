@@ -271,6 +271,8 @@ def timeseries_table(result: ScenarioResult) -> list[TimeseriesColumn]:
                 TimeseriesColumn(f"{prefix}{name}", unit, values[:, k])
                 for k, (name, unit) in enumerate(owners)
             )
+    if "pose_error" in info:  # intervention mode (aiauv_pin.wholebody.intervention_controller)
+        _add_intervention_columns(result, table, paper)
     table.extend(
         TimeseriesColumn(name, unit, q[:, k]) for k, (name, unit) in enumerate(BASE_CONFIGURATION)
     )
@@ -287,6 +289,46 @@ def timeseries_table(result: ScenarioResult) -> list[TimeseriesColumn]:
             )
         seen.add(column.name)
     return table
+
+
+#: The intervention's pose error ``(p_d - p, log(R_d R^T))`` to its reference (the point of the
+#: move at the row's time), world axes: ``(column, unit)``.
+POSE_ERROR_COLUMNS = (
+    ("pose_error_x", "m"),
+    ("pose_error_y", "m"),
+    ("pose_error_z", "m"),
+    ("pose_error_rx", "rad"),
+    ("pose_error_ry", "rad"),
+    ("pose_error_rz", "rad"),
+)
+
+
+def _add_intervention_columns(result: ScenarioResult, table: list, paper: bool) -> None:
+    """The intervention's columns: the pose error, the phase of a transit-then-intervene run
+    (0 transit, 1 intervention) and, unless the paper's controller wrote them, the thrusts
+    ``thrust_<name>`` [N] and the sharing joint motors' torques ``tau_<joint>`` [N m]."""
+    info, n = result.trajectory.info, len(result.trajectory.t)
+    error = np.asarray(info["pose_error"]).reshape(n, -1)
+    table.extend(
+        TimeseriesColumn(name, unit, error[:, k])
+        for k, (name, unit) in enumerate(POSE_ERROR_COLUMNS)
+    )
+    if "phase" in info:
+        table.append(TimeseriesColumn("phase", "-", np.asarray(info["phase"]).reshape(n)))
+    if paper:
+        return
+    thrust = np.asarray(info["thrust"]).reshape(n, -1)
+    table.extend(
+        TimeseriesColumn(f"thrust_{name}", "N", thrust[:, k])
+        for k, name in enumerate(result.thruster_names)
+    )
+    if "joint_torque" in info:
+        torque = np.asarray(info["joint_torque"]).reshape(n, -1)
+        units = result.position_units
+        table.extend(
+            TimeseriesColumn(f"tau_{name}", _effort_unit(unit), torque[:, k])
+            for k, (name, unit) in enumerate(zip(result.joint_names, units, strict=True))
+        )
 
 
 def timeseries_columns(result: ScenarioResult) -> dict[str, np.ndarray]:

@@ -729,6 +729,16 @@ def summary(result: ScenarioResult) -> dict:
         }
         content["total_thruster_work"] = exact_sum(thruster_power * dt_log[:, None])
         content["total_joint_work"] = exact_sum(joint_power * dt_log[:, None])
+    if "pose_error" in info:  # intervention mode: errors to the reference, its rows only
+        error = np.asarray(info["pose_error"]).reshape(len(t), 6)
+        error = error[np.all(np.isfinite(error), axis=1)]
+        position, attitude = (np.linalg.norm(error[:, s], axis=1) for s in (slice(3), slice(3, 6)))
+        content["intervention"] = {
+            "final_position_error": float(position[-1]),
+            "final_attitude_error": float(attitude[-1]),
+            "max_position_error": float(position.max()),
+            "max_attitude_error": float(attitude.max()),
+        }
     energy = energy_summary(result)
     if energy is not None:
         content["energy"] = energy
