@@ -547,17 +547,21 @@ PATH_FIGURES = ("fig2_cross_track.png", "path_3d.png")
 #: Figures of a run that follows no path (a passive run): the base's displacement from its start
 #: and speed against time, and the 3-D trajectories of the base and the end-effector.
 MOTION_FIGURES = ("base_motion.png", "motion_3d.png")
+#: Added for an intervention run (:mod:`aiauv_pin.wholebody`): the pose error to the reference
+#: (position [mm], attitude [deg]), the thrusts [N] and the joint angles [rad] against time.
+INTERVENTION_FIGURES = ("intervention.png",)
 
 
 def figures_of(result: ScenarioResult) -> tuple[str, ...]:
     """The figures drawn for ``result``: all of :data:`FIGURES` with the paper's controller's
     diagnostics, :data:`PATH_FIGURES` for another run that follows a path, else
-    :data:`MOTION_FIGURES`."""
+    :data:`MOTION_FIGURES`; and :data:`INTERVENTION_FIGURES` for an intervention run."""
+    extra = INTERVENTION_FIGURES if "pose_error" in result.trajectory.info else ()
     if result.followed_path is None:
-        return MOTION_FIGURES
+        return MOTION_FIGURES + extra
     if "u" in result.trajectory.info:
-        return FIGURES
-    return PATH_FIGURES
+        return FIGURES + extra
+    return PATH_FIGURES + extra
 
 
 #: Legend labels of the cross-track errors by what they measure
@@ -765,6 +769,32 @@ def _draw(
         ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"Trajectory ({case})")
         _set_equal_axes(ax, np.concatenate(drawn))
         ax.legend()
+    elif name == "intervention.png":
+        fig, axes = plt.subplots(3, 1, figsize=(6, 6), sharex=True)
+        error = np.asarray(info["pose_error"])
+        for k, axis in enumerate("xyz"):
+            (line,) = _plot(axes[0], t, 1000.0 * error[:, k], label=f"${axis}$ [mm]")
+            _plot(
+                axes[0],
+                t,
+                np.degrees(error[:, 3 + k]),
+                ls="--",
+                color=line.get_color(),
+                label=f"$r_{axis}$ [deg]",
+            )
+        axes[0].set(
+            ylabel="pose error", title=f"Intervention: pose error, thrusts, joints ({case})"
+        )
+        axes[0].legend(loc="upper right", fontsize="x-small", ncol=2)
+        thrust = np.asarray(info["thrust"])
+        for k, name_k in enumerate(result.thruster_names):
+            _plot(axes[1], t, thrust[:, k], label=name_k)
+        axes[1].set_ylabel("thrust [N]")
+        axes[1].legend(loc="upper right", fontsize="x-small", ncol=2)
+        q = np.asarray(tr.q)
+        for k, name_k in enumerate(result.joint_names):
+            _plot(axes[2], t, q[:, 7 + k], label=name_k)
+        axes[2].set(xlabel="t [s]", ylabel="joint angle [rad]")
     else:
         raise ValueError(f"unknown figure {name!r}")
     return fig
@@ -791,6 +821,7 @@ _LAYOUT_OF = {
     "fig4_phi_tilde.png": "error",
     "fig5_omega_tilde.png": "error",
     "fig7_pointing.png": "three",
+    "intervention.png": "three",
     "path_3d.png": "3d",
 }
 
@@ -846,6 +877,7 @@ def _die_with_parent(parent: int) -> None:
 #: The figures from the slowest to draw to the fastest (their drawing times are on the docs'
 #: performance page), the order in which :func:`_run_tasks` hands them out.
 _SLOWEST_FIRST = (
+    "intervention.png",
     "fig7_pointing.png",
     "fig2_cross_track.png",
     "fig4_phi_tilde.png",

@@ -15,7 +15,7 @@ import pytest
 import aiauv_pin
 from aiauv_control.laws.intervention_laws import pose_error
 from aiauv_pin.errors import ArgumentError
-from aiauv_pin.results.outputs import timeseries_table
+from aiauv_pin.results.outputs import figures_of, timeseries_table
 from aiauv_pin.scenario.definition import Scenario, run_scenario, summary
 from aiauv_pin.scenario.toml_file import ScenarioFileError, load_scenario, scenario_from_mapping
 from aiauv_pin.wholebody.intervention_controller import (
@@ -170,6 +170,7 @@ def test_scenario_file_runs_the_intervention(vehicle):
     assert content["max_position_error"] < 0.01 and content["final_attitude_error"] < 1e-3
     columns = {column.name for column in timeseries_table(result)}
     assert {"pose_error_x", "pose_error_rz", "thrust_link3_z", "tau_joint1"} <= columns
+    assert "intervention.png" in figures_of(result)
 
 
 def test_scenario_file_bad_values_are_one_line():
