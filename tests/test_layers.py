@@ -36,7 +36,8 @@ FLOORS = [
     ["aiauv_pin.model"],
     ["aiauv_pin.builders"],
     ["aiauv_pin.dynamics", "aiauv_pin.reference"],
-    ["aiauv_pin.controllers", "aiauv_pin.wholebody"],
+    ["aiauv_pin.controllers"],
+    ["aiauv_pin.wholebody"],  # whole-body controllers: intervention, station keeping, velocity
     ["aiauv_pin.simulation"],
     ["aiauv_pin.scenario"],
     ["aiauv_pin.results"],

@@ -286,6 +286,8 @@ def timeseries_table(result: ScenarioResult) -> list[TimeseriesColumn]:
             TimeseriesColumn(f"thrust_{name}", "N", thrust[:, k])
             for k, name in enumerate(result.thruster_names)
         )
+    if "pose_error" in info:  # intervention mode (aiauv_pin.wholebody.intervention_controller)
+        _add_intervention_columns(result, table, paper)
     table.extend(
         TimeseriesColumn(name, unit, q[:, k]) for k, (name, unit) in enumerate(BASE_CONFIGURATION)
     )
@@ -302,6 +304,46 @@ def timeseries_table(result: ScenarioResult) -> list[TimeseriesColumn]:
             )
         seen.add(column.name)
     return table
+
+
+#: The intervention's pose error ``(p_d - p, log(R_d R^T))`` to its reference (the point of the
+#: move at the row's time), world axes: ``(column, unit)``.
+POSE_ERROR_COLUMNS = (
+    ("pose_error_x", "m"),
+    ("pose_error_y", "m"),
+    ("pose_error_z", "m"),
+    ("pose_error_rx", "rad"),
+    ("pose_error_ry", "rad"),
+    ("pose_error_rz", "rad"),
+)
+
+
+def _add_intervention_columns(result: ScenarioResult, table: list, paper: bool) -> None:
+    """The intervention's columns: the pose error, the phase of a transit-then-intervene run
+    (0 transit, 1 intervention) and, unless the paper's controller wrote them, the thrusts
+    ``thrust_<name>`` [N] and the sharing joint motors' torques ``tau_<joint>`` [N m]."""
+    info, n = result.trajectory.info, len(result.trajectory.t)
+    error = np.asarray(info["pose_error"]).reshape(n, -1)
+    table.extend(
+        TimeseriesColumn(name, unit, error[:, k])
+        for k, (name, unit) in enumerate(POSE_ERROR_COLUMNS)
+    )
+    if "phase" in info:
+        table.append(TimeseriesColumn("phase", "-", np.asarray(info["phase"]).reshape(n)))
+    if paper:
+        return
+    thrust = np.asarray(info["thrust"]).reshape(n, -1)
+    table.extend(
+        TimeseriesColumn(f"thrust_{name}", "N", thrust[:, k])
+        for k, name in enumerate(result.thruster_names)
+    )
+    if "joint_torque" in info:
+        torque = np.asarray(info["joint_torque"]).reshape(n, -1)
+        units = result.position_units
+        table.extend(
+            TimeseriesColumn(f"tau_{name}", _effort_unit(unit), torque[:, k])
+            for k, (name, unit) in enumerate(zip(result.joint_names, units, strict=True))
+        )
 
 
 def timeseries_columns(result: ScenarioResult) -> dict[str, np.ndarray]:
@@ -523,19 +565,23 @@ MOTION_FIGURES = ("base_motion.png", "motion_3d.png")
 #: Figures added by station keeping and velocity control (:mod:`aiauv_pin.wholebody`): the pose
 #: (or twist) errors of the held axes, and the thrusts with the residual wrench's size.
 WHOLEBODY_FIGURES = ("pose_error.png", "thrusts.png")
+#: Added for an intervention run (:mod:`aiauv_pin.wholebody`): the pose error to the reference
+#: (position [mm], attitude [deg]), the thrusts [N] and the joint angles [rad] against time.
+INTERVENTION_FIGURES = ("intervention.png",)
 
 
 def figures_of(result: ScenarioResult) -> tuple[str, ...]:
     """The figures drawn for ``result``: all of :data:`FIGURES` with the paper's controller's
     diagnostics, :data:`PATH_FIGURES` for another run that follows a path, else
-    :data:`MOTION_FIGURES`."""
+    :data:`MOTION_FIGURES`; and :data:`INTERVENTION_FIGURES` for an intervention run."""
+    extra = INTERVENTION_FIGURES if "pose_error" in result.trajectory.info else ()
     if result.followed_path is None:
         if "residual" in result.trajectory.info:  # station keeping, velocity control
-            return MOTION_FIGURES + WHOLEBODY_FIGURES
-        return MOTION_FIGURES
+            return MOTION_FIGURES + WHOLEBODY_FIGURES + extra
+        return MOTION_FIGURES + extra
     if "u" in result.trajectory.info:
-        return FIGURES
-    return PATH_FIGURES
+        return FIGURES + extra
+    return PATH_FIGURES + extra
 
 
 #: Legend labels of the cross-track errors by what they measure
@@ -767,6 +813,32 @@ def _draw(
         ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"Trajectory ({case})")
         _set_equal_axes(ax, np.concatenate(drawn))
         ax.legend()
+    elif name == "intervention.png":
+        fig, axes = plt.subplots(3, 1, figsize=(6, 6), sharex=True)
+        error = np.asarray(info["pose_error"])
+        for k, axis in enumerate("xyz"):
+            (line,) = _plot(axes[0], t, 1000.0 * error[:, k], label=f"${axis}$ [mm]")
+            _plot(
+                axes[0],
+                t,
+                np.degrees(error[:, 3 + k]),
+                ls="--",
+                color=line.get_color(),
+                label=f"$r_{axis}$ [deg]",
+            )
+        axes[0].set(
+            ylabel="pose error", title=f"Intervention: pose error, thrusts, joints ({case})"
+        )
+        axes[0].legend(loc="upper right", fontsize="x-small", ncol=2)
+        thrust = np.asarray(info["thrust"])
+        for k, name_k in enumerate(result.thruster_names):
+            _plot(axes[1], t, thrust[:, k], label=name_k)
+        axes[1].set_ylabel("thrust [N]")
+        axes[1].legend(loc="upper right", fontsize="x-small", ncol=2)
+        q = np.asarray(tr.q)
+        for k, name_k in enumerate(result.joint_names):
+            _plot(axes[2], t, q[:, 7 + k], label=name_k)
+        axes[2].set(xlabel="t [s]", ylabel="joint angle [rad]")
     else:
         raise ValueError(f"unknown figure {name!r}")
     return fig
@@ -795,6 +867,7 @@ _LAYOUT_OF = {
     "fig4_phi_tilde.png": "error",
     "fig5_omega_tilde.png": "error",
     "fig7_pointing.png": "three",
+    "intervention.png": "three",
     "path_3d.png": "3d",
 }
 
@@ -850,6 +923,7 @@ def _die_with_parent(parent: int) -> None:
 #: The figures from the slowest to draw to the fastest (their drawing times are on the docs'
 #: performance page), the order in which :func:`_run_tasks` hands them out.
 _SLOWEST_FIRST = (
+    "intervention.png",
     "fig7_pointing.png",
     "fig2_cross_track.png",
     "fig4_phi_tilde.png",

@@ -64,13 +64,25 @@ from aiauv_pin.scenario.defaults import DEFAULT_CSV_PERIOD, DEFAULT_DT, DEFAULT_
 from aiauv_pin.simulation.energy import energy_summary, exact_sum
 from aiauv_pin.simulation.fixed_step import Trajectory, simulate
 from aiauv_pin.simulation.step_stability import warn_if_oscillating
+from aiauv_pin.wholebody.intervention_transit import InterventionSettings, TransitThenIntervene
 
 CASES = ("uniform", "stabilised")
 #: Controllers a scenario can name: the paper's path following (turning with the body), none
 #: (passive run), the thruster-turning baseline (:mod:`aiauv_pin.controllers.turning_controller`),
 #: a serpentine gait (:mod:`aiauv_pin.controllers.gait_controller`), station keeping or velocity
-#: control (:mod:`aiauv_pin.wholebody`).
-CONTROLLERS = ("paper", "none", "thruster_turning", "gait", "station", "velocity")
+#: control (:mod:`aiauv_pin.wholebody`), intervention (hold the end-effector's pose,
+#: :mod:`aiauv_pin.wholebody.intervention_controller`) or transit then intervention
+#: (:mod:`aiauv_pin.wholebody.intervention_transit`).
+CONTROLLERS = (
+    "paper",
+    "none",
+    "thruster_turning",
+    "gait",
+    "station",
+    "velocity",
+    "intervention",
+    "transit_intervene",
+)
 
 
 @dataclass(frozen=True)
@@ -104,6 +116,9 @@ class Scenario:
             (a serpentine gait, :attr:`gait`, compiled backend only).
         gait: The gait of ``controller = "gait"``
             (:class:`aiauv_pin.controllers.gait_controller.Gait`; ``None``: its defaults).
+        intervention: The settings of ``controller = "intervention"`` or ``"transit_intervene"``
+            (:class:`aiauv_pin.wholebody.intervention_transit.InterventionSettings`; ``None``:
+            its defaults).
         vehicle: URDF file of the vehicle (``None``: the bundled vehicle of ``case``).
         fixed_base, lenient: Load options of the vehicle (:func:`aiauv_pin.load_vehicle`).
         added_mass: ``"exact"`` or ``"lagged"`` (UUV Simulator's and gz-sim's scheme,
@@ -139,6 +154,7 @@ class Scenario:
     gait: Gait | None = None
     wholebody: Mapping[str, Any] | None = None
     waves: Waves | None = None
+    intervention: InterventionSettings | None = None
 
     def __post_init__(self) -> None:
         check_scheme(self.added_mass)
@@ -151,6 +167,13 @@ class Scenario:
             raise ValueError(
                 f"gait must be a aiauv_pin.controllers.gait_controller.Gait, got "
                 f"{type(self.gait).__name__:.40}"
+            )
+        if self.intervention is not None and not isinstance(
+            self.intervention, InterventionSettings
+        ):
+            raise ValueError(
+                "intervention must be an aiauv_pin.wholebody.intervention_transit."
+                f"InterventionSettings, got {type(self.intervention).__name__:.40}"
             )
         if self.path is not None and not isinstance(self.path, Path):
             raise ValueError(
@@ -303,6 +326,16 @@ def initial_state(vehicle: Vehicle, scenario: Scenario) -> tuple[np.ndarray, np.
     else:
         q[:3] = start - rotation @ tip
         q[3:7] = pin.Quaternion(rotation).coeffs()
+    settings = scenario.intervention
+    if scenario.controller == "intervention" and settings is not None and settings.posture:
+        # the body in its posture, the end-effector still at the start
+        if len(settings.posture) != vehicle.nv - 6:
+            raise ArgumentError(
+                f"intervention.posture: expected {vehicle.nv - 6} joint angles, "
+                f"got {len(settings.posture)}"
+            )
+        q[7:] = settings.posture
+        q[:3] += start - vehicle.frame_placement(q, tip_frame(vehicle)).translation
     v = np.zeros(vehicle.nv)
     v[0] = scenario.initial_surge
     return q, v
@@ -347,7 +380,7 @@ def followed_path(scenario: Scenario) -> Path | None:
     """The path a run of ``scenario`` follows: its path in force with a path-following controller
     (``"paper"``, ``"thruster_turning"``), ``None`` for a passive run (``controller = "none"``),
     which follows nothing and so has no path errors."""
-    if scenario.controller in ("none", "station", "velocity"):
+    if scenario.controller in ("none", "station", "velocity", "intervention"):
         return None
     return scenario.path_to_follow
 
@@ -452,6 +485,25 @@ def run_scenario(
             vehicle, scenario.controller, scenario.wholebody or {}, scenario.water, q0
         )
         law, servo, use_compiled = controller, controller.joint_servo, False
+    elif scenario.controller in ("intervention", "transit_intervene") and controller is None:
+        if compiled:
+            raise ValueError(
+                f"{scenario.controller} runs the Python controller, not the compiled loop"
+            )
+        settings = scenario.intervention or InterventionSettings()
+        if scenario.controller == "intervention":
+            law = settings.controller(vehicle, scenario.water)
+            law.check(q0)  # a task the actuators cannot produce: one line before the run
+        else:
+            law = TransitThenIntervene(
+                vehicle,
+                settings,
+                scenario.controller_gains,
+                path=scenario.path_to_follow,
+                current=scenario.water,
+            )
+        servo = law.joint_servo
+        use_compiled = False
     elif scenario.controller == "thruster_turning" and controller is None:
         from aiauv_pin.controllers.turning_controller import VehicleThrusterTurning
 
@@ -494,6 +546,9 @@ def run_scenario(
     if compile_only:
         return None
     wall_time = time.perf_counter() - start
+    if scenario.controller == "transit_intervene":  # the path errors of both phases, from p
+        for key in ("cross_track", "path_s"):
+            trajectory.info.pop(key, None)
     add_path_errors(vehicle, scenario, trajectory)
     if not passive:  # rows logged once per controller sample
         warn_if_oscillating(
@@ -582,7 +637,7 @@ def _parameters(scenario: Scenario) -> dict:
         value = getattr(scenario, f.name)
         if f.name == "gains":
             continue
-        if f.name == "gait":
+        if f.name in ("gait", "intervention"):
             value = asdict(value) if value is not None else None
         if f.name == "path":
             value = scenario.path_to_follow.describe()
@@ -701,7 +756,7 @@ def summary(result: ScenarioResult) -> dict:
     }
     if axes is not None:
         content["cross_track_axes"] = list(axes)
-    if "u" in info:
+    if "u" in info and np.all(np.isfinite(info["u"])):  # (not a transit's intervention rows)
         gains = scenario.controller_gains
         u = info["u"]
         final.update(
@@ -727,6 +782,16 @@ def summary(result: ScenarioResult) -> dict:
         }
         content["total_thruster_work"] = exact_sum(thruster_power * dt_log[:, None])
         content["total_joint_work"] = exact_sum(joint_power * dt_log[:, None])
+    if "pose_error" in info:  # intervention mode: errors to the reference, its rows only
+        error = np.asarray(info["pose_error"]).reshape(len(t), 6)
+        error = error[np.all(np.isfinite(error), axis=1)]
+        position, attitude = (np.linalg.norm(error[:, s], axis=1) for s in (slice(3), slice(3, 6)))
+        content["intervention"] = {
+            "final_position_error": float(position[-1]),
+            "final_attitude_error": float(attitude[-1]),
+            "max_position_error": float(position.max()),
+            "max_attitude_error": float(attitude.max()),
+        }
     energy = energy_summary(result)
     if energy is not None:
         content["energy"] = energy

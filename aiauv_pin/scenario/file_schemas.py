@@ -185,7 +185,8 @@ class ControllerTable(BaseModel):
         Literal[CONTROLLERS],
         "-",
         "paper (path following), none (passive: thrusters and joints idle), thruster_turning, "
-        "gait (serpentine swimming, [gait]), station ([station]) or velocity ([velocity])",
+        "gait (serpentine swimming, [gait]), station ([station]), velocity ([velocity]), "
+        "intervention or transit_intervene ([intervention])",
         "paper",
     )
     u_d: gain(MAX_SPEED, "m/s", f"desired surge speed (eq. 21, 25); default {_GAINS.u_d:g}")
@@ -350,6 +351,51 @@ class WavesTable(BaseModel):
     order: key(number(1.0, 50.0), "-", "Fourier harmonics of a fenton wave (default 10)")
 
 
+Axis = Literal["x", "y", "z", "rx", "ry", "rz"]
+
+
+class InterventionTable(BaseModel):
+    """``[intervention]``: hold the end-effector's pose with thrusters and joints
+    (``controller.type = "intervention"`` or ``"transit_intervene"``;
+    :class:`aiauv_pin.wholebody.intervention_transit.InterventionSettings`)."""
+
+    model_config = strict_config("intervention")
+    frame: key(
+        Annotated[str, Field(min_length=1, max_length=200)], "-", "the frame held (end_effector)"
+    )
+    target_position: key(Position, "m", "target of the frame, world (default: where it starts)")
+    target_rpy: key(vector(-10.0, 10.0), "rad", "target roll, pitch, yaw, world axes")
+    move_time: key(number(0.0, MAX_DURATION), "s", "minimum-jerk move to the target (0: a step)")
+    posture: key(
+        Annotated[list[Angle], Field(min_length=1, max_length=1000)],
+        "rad",
+        "joint angles of the null-space posture (and the start of an intervention run)",
+    )
+    shared_joints: key(bool, "-", "joint motors share the task (false: joints locked)")
+    axes: key(
+        Annotated[list[Axis], Field(min_length=1, max_length=6)],
+        "-",
+        "task axes among x, y, z, rx, ry, rz (world; default all six)",
+    )
+    current_known: key(bool, "-", "the model knows the current (false: integral action)")
+    thrust_limit: key(number(0.0, 1.0e6, low_open=True), "N", "largest thrust of each thruster")
+    joint_torque_limit: key(
+        number(0.0, 1.0e6, low_open=True), "N m", "largest torque of each joint motor"
+    )
+    stiffness: gain(1.0e4, "1/s^2", "pose error gain K_p")
+    damping: gain(1.0e4, "1/s", "twist error gain K_d")
+    integral: gain(1.0e4, "1/s^3", "pose error integral gain K_i", zero=True)
+    integral_limit: gain(1.0e4, "m s", "anti-windup limit of the integral", zero=True)
+    posture_stiffness: gain(1.0e4, "1/s^2", "posture joint PD stiffness", zero=True)
+    posture_damping: gain(1.0e4, "1/s", "posture joint PD damping", zero=True)
+    thrust_weight: gain(1.0e4, "1/N", "effort weight of each thruster")
+    joint_weight: gain(1.0e4, "1/(N m)", "effort weight of each joint motor")
+    posture_weight: gain(1.0e4, "s^2/rad", "weight of the posture task", zero=True)
+    base_weight: gain(1.0e4, "s^2/m", "weight of the base damping task", zero=True)
+    site: key(Position, "m", "work site of transit_intervene, world")
+    switch_distance: key(Size, "m", "end-effector distance to the site that ends the transit")
+
+
 class OutputTable(BaseModel):
     """``[output]``: what a run writes."""
 
@@ -418,4 +464,5 @@ class ScenarioFile(BaseModel):
     station: key(StationTable, "-", "station keeping (controller.type = station)")
     velocity: key(VelocityTable, "-", "velocity control (controller.type = velocity)")
     waves: key(WavesTable, "-", "linear waves on the current (default: none)")
+    intervention: key(InterventionTable, "-", "the intervention (controller.type = intervention)")
     output: key(OutputTable, "-", "outputs")

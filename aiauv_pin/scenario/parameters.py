@@ -174,6 +174,7 @@ TABLES: dict[str, tuple[str, ...] | None] = {
     "station": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("station.")),
     "velocity": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("velocity.")),
     "waves": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("waves.")),
+    "intervention": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("intervention.")),
     "output": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("output.")),
 }
 

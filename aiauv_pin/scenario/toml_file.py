@@ -35,6 +35,9 @@ The format (every key optional; without a file ``aiauv simulate`` runs the paper
                                  # k_1p, k_1i, q_max, feedforward; beyond the paper:
                                  # current_compensation = "integral_los", turn_feedforward,
                                  # hydrostatic_compensation (README, "Beyond the paper")
+    [intervention]               # controller type "intervention" or "transit_intervene"
+    target_position = [3.3, 0.0, 0.2]  # end-effector target [m], world; target_rpy [rad]
+    move_time = 8.0              # [s] minimum-jerk move; gains: stiffness, damping, integral, ...
     [output]
     csv_period = 0.04            # [s] between rows of timeseries.csv
 
@@ -68,6 +71,7 @@ from aiauv_pin.errors import AiauvError
 from aiauv_pin.scenario.definition import Scenario
 from aiauv_pin.scenario.file_schemas import ScenarioFile
 from aiauv_pin.scenario.parameters import TABLES, TOP_LEVEL
+from aiauv_pin.wholebody.intervention_transit import InterventionSettings
 
 __all__ = ["TABLES", "TOP_LEVEL", "ScenarioFileError", "load_scenario", "scenario_from_mapping"]
 
@@ -173,6 +177,13 @@ def scenario_from_mapping(table: Mapping[str, Any], base_dir: str | Path = ".") 
             if options["controller"] != name:
                 raise ScenarioFileError(f"{name}: given, but controller.type is not {name!r}")
             options["wholebody"] = _plain(getattr(checked, name))
+    if checked.intervention is not None:
+        try:
+            options["intervention"] = InterventionSettings.from_mapping(
+                _plain(checked.intervention)
+            )
+        except ValueError as exc:
+            raise ScenarioFileError(f"intervention: {' '.join(str(exc).split())}") from None
     output = given(checked.output)
     if "csv_period" in output:
         options["csv_period"] = output["csv_period"]

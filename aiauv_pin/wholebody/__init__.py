@@ -1,5 +1,6 @@
-"""Whole-vehicle controllers for any vehicle: station keeping, velocity control (and intervention).
+"""Whole-body controllers for any vehicle: intervention (hold a frame's pose with thrusters and
+joints), station keeping and velocity control.
 
-May import :mod:`aiauv_pin.dynamics` and the floors below it (the floor of
-:mod:`aiauv_pin.controllers`).
+The laws live in :mod:`aiauv_control.laws`; here they get their measurements (Pinocchio through
+:mod:`aiauv_pin.model`) and actuators. May import :mod:`aiauv_pin.controllers` and the floors below.
 """
