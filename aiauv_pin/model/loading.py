@@ -207,11 +207,8 @@ def load_vehicle(
     check_xml_text(text, str(source))
     if path is not None and is_mjcf_text(text):
         mjcf = read_mjcf(source)  # MuJoCo compiles it; we read the URDF it is
-        if mjcf.fixed_base:
-            raise VehicleLoadError(
-                f"{source}: the root body is not on a free joint: "
-                "fixed-base MJCF needs fixed_base support"
-            )
+        # a root body not on a free joint hangs from MuJoCo's world body: a fixed base
+        fixed_base = bool(fixed_base) or mjcf.fixed_base
         text = mjcf.urdf_text
     try:
         root = parse_robot_text(text, str(source))
