@@ -161,6 +161,8 @@ class Vehicle:
         self.damping = bool(damping)
         self.restoring = bool(restoring)
         self.urdf_path: Path | None = None  # set by load_vehicle; the viewer reads visuals from it
+        #: What the conversion of an SDF file changed or left out (one line each; set by load_vehicle)
+        self.description_notes: tuple[str, ...] = ()
         self.model.gravity = pin.Motion(
             np.array([0.0, 0.0, -hydro.gravity if restoring else 0.0]), np.zeros(3)
         )
