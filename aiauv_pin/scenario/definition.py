@@ -66,8 +66,11 @@ from aiauv_pin.simulation.step_stability import warn_if_oscillating
 CASES = ("uniform", "stabilised")
 #: Controllers a scenario can name: the paper's path following (turning with the body), none
 #: (passive run), the thruster-turning baseline (:mod:`aiauv_pin.controllers.turning_controller`),
-#: or a serpentine gait (:mod:`aiauv_pin.controllers.gait_controller`).
-CONTROLLERS = ("paper", "none", "thruster_turning", "gait")
+#: a serpentine gait (:mod:`aiauv_pin.controllers.gait_controller`), or constant thrusts (an
+#: open-loop command, :meth:`CompiledController.constant`).
+CONTROLLERS = ("paper", "none", "thruster_turning", "gait", "constant")
+#: Controllers that follow no path (their runs have no path errors).
+OPEN_LOOP_CONTROLLERS = ("none", "constant")
 
 
 @dataclass(frozen=True)
@@ -101,7 +104,9 @@ class Scenario:
             (a serpentine gait, :attr:`gait`, compiled backend only).
         gait: The gait of ``controller = "gait"``
             (:class:`aiauv_pin.controllers.gait_controller.Gait`; ``None``: its defaults).
-        vehicle: URDF file of the vehicle (``None``: the bundled vehicle of ``case``).
+        thrusts: The thrusts [N] of ``controller = "constant"``, one per thruster in the vehicle's
+            order (saturated to their ``max_thrust``).
+        vehicle: URDF (or SDF) file of the vehicle (``None``: the bundled vehicle of ``case``).
         added_mass: ``"exact"`` or ``"lagged"`` (UUV Simulator's and gz-sim's scheme,
             :mod:`aiauv_pin.dynamics.lagged_added_mass`; runs the Python controller, not the compiled loop).
         lagged_filter: The lagged scheme's filter coefficient in ``(0, 1]`` (0.3: UUV Simulator,
@@ -127,6 +132,7 @@ class Scenario:
     added_mass: str = "exact"
     lagged_filter: float = UUV_SIMULATOR_FILTER
     gait: Gait | None = None
+    thrusts: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         check_scheme(self.added_mass)
@@ -135,6 +141,13 @@ class Scenario:
             raise ValueError(
                 f"unknown controller '{self.controller}' (expected {' or '.join(CONTROLLERS)})"
             )
+        if self.thrusts is not None:
+            thrusts = tuple(float(x) for x in self.thrusts)
+            if not all(map(math.isfinite, thrusts)):
+                raise ValueError("thrusts must be finite numbers [N]")
+            object.__setattr__(self, "thrusts", thrusts)
+        if (self.controller == "constant") != (self.thrusts is not None):
+            raise ValueError("thrusts go with controller 'constant', and it needs them")
         if self.gait is not None and not isinstance(self.gait, Gait):
             raise ValueError(
                 f"gait must be a aiauv_pin.controllers.gait_controller.Gait, got "
@@ -314,7 +327,7 @@ def followed_path(scenario: Scenario) -> Path | None:
     """The path a run of ``scenario`` follows: its path in force with a path-following controller
     (``"paper"``, ``"thruster_turning"``), ``None`` for a passive run (``controller = "none"``),
     which follows nothing and so has no path errors."""
-    return None if scenario.controller == "none" else scenario.path_to_follow
+    return None if scenario.controller in OPEN_LOOP_CONTROLLERS else scenario.path_to_follow
 
 
 #: Position unit of each one-degree-of-freedom joint type of Pinocchio that moves along an axis
@@ -398,6 +411,14 @@ def run_scenario(
             )
         law = CompiledController.passive() if use_compiled else None
         servo = None
+    elif scenario.controller == "constant" and controller is None:
+        if vehicle.fast is None or compiled is False:
+            raise ValueError("constant thrusts run in the compiled loop only")
+        law, servo, use_compiled = (
+            CompiledController.constant(vehicle, scenario.thrusts),
+            None,
+            True,
+        )
     elif scenario.controller == "gait" and controller is None:
         if compiled is False:
             raise ValueError(
@@ -451,7 +472,7 @@ def run_scenario(
         return None
     wall_time = time.perf_counter() - start
     add_path_errors(vehicle, scenario, trajectory)
-    if not passive:  # rows logged once per controller sample
+    if scenario.controller not in OPEN_LOOP_CONTROLLERS:  # rows logged once per sample
         warn_if_oscillating(
             np.asarray(trajectory.v)[:, 6:],
             scenario.method,

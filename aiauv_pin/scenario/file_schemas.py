@@ -171,6 +171,7 @@ def gain(high: float, unit: str, meaning: str, *, zero: bool = False):
 
 
 CrossTrackGain = number(0.0, 100.0, low_open=True)
+FiniteThrust = number(-1.0e9, 1.0e9)
 
 
 class ControllerTable(BaseModel):
@@ -182,9 +183,15 @@ class ControllerTable(BaseModel):
     type: key(
         Literal[CONTROLLERS],
         "-",
-        "paper (path following), none (passive: thrusters and joints idle), thruster_turning or "
-        "gait (serpentine swimming, [gait])",
+        "paper (path following), none (passive: thrusters and joints idle), thruster_turning, "
+        "gait (serpentine swimming, [gait]) or constant (constant thrusts, joints idle)",
         "paper",
+    )
+    thrusts: key(
+        Annotated[list[FiniteThrust], Field(min_length=1)],
+        "N",
+        'type = "constant": one thrust per thruster, in the vehicle\'s order (saturated to '
+        "max_thrust)",
     )
     u_d: gain(MAX_SPEED, "m/s", f"desired surge speed (eq. 21, 25); default {_GAINS.u_d:g}")
     k_e: key(
