@@ -1,4 +1,4 @@
-"""Reading vehicle description files safely: URDF structure, xacro, ROS packages, limits, names.
+"""Reading vehicle description files safely: URDF structure, xacro, ROS packages, SDF, limits, names.
 
 Vehicle files are data, never code. May import :mod:`aiauv_pin._internal`, :mod:`aiauv_pin.errors`
 and :mod:`aiauv_hydro`.

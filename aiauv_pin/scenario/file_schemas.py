@@ -187,12 +187,6 @@ class ControllerTable(BaseModel):
         "gait (serpentine swimming, [gait]) or constant (constant thrusts, joints idle)",
         "paper",
     )
-    thrusts: key(
-        Annotated[list[FiniteThrust], Field(min_length=1)],
-        "N",
-        'type = "constant": one thrust per thruster, in the vehicle\'s order (saturated to '
-        "max_thrust)",
-    )
     u_d: gain(MAX_SPEED, "m/s", f"desired surge speed (eq. 21, 25); default {_GAINS.u_d:g}")
     k_e: key(
         CrossTrackGain | Annotated[list[CrossTrackGain], Field(min_length=2, max_length=2)],
@@ -237,6 +231,12 @@ class ControllerTable(BaseModel):
     )
     turn_moment_gain: gain(
         1.0e6, "N m/rad", "effective hydrodynamic moment per radian of base angle"
+    )
+    thrusts: key(
+        Annotated[list[FiniteThrust], Field(min_length=1)],
+        "N",
+        'type = "constant": one thrust per thruster, in the vehicle\'s order (saturated to '
+        "max_thrust)",
     )
 
 
