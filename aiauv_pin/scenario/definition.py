@@ -472,7 +472,7 @@ def run_scenario(
         return None
     wall_time = time.perf_counter() - start
     add_path_errors(vehicle, scenario, trajectory)
-    if scenario.controller not in OPEN_LOOP_CONTROLLERS:  # rows logged once per sample
+    if not passive and scenario.controller != "constant":  # rows logged once per sample
         warn_if_oscillating(
             np.asarray(trajectory.v)[:, 6:],
             scenario.method,
