@@ -987,15 +987,16 @@ class _Converter:
         self.undrawn: list[str] = []  # links whose visuals were meshes we cannot draw
 
     # -- poses ----------------------------------------------------------------------------------
+    def scoped_in(self, entity: str, reference: str) -> str:
+        """A frame name written inside the (nested) model of ``entity``, in the flattened scope:
+        ``__model__`` is that model's frame (a nested model's node, or ``""`` at the top)."""
+        model_node = entity.rpartition("/")[0]
+        return _scoped(reference, f"{model_node}/" if model_node else "", model_node)
+
     def in_link(self, link: str, pose: Pose, default: str) -> tuple[np.ndarray, np.ndarray]:
         """A pose written in ``link`` (relative to ``default`` unless ``relative_to``), in the
         link frame."""
-        reference = pose.relative_to.replace("::", "/") if pose.relative_to else default
-        if reference == "__model__":
-            reference = ""
-        elif pose.relative_to and reference not in self.flat.nodes and reference != "":
-            prefix = link.rpartition("/")[0]
-            reference = f"{prefix}/{reference}" if prefix else reference
+        reference = self.scoped_in(link, pose.relative_to) if pose.relative_to else default
         r_ref, t_ref = self.pose_of(reference)
         r_link, t_link = self.pose_of(link)
         rotation = r_link.T @ r_ref @ pose.rotation
@@ -1124,11 +1125,7 @@ class _Converter:
         ):
             expressed = "__model__"
         if expressed:
-            reference = (
-                ""
-                if expressed == "__model__"
-                else _scoped(expressed, name.rpartition("/")[0] + "/" if "/" in name else "", "")
-            )
+            reference = self.scoped_in(name, expressed)
             r_ref, _ = self.pose_of(reference)
             r_joint, _ = self.pose_of(name)
             vector = r_joint.T @ r_ref @ vector

@@ -29,6 +29,10 @@ and #1784 of 2022; the older Fortress plugin took positive added mass and had no
   capsule, ellipsoid, cone; meshes by their mesh volume) and its centre of buoyancy their
   volume-weighted pose positions in the link frame; density ``<uniform_fluid_density>`` (default 1000).
 
+The reading of these conventions (plugin terms, poses, collision volumes) lives in
+:mod:`aiauv_pin.description.sdf_reading`, which also loads whole SDF models as vehicles
+(``load_vehicle("model.sdf")``); this module imports and exports.
+
 Import (:func:`import_gz`) maps a model's plugins and ``<fluid_added_mass>`` onto ``fossen`` links of
 our block for the URDF links of the same names; it requires the SDF link frames to be the URDF link
 frames (true for ``gz sdf -p robot.urdf`` and for our export), and checks it on the link poses at
