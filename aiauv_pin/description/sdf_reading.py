@@ -849,7 +849,7 @@ def read_thruster(plugin: Element, prefix: str) -> GzThruster:
 
     Thrust ``T = C_t rho D^4 |omega| omega`` (``AngularVelToThrust``, lines 593-599); a force
     command is clamped to ``[min_thrust_cmd, max_thrust_cmd]`` (defaults -1000 and 1000, lines
-    113-119, 430-450, 519-520), an angular-velocity command (``use_angvel_cmd``) to the same limits
+    113-119, 430-450, 520-521), an angular-velocity command (``use_angvel_cmd``) to the same limits
     in rad/s. Our thruster is symmetric: its ``max_thrust`` is the larger magnitude.
     """
     joint = (plugin.findtext("joint_name") or "").strip()
