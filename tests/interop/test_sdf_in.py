@@ -101,3 +101,18 @@ def test_propelled_at_300_rpm_reaches_gz_speed():
     np.testing.assert_array_equal(thrust[-1], [-6.982942505858744])
     # straight-line terminal speed of the surge law: sqrt(T / X_u|u|) = 1.0589 m/s, not yet reached
     assert speed < math.sqrt(6.982942505858744 / 6.2282)
+
+
+def test_import_gz_reads_undeclared_prefixes(tmp_path):
+    """`aiauv import-gz` read SDF with the same parser: a `gz:` element no longer stops it."""
+    from aiauv_pin.interop.gz import read_gz_model
+
+    path = tmp_path / "m.sdf"
+    path.write_text(
+        '<sdf version="1.9"><model name="m"><link name="hull"><gz:extra gz:a="1"/></link>'
+        '<plugin name="gz::sim::systems::Hydrodynamics" filename="gz-sim-hydrodynamics-system">'
+        "<link_name>hull</link_name><xUabsU>-2</xUabsU></plugin></model></sdf>",
+        encoding="utf-8",
+    )
+    (link,) = read_gz_model(path).links
+    assert link.quadratic_damping[0, 0] == 2.0
