@@ -31,8 +31,8 @@ controller):
   (:func:`aiauv_pin.kernels.articulated_body.actuators_into`: fin angles towards the controller's
   ``W.fin_command``, the thrust of thrusters with a lag or a rate limit towards the command that
   :func:`~aiauv_pin.kernels.articulated_body.thrust_into` recorded), and the value reached is held
-  over the step; the interpreted loop has no actuator state and refuses a Python controller on a
-  vehicle with fins or thruster dynamics.
+  over the step; the interpreted loop has no actuator state: it refuses a Python controller on a
+  vehicle with thruster dynamics and holds fins at zero angle.
 
 Which compiled controller the loop runs (:func:`run_controller`): a user's function, or a built-in
 one chosen by type. numba's on-disk cache cannot key a compiled function on an argument that is
