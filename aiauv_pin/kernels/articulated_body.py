@@ -18,10 +18,12 @@ stage with the stage's own time:
 
 * ``current(t, x, y, z, parameters) -> (V_x, V_y, V_z)``: the water velocity [m/s] at a world
   point [m] (:mod:`aiauv_hydro.currents` has the built-in ones), sampled at each body's probe point
-  (:attr:`aiauv_hydro.laws.fluid_terms.FluidModel.current_probe`). A time- or space-varying current is applied
-  quasi-steadily: the relative-velocity form of Fossen 2021, eq. (10.5), which is exact for a
-  uniform steady current, with the current's own local acceleration (Froude-Krylov and its
-  added-mass reaction) neglected;
+  (:attr:`aiauv_hydro.laws.fluid_terms.FluidModel.current_probe`), with the water's acceleration
+  ``DV/Dt`` [m/s^2] at the same point (:func:`aiauv_hydro.currents.current_acceleration`): the
+  forces use the relative velocity (Fossen 2021, eq. (10.5)) and the water's acceleration adds
+  the Froude-Krylov force and the added mass's reaction
+  (:mod:`aiauv_hydro.laws.unsteady_flow`), unless the environment holds the quasi-steady model
+  (``current_unsteady`` false: the acceleration neglected);
 * ``disturbance(t, q, v, parameters, tau)``: adds a generalised force [N, N m] to ``tau`` (nv,).
 """
 
@@ -33,13 +35,14 @@ from typing import NamedTuple
 import numpy as np
 
 from aiauv_control.laws.paper_laws import joint_pd_implicit_terms, joint_pd_torque
-from aiauv_hydro.currents import current_velocity
+from aiauv_hydro.currents import current_acceleration, current_velocity
 from aiauv_hydro.laws.fluid_terms import (
     add_body_fluid_bias,
     coriolis_of_momentum,
     hydrostatic_wrench,
     stacked_row_dot,
 )
+from aiauv_hydro.laws.unsteady_flow import add_flow_acceleration_bias
 from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled
 from aiauv_hydro.numerics.spatial import cross3, motion_cross, motion_to_child
 from aiauv_pin.kernels.disturbances import apply_disturbance
@@ -284,7 +287,9 @@ def point_in_world(rotation, position, b, x, y, z):
 
 @compiled(fastmath=True, borrows_only=True)
 def sample_current(model, env, t, W):
-    """Water velocity at every body's probe point at time ``t`` into ``W.current`` (after kinematics)."""
+    """Water velocity at every body's probe point at time ``t`` into ``W.current``, and its
+    acceleration into ``W.flow_acceleration`` (zeros unless ``env.current_unsteady``), after
+    kinematics."""
     current_at_probes(
         env.current_function,
         env.current_kind,
@@ -295,6 +300,37 @@ def sample_current(model, env, t, W):
         W.position,
         W.current,
     )
+    if env.current_unsteady:
+        acceleration_at_probes(
+            env.current_acceleration_function,
+            env.current_function,
+            env.current_kind,
+            env.current_parameters,
+            t,
+            model.fluid.current_probe,
+            W.rotation,
+            W.position,
+            W.flow_acceleration,
+        )
+    else:
+        W.flow_acceleration[:, :] = 0.0
+
+
+@compiled(fastmath=True)
+def acceleration_at_probes(
+    acceleration, function, kind, parameters, t, probe, rotation, position, water
+):
+    """``water[b]``: the water's acceleration ``DV/Dt`` at body ``b``'s probe point at time ``t``
+    [m/s^2], world axes (:func:`aiauv_hydro.currents.current_acceleration`).
+
+    Reference-counted, as :func:`current_at_probes`: it may call a user's functions.
+    """
+    for b in range(water.shape[0]):
+        x, y, z = point_in_world(rotation, position, b, probe[b, 0], probe[b, 1], probe[b, 2])
+        a = current_acceleration(acceleration, function, kind, t, x, y, z, parameters)
+        water[b, 0] = a[0]
+        water[b, 1] = a[1]
+        water[b, 2] = a[2]
 
 
 @compiled(fastmath=True)
@@ -324,8 +360,9 @@ def body_bias(model, W):
     """Velocity- and state-dependent part of each body's equation ``f = I a + p`` (left-hand side).
 
     ``p = nu x* (I_RB nu)`` (rigid Coriolis, Featherstone 2008, eq. (2.67)) plus every fluid term of
-    :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`; after :func:`kinematics` and
-    :func:`sample_current`.
+    :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias` and the water's acceleration
+    (:func:`aiauv_hydro.laws.unsteady_flow.add_flow_acceleration_bias`); after :func:`kinematics`
+    and :func:`sample_current`.
     """
     rigid, twist, bias = model.bodies.rigid_inertia, W.twist, W.bias
     for b in range(bias.shape[0]):
@@ -350,6 +387,7 @@ def body_bias(model, W):
     add_body_fluid_bias(
         model.fluid, W.rotation, W.twist, W.current, W.bias, W.relative, W.fluid_scratch
     )
+    add_flow_acceleration_bias(model.fluid, W.rotation, W.flow_acceleration, W.bias)
 
 
 # ---------------------------------------------------------------------- articulated-body algorithm
@@ -854,6 +892,7 @@ def workspace(nb: int, nq: int, nv: int) -> Workspace:
         np.empty(nq),
         np.empty(nq),
         np.empty((nb, 6)),
+        np.zeros((nb, 3)),
     )
 
 

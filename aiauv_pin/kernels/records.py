@@ -88,6 +88,10 @@ class Environment(NamedTuple):
 
     A built-in current or disturbance is chosen by its ``kind`` with ``*_function = None``; a user's
     own compiled function is passed in ``*_function`` (:func:`aiauv_hydro.numerics.jit.user_or_builtin`).
+    ``current_acceleration_function`` is a user's own acceleration of the water (``None``: the
+    built-in's, or differences of the user's velocity; :func:`aiauv_hydro.currents.current_acceleration`);
+    ``current_unsteady`` is ``False`` where the water never accelerates (a constant current) or
+    for the quasi-steady model, and then the water's acceleration is not sampled.
     """
 
     current_function: object
@@ -96,6 +100,8 @@ class Environment(NamedTuple):
     disturbance_function: object
     disturbance_kind: int
     disturbance_parameters: np.ndarray
+    current_acceleration_function: object
+    current_unsteady: bool
 
 
 class Workspace(NamedTuple):
@@ -137,6 +143,7 @@ class Workspace(NamedTuple):
     subtree_restoring: (
         np.ndarray
     )  # (nb, 6) -hydrostatic wrench of each body's subtree (servo's g(q))
+    flow_acceleration: np.ndarray  # (nb, 3) the water's acceleration DV/Dt at each probe, world
 
 
 def _joint_kind_axis(joint) -> tuple[int, np.ndarray] | None:
