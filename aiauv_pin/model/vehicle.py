@@ -46,8 +46,8 @@ import pinocchio as pin
 
 from aiauv_hydro.currents import Current, as_current
 from aiauv_hydro.laws.fluid_terms import FluidModel, add_body_fluid_bias
-from aiauv_hydro.laws.unsteady_flow import add_flow_acceleration_bias
 from aiauv_hydro.laws.kirchhoff import momentum_in_world
+from aiauv_hydro.laws.unsteady_flow import add_flow_acceleration_bias
 from aiauv_hydro.spec import HydroSpec
 from aiauv_pin._internal.array_checks import (
     configuration,

@@ -20,15 +20,16 @@ mass matrix, the second is :func:`aiauv_hydro.laws.fluid_terms.current_accelerat
 since the constant current, exact for it), the third is the added mass's reaction to the water's
 acceleration, new here. For a uniform current ``a = dV/dt`` is exact; in a non-uniform flow the
 derivative of the water's velocity along the body's path differs from ``DV/Dt`` by
-``((v - V) . grad) V``, and the result of Auton, Hunt and Prud'homme (1988, *J. Fluid Mech.* 197,
-241-257, their force on a body of volume V) for a body in a weakly non-uniform inviscid flow, ``C_a rho V (DV/Dt -
-dv/dt)``, takes the material derivative: so does this law.
+``((v - V) . grad) V``; for a body in a weakly non-uniform inviscid flow, the force of Auton,
+Hunt and Prud'homme (1988, *J. Fluid Mech.* 197, 241-257), ``C_a rho Vol (DV/Dt - dv/dt)``, takes
+the material derivative: so does this law.
 
 The pressure gradient that accelerates the water, ``-grad p = rho (DV/Dt - g)`` (Euler's
 equation), also pushes the displaced volume: ``rho Vol (DV/Dt - g)`` at its centroid, the centre of
 buoyancy ``c_B``. The ``-g`` part is the buoyancy (:func:`aiauv_hydro.laws.fluid_terms.hydrostatic_wrench`);
 the rest is the Froude-Krylov force ``rho Vol R^T a`` with the moment ``c_B x rho Vol R^T a``
-(DNV-RP-C205, 2021, Sec. 6.2, Morison's load formula: the ``1`` of ``C_M = 1 + C_A``). Together, the wrench of the water's acceleration on body ``b`` is
+(DNV-RP-C205, 2021, Sec. 6.2, Morison's load formula: the ``1`` of ``C_M = 1 + C_A``). Together,
+the wrench of the water's acceleration on body ``b`` is
 
     ``w_b = (M_F + M_A)[:, :3] R^T a``,   ``M_F[:, :3] = (rho Vol I, rho Vol [c_B])``
 
