@@ -366,3 +366,39 @@ def test_constant_current_is_bit_identical_to_the_quasi_steady_model(paper_vehic
     a = paper_vehicle.acceleration(q, v, tau, water)
     b = paper_vehicle.acceleration(q, v, tau, water.quasi_steady())
     assert np.array_equal(a, b)
+
+
+@compiled
+def users_tidal_velocity(t, x, y, z, parameters):
+    """A user's own copy of the tidal current, ``V = A sin(omega t + phi)``."""
+    s = math.sin(parameters[3] * t + parameters[4])
+    return parameters[0] * s, parameters[1] * s, parameters[2] * s
+
+
+@compiled
+def users_tidal_acceleration(t, x, y, z, parameters):
+    """Its acceleration, by hand."""
+    c = parameters[3] * math.cos(parameters[3] * t + parameters[4])
+    return parameters[0] * c, parameters[1] * c, parameters[2] * c
+
+
+def test_users_current_in_the_compiled_loop(tmp_path):
+    """``simulate`` (compiled loop) with a user's current: with its own acceleration it runs the
+    built-in tidal current's dynamics to round-off (1e-12), by differences to 1e-8."""
+    vehicle = sphere(tmp_path, 1.5)
+    omega, phase = 2 * math.pi / PERIOD, 0.3
+    parameters = np.array([*AMPLITUDE, omega, phase])
+    runs = {}
+    for name, water in (
+        ("builtin", oscillating_flow(phase)),
+        ("own", Current(users_tidal_velocity, parameters, acceleration=users_tidal_acceleration)),
+        ("differences", Current(users_tidal_velocity, parameters)),
+    ):
+        run = aiauv_pin.simulate(
+            vehicle, vehicle.neutral_configuration(), np.zeros(6), 2.0, 0.01, current=water
+        )
+        runs[name] = run.v
+    scale = np.abs(runs["builtin"]).max()
+    assert scale > 0.05  # the sphere was set moving by the water's acceleration
+    assert np.abs(runs["own"] - runs["builtin"]).max() <= 1e-12 * max(scale, 1.0)
+    assert np.abs(runs["differences"] - runs["builtin"]).max() <= 1e-8 * max(scale, 1.0)
