@@ -369,7 +369,9 @@ def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch
     with the damping ``tau_D`` of each link (linear, quadratic, forward-speed and crossflow) in
     its link frame (:func:`add_link_damping`, the walk over the links that the derivative
     :func:`body_fluid_bias_jacobians` shares).
-    The added-mass inertia term ``M_A dv`` is not here: it belongs to the mass matrix.
+    The added-mass inertia term ``M_A dv`` is not here: it belongs to the mass matrix; nor are the
+    water's own acceleration terms (Froude-Krylov and the added mass's reaction to it):
+    :func:`aiauv_hydro.laws.unsteady_flow.add_flow_acceleration_bias`.
 
     Args:
         fluid: The vehicle's :class:`FluidModel`.

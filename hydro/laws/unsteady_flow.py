@@ -44,6 +44,7 @@ bit-identical); the quasi-steady model (``Current(..., unsteady=False)``) sample
 
 from __future__ import annotations
 
+from aiauv_hydro.laws.fluid_terms import current_in_body
 from aiauv_hydro.numerics.jit import compiled
 from aiauv_hydro.numerics.spatial import cross3
 
@@ -77,17 +78,6 @@ def flow_acceleration_wrench(added_mass, displaced, b, a0, a1, a2):
     )
 
 
-@compiled(fastmath=True)
-def acceleration_in_body(rotation, acceleration, b):
-    """``R_b^T a_b``: the water's acceleration at body ``b``'s probe in body axes [m/s^2]."""
-    a0, a1, a2 = acceleration[b, 0], acceleration[b, 1], acceleration[b, 2]
-    return (
-        rotation[b, 0, 0] * a0 + rotation[b, 1, 0] * a1 + rotation[b, 2, 0] * a2,
-        rotation[b, 0, 1] * a0 + rotation[b, 1, 1] * a1 + rotation[b, 2, 1] * a2,
-        rotation[b, 0, 2] * a0 + rotation[b, 1, 2] * a1 + rotation[b, 2, 2] * a2,
-    )
-
-
 @compiled(fastmath=True, borrows_only=True)
 def add_flow_acceleration_bias(fluid, rotation, acceleration, bias):
     """``bias_b -= (M_F + M_A)[:, :3] R_b^T a_b`` for every body whose water accelerates.
@@ -106,7 +96,7 @@ def add_flow_acceleration_bias(fluid, rotation, acceleration, bias):
     for b in range(acceleration.shape[0]):
         if acceleration[b, 0] == 0.0 and acceleration[b, 1] == 0.0 and acceleration[b, 2] == 0.0:
             continue
-        a0, a1, a2 = acceleration_in_body(rotation, acceleration, b)
+        a0, a1, a2 = current_in_body(rotation, acceleration, b)
         w = flow_acceleration_wrench(added, displaced, b, a0, a1, a2)
         for i in range(6):
             bias[b, i] -= w[i]
@@ -132,7 +122,7 @@ def add_flow_acceleration_rotation_jacobian(fluid, rotation, acceleration, d_rot
     for b in range(acceleration.shape[0]):
         if acceleration[b, 0] == 0.0 and acceleration[b, 1] == 0.0 and acceleration[b, 2] == 0.0:
             continue
-        a0, a1, a2 = acceleration_in_body(rotation, acceleration, b)
+        a0, a1, a2 = current_in_body(rotation, acceleration, b)
         # column j of G [a] is G (a x e_j); the wrench is linear in its acceleration argument
         for j in range(3):
             e0, e1, e2 = cross3(a0, a1, a2, 1.0 if j == 0 else 0.0, 1.0 if j == 1 else 0.0,
