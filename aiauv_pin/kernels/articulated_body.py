@@ -287,9 +287,7 @@ def point_in_world(rotation, position, b, x, y, z):
 
 @compiled(fastmath=True, borrows_only=True)
 def sample_current(model, env, t, W):
-    """Water velocity at every body's probe point at time ``t`` into ``W.current``, and its
-    acceleration into ``W.flow_acceleration`` (zeros unless ``env.current_unsteady``), after
-    kinematics."""
+    """Water velocity at every body's probe point at time ``t`` into ``W.current`` (after kinematics)."""
     current_at_probes(
         env.current_function,
         env.current_kind,
@@ -300,20 +298,6 @@ def sample_current(model, env, t, W):
         W.position,
         W.current,
     )
-    if env.current_unsteady:
-        acceleration_at_probes(
-            env.current_acceleration_function,
-            env.current_function,
-            env.current_kind,
-            env.current_parameters,
-            t,
-            model.fluid.current_probe,
-            W.rotation,
-            W.position,
-            W.flow_acceleration,
-        )
-    else:
-        W.flow_acceleration[:, :] = 0.0
 
 
 @compiled(fastmath=True)
@@ -360,9 +344,8 @@ def body_bias(model, W):
     """Velocity- and state-dependent part of each body's equation ``f = I a + p`` (left-hand side).
 
     ``p = nu x* (I_RB nu)`` (rigid Coriolis, Featherstone 2008, eq. (2.67)) plus every fluid term of
-    :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias` and the water's acceleration
-    (:func:`aiauv_hydro.laws.unsteady_flow.add_flow_acceleration_bias`); after :func:`kinematics`
-    and :func:`sample_current`.
+    :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`; after :func:`kinematics` and
+    :func:`sample_current`. The water's acceleration is added by :func:`flow_acceleration_bias`.
     """
     rigid, twist, bias = model.bodies.rigid_inertia, W.twist, W.bias
     for b in range(bias.shape[0]):
@@ -387,7 +370,29 @@ def body_bias(model, W):
     add_body_fluid_bias(
         model.fluid, W.rotation, W.twist, W.current, W.bias, W.relative, W.fluid_scratch
     )
-    add_flow_acceleration_bias(model.fluid, W.rotation, W.flow_acceleration, W.bias)
+
+
+@compiled(fastmath=True, borrows_only=True)
+def flow_acceleration_bias(model, env, t, W):
+    """The water's acceleration ``DV/Dt`` at every body's probe point at time ``t`` into
+    ``W.flow_acceleration`` and its wrench in each body's bias
+    (:func:`aiauv_hydro.laws.unsteady_flow.add_flow_acceleration_bias`), after :func:`body_bias`,
+    when ``env.current_unsteady``; nothing at all otherwise (a constant current, the quasi-steady
+    model: ``W.flow_acceleration`` is then left as it was), so those runs execute the code they
+    did before the term existed."""
+    if env.current_unsteady:
+        acceleration_at_probes(
+            env.current_acceleration_function,
+            env.current_function,
+            env.current_kind,
+            env.current_parameters,
+            t,
+            model.fluid.current_probe,
+            W.rotation,
+            W.position,
+            W.flow_acceleration,
+        )
+        add_flow_acceleration_bias(model.fluid, W.rotation, W.flow_acceleration, W.bias)
 
 
 # ---------------------------------------------------------------------- articulated-body algorithm
@@ -912,6 +917,7 @@ def acceleration_into(model, env, servo, t, q, v, tau, W, out, implicit_step):
     kinematics(model.bodies, q, v, W)
     sample_current(model, env, t, W)
     body_bias(model, W)
+    flow_acceleration_bias(model, env, t, W)
     tau_all = W.tau_total
     for i in range(tau.shape[0]):
         tau_all[i] = tau[i]

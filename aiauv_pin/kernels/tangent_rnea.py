@@ -65,6 +65,7 @@ from aiauv_pin.kernels.articulated_body import (
     _matvec6,
     _xT_add,
     body_bias,
+    flow_acceleration_bias,
     kinematics,
     sample_current,
 )
@@ -538,6 +539,7 @@ def acceleration_derivatives_into(
     kinematics(bodies, q, v, W)
     sample_current(model, env, t, W)
     body_bias(model, W)
+    flow_acceleration_bias(model, env, t, W)
     for b in range(nb):
         xl = W.placement[b]
         motion_transform_into(xl[:3], xl[3, 0], xl[3, 1], xl[3, 2], D.xform[b])
@@ -561,10 +563,11 @@ def acceleration_derivatives_into(
         # d e = [e] d theta and d v_c = [v_c] d theta (e = R^T z turns by -d theta)
         _times_skew(D.d_up[b], rot[2, 0], rot[2, 1], rot[2, 2], D.d_rotation[b], False)
         _times_skew(D.d_current[b], vc0, vc1, vc2, D.d_rotation[b], True)
-    # the water's acceleration in body axes turns like the current (zero: nothing added)
-    add_flow_acceleration_rotation_jacobian(
-        model.fluid, W.rotation, W.flow_acceleration, D.d_rotation
-    )
+    # the water's acceleration in body axes turns like the current
+    if env.current_unsteady:
+        add_flow_acceleration_rotation_jacobian(
+            model.fluid, W.rotation, W.flow_acceleration, D.d_rotation
+        )
     _mass_matrix(bodies, D)
     _invert_spd(D.mass, D.cholesky, D.mass_inverse)
     if da_dthrust.shape[1] > 0:
