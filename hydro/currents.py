@@ -342,14 +342,19 @@ class Current:
             raise HydroError(f"current.period: expected a positive number, got {parameters[6]!r}")
 
     @classmethod
-    def constant(cls, velocity) -> Current:
-        """Uniform, steady current ``velocity`` (3,) [m/s], world axes."""
+    def constant(cls, velocity, *, unsteady: bool = True) -> Current:
+        """Uniform, steady current ``velocity`` (3,) [m/s], world axes (it never accelerates:
+        ``unsteady`` changes nothing but the description)."""
         v = _vector3(velocity, "current.velocity")
-        return cls(constant_current, v, "constant", {"type": "constant", "velocity": v.tolist()})
+        description = {"type": "constant", "velocity": v.tolist()}
+        return cls(constant_current, v, "constant", description, unsteady=unsteady)
 
     @classmethod
-    def tidal(cls, mean, amplitude, period: float, phase: float = 0.0) -> Current:
-        """``V(t) = mean + amplitude sin(2 pi t / period + phase)`` [m/s]."""
+    def tidal(
+        cls, mean, amplitude, period: float, phase: float = 0.0, *, unsteady: bool = True
+    ) -> Current:
+        """``V(t) = mean + amplitude sin(2 pi t / period + phase)`` [m/s]; ``unsteady=False``: the
+        quasi-steady model (its acceleration neglected)."""
         mean = _vector3(mean, "current.velocity")
         amplitude = _vector3(amplitude, "current.amplitude")
         period = _number(period, "current.period", positive=True)
@@ -362,11 +367,14 @@ class Current:
             "period": period,
             "phase": phase,
         }
-        return cls(tidal_current, parameters, "tidal", description)
+        return cls(tidal_current, parameters, "tidal", description, unsteady=unsteady)
 
     @classmethod
-    def shear(cls, velocity, gradient, reference_z: float = 0.0) -> Current:
-        """``V(z) = velocity + gradient (z - reference_z)`` [m/s], ``gradient`` in [1/s]."""
+    def shear(
+        cls, velocity, gradient, reference_z: float = 0.0, *, unsteady: bool = True
+    ) -> Current:
+        """``V(z) = velocity + gradient (z - reference_z)`` [m/s], ``gradient`` in [1/s];
+        ``unsteady=False``: the quasi-steady model (its acceleration ``V_z G`` neglected)."""
         velocity = _vector3(velocity, "current.velocity")
         gradient = _vector3(gradient, "current.gradient")
         reference_z = _number(reference_z, "current.reference_z")
@@ -377,7 +385,7 @@ class Current:
             "gradient": gradient.tolist(),
             "reference_z": reference_z,
         }
-        return cls(shear_current, parameters, "shear", description)
+        return cls(shear_current, parameters, "shear", description, unsteady=unsteady)
 
     @property
     def kind_code(self) -> int:

@@ -195,6 +195,8 @@ def test_quasi_steady_option_in_api_and_tables():
     assert unsteady.unsteady and not steady.unsteady
     quasi = unsteady.quasi_steady()
     assert quasi.describe() == steady.describe() and quasi.function is steady.function
+    by_keyword = Current.tidal([0.1, 0, 0], [0.2, 0, 0], 9.0, unsteady=False)
+    assert by_keyword.describe() == steady.describe()
     assert np.array_equal(quasi.parameters, steady.parameters)
     assert np.all(steady.water_acceleration(1.0, np.zeros(3)) == 0.0)
     assert steady.describe()["unsteady"] is False and "unsteady" not in unsteady.describe()
