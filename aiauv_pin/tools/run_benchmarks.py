@@ -42,6 +42,14 @@ def _spread(values: list[float]) -> dict:
 
 
 # ---------------------------------------------------------------------- throughput
+def _process_cpu() -> float:
+    """User plus system CPU time of this process, all threads [s]."""
+    import resource
+
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
 def _warm(duration: float) -> str:
     """One short run in a worker thread (loads the compiled code and this thread's vehicle)."""
     from aiauv_pin.model.loading import bundled_urdf
@@ -117,6 +125,9 @@ def throughput(
         "rollout_midpoint": [],
         "rollout_midpoint_sparse_log": [],
     }
+    # CPU time [s] of each rollout batch (this process's user + system time: the stable figure on
+    # a shared machine, where wall time depends on the other processes)
+    cpu: dict[str, list[float]] = {name: [] for name in times if name.startswith("rollout")}
     try:
         for cluster in clusters.values():
             with Client(cluster) as client:
@@ -165,6 +176,7 @@ def throughput(
                 ),
             ):
                 controllers = laws()
+                cpu_start = _process_cpu()
                 start = time.perf_counter()
                 batch = rollout(
                     vehicle,
@@ -178,6 +190,7 @@ def throughput(
                     log_every=log_every,
                 )
                 times[name].append(time.perf_counter() - start)
+                cpu[name].append(_process_cpu() - cpu_start)
                 if not (batch.status == "complete").all():
                     raise RuntimeError(f"{name}: a run diverged")
                 del batch  # up to 57 MB per run, freed before the next batch
@@ -201,6 +214,12 @@ def throughput(
             "wall_s": _spread(walls),
             "runs_per_minute": _spread([60.0 * runs / w for w in walls]),
         }
+        if name in cpu:
+            results[name]["cpu_per_run_s"] = _spread([c / runs for c in cpu[name]])
+            # what ``cores`` idle cores would give: cores x 60 s / CPU per run
+            results[name]["runs_per_minute_idle_cores"] = _spread(
+                [60.0 * cores * runs / c for c in cpu[name]]
+            )
     results["ratio_sweep_threads_to_processes"] = (
         results["sweep_threads"]["runs_per_minute"]["median"]
         / results["sweep_processes"]["runs_per_minute"]["median"]
@@ -648,6 +667,13 @@ def format_parts(results: dict) -> list[str]:
         spread(f"{head}: sweep, processes", tp["sweep_processes"]["runs_per_minute"], "")
         spread(f"{head}: sweep, threads", tp["sweep_threads"]["runs_per_minute"], "")
         spread(f"{head}: rollout()", tp["rollout"]["runs_per_minute"], "")
+        if "cpu_per_run_s" in tp["rollout"]:
+            spread(f"{head}: rollout(), CPU per run", tp["rollout"]["cpu_per_run_s"], "s")
+            spread(
+                f"{head}: rollout(), from CPU on idle cores",
+                tp["rollout"]["runs_per_minute_idle_cores"],
+                "",
+            )
         if "rollout_sparse_log" in tp:
             spread(
                 f"{head}: rollout(), log every {tp['rollout_sparse_log_every']}th step",
