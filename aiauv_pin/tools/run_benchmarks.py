@@ -8,6 +8,7 @@
   both clusters are started and warmed up before the first round.
 * :func:`end_to_end`: wall time of fresh ``aiauv simulate`` processes (warm numba cache), with and
   without the playback page, interleaved.
+* :func:`memory`: peak resident memory of fresh processes simulating chains of 9 to 127 links.
 * :func:`first_run`: CPU and wall time of a new installation's first run (empty numba cache), with
   the kernels shipped with the package and, interleaved, with everything compiled.
 * :func:`accuracy_per_cost`: the largest end-effector distance over the whole path between each
@@ -341,6 +342,90 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
             for name, split in parts.items()
         },
     }
+
+
+# ---------------------------------------------------------------------- memory
+#: The links of :func:`memory`'s chains (:func:`aiauv_pin.tools.native_benchmarks.chain_spec`):
+#: the paper's 9, and the scaling figure's 65 and 127.
+MEMORY_LINKS = (9, 65, 127)
+
+#: The peak resident set of this process [MiB]: ``VmHWM`` of ``/proc/self/status`` (proc(5)),
+#: the high-water mark of this address space. ``ru_maxrss`` is not used: Linux carries it over
+#: ``fork`` and ``exec``, so a child reports at least the (large) benchmark process's peak.
+_PEAK = (
+    "def peak():\n"
+    "    for line in open('/proc/self/status'):\n"
+    "        if line.startswith('VmHWM:'):\n"
+    "            return int(line.split()[1]) / 1024\n"
+)
+
+#: A fresh process: load a vehicle, run it compiled (passive, no controller), print its peak
+#: resident set [MiB] and a digest of the trajectory (the same on every run).
+_MEMORY_SCRIPT = (
+    _PEAK
+    + """\
+import hashlib, json, sys
+import numpy as np
+import aiauv_pin
+vehicle = aiauv_pin.load_vehicle(sys.argv[1])
+q0, v0 = vehicle.neutral_configuration(), np.zeros(vehicle.nv)
+run = aiauv_pin.simulate(vehicle, q0, v0, float(sys.argv[2]), 0.01)
+digest = hashlib.sha256(np.ascontiguousarray(run.q).tobytes() + np.ascontiguousarray(run.v).tobytes())
+print(json.dumps({
+    "peak_mib": peak(),
+    "backend": vehicle.active_backend,
+    "trajectory_sha256": digest.hexdigest(),
+}))
+"""
+)
+
+
+def memory(links: tuple[int, ...] = MEMORY_LINKS, duration: float = 10.0, repeats: int = 3) -> dict:
+    """Peak resident memory [MiB] of a fresh process that loads a chain of ``links`` modules
+    (built by :mod:`aiauv_pin.builders`, as ``aiauv build`` does) and simulates ``duration``
+    seconds compiled, interleaved over ``repeats`` rounds; and the floor, a fresh
+    ``python -c "import aiauv_pin"`` (numpy, numba and Pinocchio imported)."""
+    import json
+
+    from aiauv_pin.builders.urdf_builder import build_urdf
+    from aiauv_pin.builders.vehicle_spec import spec_from_dict
+    from aiauv_pin.tools.native_benchmarks import chain_spec
+
+    import_only = [sys.executable, "-c", _PEAK_OF_IMPORT]
+    peaks: dict[str, list[float]] = {"import_only": [], **{str(n): [] for n in links}}
+    digests: dict[str, set[str]] = {str(n): set() for n in links}
+    backends: dict[str, str] = {}
+    with tempfile.TemporaryDirectory() as folder:
+        commands = {"import_only": import_only}
+        for n in links:
+            urdf = Path(folder) / f"chain{n}.urdf"
+            urdf.write_text(build_urdf(spec_from_dict(chain_spec(n))), encoding="utf-8")
+            commands[str(n)] = [sys.executable, "-c", _MEMORY_SCRIPT, str(urdf), f"{duration:g}"]
+        for _ in range(repeats):
+            for name, command in commands.items():
+                done = subprocess.run(command, capture_output=True, text=True, check=True)
+                row = json.loads(done.stdout.strip().splitlines()[-1])
+                peaks[name].append(row["peak_mib"])
+                if name in digests:
+                    digests[name].add(row["trajectory_sha256"])
+                    backends[name] = row["backend"]
+    return {
+        "duration_s": duration,
+        "repeats": repeats,
+        "import_only_peak_mib": _spread(peaks["import_only"]),
+        "rows": [
+            {
+                "links": n,
+                "backend": backends[str(n)],
+                "peak_mib": _spread(peaks[str(n)]),
+                "trajectory_sha256": sorted(digests[str(n)]),
+            }
+            for n in links
+        ],
+    }
+
+
+_PEAK_OF_IMPORT = _PEAK + "import json\nimport aiauv_pin\nprint(json.dumps({'peak_mib': peak()}))\n"
 
 
 # ---------------------------------------------------------------------- first run
@@ -708,6 +793,12 @@ def format_parts(results: dict) -> list[str]:
         for name, label in labels:
             for part, values in e2e.get("breakdown", {}).get(name, {}).items():
                 spread(f"  {label}: {part[:-2]}", values, "s")
+    mem = results.get("memory")
+    if mem:
+        spread("peak memory, fresh 'import aiauv_pin'", mem["import_only_peak_mib"], "MiB")
+        for row in mem["rows"]:
+            label = f"peak memory, {row['links']} links, {mem['duration_s']:g} s {row['backend']}"
+            spread(label, row["peak_mib"], "MiB")
     first = results.get("first_run")
     if first:
         for name, label in (("shipped", "shipped kernels"), ("compiled", "all compiled")):
