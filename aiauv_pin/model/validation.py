@@ -208,23 +208,30 @@ def validate_parameters(structure: UrdfStructure, hydro: HydroSpec, where: str =
             )
 
 
+#: From this many velocity coordinates on, a compiled vehicle's mass matrix is checked on the
+#: compiled accelerations (:func:`validate_mass_matrix`): Pinocchio's ``Data`` is then 2 MB or more.
+COMPILED_CHECK_FROM = 32
+
+
 def validate_mass_matrix(vehicle, where: str = "", *, reference: bool = False) -> float:
     """Refuse a vehicle whose ``M(q)`` at the neutral configuration is not finite and positive
     definite; return its smallest eigenvalue.
 
-    A vehicle running compiled (:attr:`aiauv_pin.Vehicle.fast`) is checked without Pinocchio's
-    ``Data`` (about 150 MB at 127 links, its size growing as ``nv^3``; the compiled path never
-    needs it): the columns of ``M^-1`` are the compiled accelerations of unit generalised forces
-    at rest, ``a(e_i) - a(0)`` (the equations of motion are linear in ``tau``), and ``M`` is
-    positive definite exactly when ``M^-1`` is, with ``lambda_min(M) = 1 / lambda_max(M^-1)``
-    and the same ratio of extreme eigenvalues. ``reference=True`` (``aiauv check``, which prints
-    the eigenvalue) and the Pinocchio backend form ``M`` with Pinocchio
-    (:meth:`aiauv_pin.Vehicle.mass_matrix`).
+    A vehicle running compiled (:attr:`aiauv_pin.Vehicle.fast`) with at least
+    :data:`COMPILED_CHECK_FROM` velocity coordinates is checked without Pinocchio's ``Data``
+    (about 150 MB at 127 links, its size growing as ``nv^3``; the compiled path never needs it;
+    below that size the ``Data`` is small and Pinocchio's check is cheaper than loading the
+    compiled entry point, 30-40 ms of CPU once): the columns of ``M^-1`` are the compiled
+    accelerations of unit generalised forces at rest, ``a(e_i) - a(0)`` (the equations of
+    motion are linear in ``tau``), and ``M`` is positive definite exactly when ``M^-1`` is, with
+    ``lambda_min(M) = 1 / lambda_max(M^-1)`` and the same ratio of extreme eigenvalues.
+    ``reference=True`` (``aiauv check``, which prints the eigenvalue), smaller vehicles and the
+    Pinocchio backend form ``M`` with Pinocchio (:meth:`aiauv_pin.Vehicle.mass_matrix`).
 
     Raises:
         PhysicalParameterError: One line.
     """
-    if vehicle.fast is not None and not reference:
+    if vehicle.fast is not None and vehicle.nv >= COMPILED_CHECK_FROM and not reference:
         return _validate_inverse_mass_matrix(vehicle, where)
     mass_matrix = vehicle.mass_matrix(vehicle.neutral_configuration())
     if not np.all(np.isfinite(mass_matrix)):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from aiauv_pin.errors import VehicleLoadError
-from aiauv_pin.model import loading
+from aiauv_pin.model import loading, validation
 from aiauv_pin.model.validation import validate_mass_matrix
 
 TWO_LINKS = """<robot name="two">
@@ -21,7 +21,8 @@ TWO_LINKS = """<robot name="two">
 </robot>"""
 
 
-def test_compiled_load_and_run_make_no_pinocchio_data():
+def test_compiled_load_and_run_make_no_pinocchio_data(monkeypatch):
+    monkeypatch.setattr(validation, "COMPILED_CHECK_FROM", 1)  # the check of large vehicles
     vehicle = loading.load_vehicle()
     assert vehicle.active_backend == "numba"
     assert vehicle._pinocchio.data is None and vehicle._pinocchio.buoyancy_data is None
@@ -35,13 +36,14 @@ def test_compiled_load_and_run_make_no_pinocchio_data():
 
 def test_compiled_mass_matrix_check_agrees_with_pinocchio():
     vehicle = loading.load_vehicle()
-    compiled = validate_mass_matrix(vehicle)
+    compiled = validation._validate_inverse_mass_matrix(vehicle, "")
     reference = validate_mass_matrix(vehicle, reference=True)
     assert compiled == pytest.approx(reference, rel=1e-9)
 
 
 @pytest.mark.parametrize("backend", ["numba", "pinocchio"])
-def test_a_massless_leaf_link_is_refused_on_both_paths(tmp_path, backend):
+def test_a_massless_leaf_link_is_refused_on_both_paths(tmp_path, backend, monkeypatch):
+    monkeypatch.setattr(validation, "COMPILED_CHECK_FROM", 1)
     path = tmp_path / "two.urdf"
     path.write_text(TWO_LINKS.format(mass=0, inertia=0), encoding="utf-8")
     with pytest.raises(VehicleLoadError, match="singular"):
