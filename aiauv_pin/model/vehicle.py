@@ -177,8 +177,7 @@ class Vehicle:
         self.model.gravity = pin.Motion(
             np.array([0.0, 0.0, -hydro.gravity if restoring else 0.0]), np.zeros(3)
         )
-        self._pinocchio = _PinocchioScratch()
-        self._pinocchio.data = model.createData()
+        self._pinocchio = _PinocchioScratch()  # Pinocchio data made on first use
         self._packed: Model | None = None
         # the description packed once (aiauv_pin.model.assembly): both backends evaluate it
         self._assembly = parts = assemble(
