@@ -294,7 +294,8 @@ def simulate(
             after_first_chunk=after_first_chunk,
             compile_only=compile_only,
         )
-    if controller is not None and has_actuator_state(vehicle):
+    carried = getattr(controller, "handles_thruster_dynamics", False) and not vehicle.hydro.fins
+    if controller is not None and has_actuator_state(vehicle) and not carried:
         raise ArgumentError(
             "this vehicle has fins or thruster dynamics, whose actuator state only the compiled "
             "loop carries: give a CompiledController (it writes workspace.fin_command and "
