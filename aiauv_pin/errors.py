@@ -37,6 +37,12 @@ class VehicleLoadError(AiauvError, ValueError):
     """A vehicle description that cannot be loaded (missing file, broken URDF, bad parameters)."""
 
 
+class InteropError(VehicleLoadError):
+    """A model of another simulator (SDF, MJCF) that cannot be read, imported or exported; the
+    message is one line naming the problem. A :class:`VehicleLoadError`, since ``load_vehicle``
+    reads SDF files too."""
+
+
 class SimulationDiverged(AiauvError, RuntimeError):
     """The state became non-finite; ``trajectory`` holds everything computed before that.
 

@@ -52,10 +52,12 @@ def _add_simulate(subparsers) -> None:
     parser.add_argument(
         "--vehicle",
         type=Path,
-        help="URDF, .xacro or MJCF (MuJoCo) file (default: the bundled paper vehicle of --case)",
+        help="URDF, .xacro, MJCF (MuJoCo) or SDF (.sdf, .world) file (default: the bundled paper "
+        "vehicle of --case)",
     )
     _add_description_options(parser)
     _add_load_options(parser)
+    _add_sdf_options(parser)
     parser.add_argument(
         "--case",
         choices=("uniform", "stabilised"),
@@ -335,9 +337,12 @@ def _add_check(subparsers) -> None:
         "usable vehicle, even with warnings (e.g. not neutrally buoyant, no surge thruster); "
         "1 with a one-line reason otherwise.",
     )
-    parser.add_argument("urdf", type=Path, help="URDF, .xacro or MJCF (MuJoCo) file")
+    parser.add_argument(
+        "urdf", type=Path, help="URDF, .xacro, MJCF (MuJoCo) or SDF (.sdf, .world) file"
+    )
     _add_description_options(parser)
     _add_load_options(parser)
+    _add_sdf_options(parser)
     parser.add_argument(
         "--physics",
         action="store_true",
@@ -409,12 +414,38 @@ def _add_description_options(parser) -> None:
     )
 
 
+def _add_sdf_options(parser) -> None:
+    """``--model``, ``--model-path``: for SDF files (a world's model, ``model://`` URIs)."""
+    parser.add_argument(
+        "--model",
+        dest="sdf_model",
+        metavar="NAME",
+        default=None,
+        help="SDF file: the model to load when the file (a world) holds several",
+    )
+    parser.add_argument(
+        "--model-path",
+        dest="model_path",
+        metavar="DIR",
+        type=Path,
+        action="append",
+        default=[],
+        help="SDF file: folder searched for model:// URIs and local copies of Fuel models "
+        "(repeatable; searched before GZ_SIM_RESOURCE_PATH)",
+    )
+
+
 def _description_options(args) -> dict:
-    return {
+    options = {
         "xacro_args": dict(args.xacro_args),
         "package_path": list(args.package_path),
         "trust_xacro": args.trust_xacro,
     }
+    if getattr(args, "sdf_model", None) is not None:
+        options["model"] = args.sdf_model
+    if getattr(args, "model_path", None):
+        options["model_path"] = list(args.model_path)
+    return options
 
 
 def _add_load_options(parser) -> None:

@@ -168,6 +168,7 @@ def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
             "(the path-following controller's layout)"
         )
     warnings += _playback_warnings(vehicle, load_options.get("package_path", ()))
+    warnings += [f"SDF: {note}" for note in vehicle.description_notes]
     root_frame = data.oMf[model.getFrameId(structure.root, pin.FrameType.BODY)]
     cg_total = root_frame.actInv(weighted_cg / total_mass) if total_mass > 0 else np.zeros(3)
     cb_total = root_frame.actInv(weighted_cb / total_volume) if total_volume > 0 else None

@@ -42,6 +42,9 @@ import numpy as np
 
 from aiauv_pin.controllers.gait_compiled import gait_info_shapes, serpentine_gait
 from aiauv_pin.controllers.paper_compiled import (
+    ConstantParameters,
+    constant_info_shapes,
+    constant_thrust,
     paper_info_shapes,
     paper_path_following,
     passive,
@@ -51,7 +54,13 @@ from aiauv_pin.errors import ArgumentError, RecordSizeError
 
 #: The built-in compiled controllers: given to the compiled loop as ``None``, which chooses them by
 #: their parameters' type (:func:`aiauv_pin.simulation.compiled_loop.run_controller`).
-BUILTIN_CONTROLLERS = (passive, paper_path_following, thruster_turning, serpentine_gait)
+BUILTIN_CONTROLLERS = (
+    passive,
+    paper_path_following,
+    thruster_turning,
+    serpentine_gait,
+    constant_thrust,
+)
 
 _BOUNDS_CHECKED: dict = {}
 
@@ -122,6 +131,8 @@ def _sizes_of_builtin(function, n_joints: int, n_thrusters: int):
     """``(info width, {parameter field: expected length})`` of a built-in controller, or ``None``."""
     if function is passive:
         return 0, {}
+    if function is constant_thrust:
+        return 2 * n_thrusters, {"thrusts": n_thrusters}
     if function is paper_path_following:
         shapes = paper_info_shapes(n_joints, n_thrusters)
         fields = {
@@ -173,6 +184,24 @@ class CompiledController:
     def passive(cls) -> CompiledController:
         """No input at all: thrusters and joints idle."""
         return cls(passive)
+
+    @classmethod
+    def constant(cls, vehicle, thrusts) -> CompiledController:
+        """Constant thrusts [N], one per thruster of ``vehicle`` in its order, each saturated to
+        its thruster's ``max_thrust`` (as the thrusters saturate commands); joints idle.
+
+        Raises:
+            ArgumentError: Not one finite thrust per thruster.
+        """
+        limits = np.array([t.max_thrust for t in vehicle.hydro.thrusters], dtype=float)
+        values = np.asarray(thrusts, dtype=float).reshape(-1)
+        if values.shape != limits.shape or not np.all(np.isfinite(values)):
+            raise ArgumentError(
+                f"constant thrusts: expected {limits.size} finite numbers (one per thruster), "
+                f"got {np.asarray(thrusts).size}"
+            )
+        parameters = ConstantParameters(np.clip(values, -limits, limits))
+        return cls(constant_thrust, parameters, info_shapes=constant_info_shapes(limits.size))
 
     @property
     def loop_function(self):

@@ -47,6 +47,26 @@ def passive(t, q, v, model, workspace, parameters, state, tau, info):
         tau[i] = 0.0
 
 
+class ConstantParameters(NamedTuple):
+    """Parameters of :func:`constant_thrust`: one thrust per thruster [N] (within their limits)."""
+
+    thrusts: np.ndarray
+
+
+def constant_info_shapes(n_thrusters: int) -> dict[str, tuple[int, ...]]:
+    """Keys and shapes of the info row of :func:`constant_thrust`."""
+    return {"thrust": (n_thrusters,), "thruster_power": (n_thrusters,)}
+
+
+@compiled
+def constant_thrust(t, q, v, model, workspace, parameters, state, tau, info):
+    """Constant thrusts, joints idle: ``tau = B(q) thrusts`` (eq. 20), the thrusts and their power
+    logged. An open-loop command, as a thrust command on gz-sim's Thruster topic."""
+    kinematics(model.bodies, q, v, workspace)
+    thrust_into(model, workspace, parameters.thrusts, tau)
+    thrusts_and_power_into(model, workspace, parameters.thrusts, info, 0)
+
+
 class FrameMeasurement(NamedTuple):
     """What a path-following controller measures of its end-effector frame at a sample: buffers
     that :func:`measure_end_effector` overwrites (:func:`new_frame_measurement` builds them)."""

@@ -29,6 +29,10 @@ and #1784 of 2022; the older Fortress plugin took positive added mass and had no
   capsule, ellipsoid, cone; meshes by their mesh volume) and its centre of buoyancy their
   volume-weighted pose positions in the link frame; density ``<uniform_fluid_density>`` (default 1000).
 
+The reading of these conventions (plugin terms, poses, collision volumes) lives in
+:mod:`aiauv_pin.description.sdf_reading`, which also loads whole SDF models as vehicles
+(``load_vehicle("model.sdf")``); this module imports and exports.
+
 Import (:func:`import_gz`) maps a model's plugins and ``<fluid_added_mass>`` onto ``fossen`` links of
 our block for the URDF links of the same names; it requires the SDF link frames to be the URDF link
 frames (true for ``gz sdf -p robot.urdf`` and for our export), and checks it on the link poses at
@@ -46,308 +50,45 @@ from __future__ import annotations
 
 import math
 import os
-import re
-import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from xml.etree.ElementTree import Element, ParseError, SubElement, indent, tostring
+from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
-import defusedxml
-import defusedxml.ElementTree as SafeElementTree
 import numpy as np
 
 from aiauv_hydro.spec import HydroError, LinkHydrodynamics
 from aiauv_hydro.urdf.block_reader import parse_robot_text, read_hydrodynamics
 from aiauv_hydro.urdf.block_writer import format_number, format_numbers, fossen_link_element
-from aiauv_hydro.urdf.xml_reading import parse_bool
 from aiauv_pin._internal.atomic import atomic_path
 from aiauv_pin._internal.atomic import write_text as atomic_write_text
-from aiauv_pin.description.input_limits import check_xml_text, read_text
-from aiauv_pin.description.plausible_ranges import MAX_DISTANCE
-from aiauv_pin.errors import AiauvError, InputLimitError, VehicleLoadError
-from aiauv_pin.interop.export_source import ExportSource, load_export_source, rpy_of, rpy_to_matrix
+from aiauv_pin.description.input_limits import read_text
+from aiauv_pin.description.sdf_reading import (
+    FLUID_ADDED_MASS_ENTRIES,
+    FORCE_AXES,
+    GZ_DEFAULT_FLUID_DENSITY,
+    MAX_SDF_BYTES,
+    VELOCITIES,
+    PluginTerms,
+    Pose,
+    collision_volume,
+    fluid_added_mass,
+    is_buoyancy_plugin,
+    is_hydrodynamics_plugin,
+    number,
+    numbers,
+    plugin_terms,
+    read_sdf_file,
+    sdf_pose,
+)
+from aiauv_pin.errors import AiauvError
+from aiauv_pin.interop.export_source import ExportSource, load_export_source, rpy_of
 from aiauv_pin.interop.interop_errors import InteropError
 from aiauv_pin.model.loading import load_vehicle
 
-#: SNAME letters of the force/moment axes and of the velocities, in our twist order.
-FORCE_AXES = "xyzkmn"
-VELOCITIES = "UVWPQR"
-#: Letters of ``<fluid_added_mass>`` entries, in our twist order.
-ADDED_MASS_AXES = "xyzpqr"
-#: The 21 element names of ``<fluid_added_mass>`` and their (row, column).
-FLUID_ADDED_MASS_ENTRIES = tuple(
-    (ADDED_MASS_AXES[i] + ADDED_MASS_AXES[j], i, j) for i in range(6) for j in range(i, 6)
-)
-#: gz Buoyancy's default fluid density [kg/m^3].
-GZ_DEFAULT_FLUID_DENSITY = 1000.0
 #: Largest distance [m] (or rotation difference [rad]) between an SDF link pose and the URDF's.
 POSE_TOLERANCE = 1e-6
-#: Largest SDF file accepted [bytes].
-MAX_SDF_BYTES = 50_000_000
-
-_ADDED_MASS_RE = re.compile(r"^([xyzkmn])Dot([UVWPQR])$")
-_LINEAR_RE = re.compile(r"^([xyzkmn])([UVWPQR])$")
-_ABS_RE = re.compile(r"^([xyzkmn])([UVWPQR])abs([UVWPQR])$")
-_QUADRATIC_RE = re.compile(r"^([xyzkmn])([UVWPQR])([UVWPQR])$")
-#: Plugin elements that import reads without mapping them (with a warning where they matter).
-_IGNORED_PLUGIN_ELEMENTS = ("namespace", "water_density", "waterDensity")
-_CURRENT_ELEMENTS = ("default_current", "lookup_current_x", "lookup_current_y", "lookup_current_z")
-
-
-def _one_line(text) -> str:
-    return " ".join(str(text).split())
-
-
-def _is_hydrodynamics_plugin(plugin: Element) -> bool:
-    name = plugin.get("name", "")
-    filename = plugin.get("filename", "")
-    return name.endswith("systems::Hydrodynamics") or "hydrodynamics-system" in filename
-
-
-def _is_buoyancy_plugin(plugin: Element) -> bool:
-    name = plugin.get("name", "")
-    filename = plugin.get("filename", "")
-    return name.endswith("systems::Buoyancy") or "buoyancy-system" in filename
-
-
-# --------------------------------------------------------------------------------------------------
-# Reading SDF
-# --------------------------------------------------------------------------------------------------
-
-
-def _number(text: str | None, what: str) -> float:
-    try:
-        value = float((text or "").strip())
-    except ValueError:
-        raise InteropError(f"{what}: '{_one_line(text)}' is not a number") from None
-    if not math.isfinite(value):
-        raise InteropError(f"{what}: '{_one_line(text)}' is not a finite number")
-    return value
-
-
-def _numbers(text: str | None, count: int, what: str) -> np.ndarray:
-    tokens = (text or "").split()
-    if len(tokens) != count:
-        raise InteropError(f"{what}: expected {count} numbers, got {len(tokens)}")
-    return np.array([_number(token, what) for token in tokens])
-
-
-def _parse_bool(text: str | None, what: str) -> bool:
-    """:func:`aiauv_hydro.urdf.xml_reading.parse_bool`, its error as an :class:`InteropError`."""
-    try:
-        return parse_bool(text, what)
-    except HydroError as exc:
-        raise InteropError(str(exc)) from None
-
-
-@dataclass(frozen=True)
-class Pose:
-    """An SDF ``<pose>``: rotation and translation of a frame in the frame it is relative to."""
-
-    rotation: np.ndarray
-    translation: np.ndarray
-    relative_to: str = ""
-
-
-def _quaternion_matrix(x: float, y: float, z: float, w: float) -> np.ndarray:
-    norm = math.sqrt(x * x + y * y + z * z + w * w)
-    if norm == 0.0:
-        raise InteropError("pose quaternion is zero")
-    x, y, z, w = x / norm, y / norm, z / norm, w / norm
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
-def _pose(element: Element | None, what: str) -> Pose:
-    """An SDF pose (``x y z r p y``, ``degrees="true"``, or ``rotation_format="quat_xyzw"``)."""
-    if element is None:
-        return Pose(np.eye(3), np.zeros(3))
-    relative_to = element.get("relative_to", "")
-    if element.get("rotation_format", "euler_rpy") == "quat_xyzw":
-        values = _numbers(element.text, 7, f"{what} <pose>")
-        return Pose(_quaternion_matrix(*values[3:]), values[:3], relative_to)
-    if element.get("rotation_format", "euler_rpy") != "euler_rpy":
-        raise InteropError(
-            f"{what} <pose>: unknown rotation_format '{element.get('rotation_format')}'"
-        )
-    text = element.text or ""
-    values = _numbers(text, 6, f"{what} <pose>") if text.split() else np.zeros(6)
-    angles = values[3:]
-    if element.get("degrees") is not None and _parse_bool(
-        element.get("degrees"), f"{what} degrees"
-    ):
-        angles = np.radians(angles)
-    return Pose(rpy_to_matrix(angles), values[:3], relative_to)
-
-
-def _shape_volume(geometry: Element, what: str) -> float:
-    """Volume [m^3] of an SDF geometry as gz's Buoyancy system takes it (gz-math shape volumes)."""
-    shape = next((child for child in geometry if isinstance(child.tag, str)), None)
-    if shape is None:
-        raise InteropError(f"{what}: empty <geometry>")
-
-    def sizes(values, tag: str):
-        # sizes within the validation gate's distances (a radius of 1e308 overflowed the volume)
-        for value in np.atleast_1d(values):
-            if not 0.0 <= value <= MAX_DISTANCE:
-                raise InteropError(
-                    f"{what} {shape.tag} <{tag}>: must be in [0, {MAX_DISTANCE:g}] m, got {value:g}"
-                )
-        return values
-
-    def scalar(tag: str) -> float:
-        return sizes(_number(shape.findtext(tag), f"{what} {shape.tag} <{tag}>"), tag)
-
-    if shape.tag == "box":
-        size = sizes(np.abs(_numbers(shape.findtext("size"), 3, f"{what} box <size>")), "size")
-        return float(np.prod(size))
-    if shape.tag == "sphere":
-        return 4.0 / 3.0 * math.pi * scalar("radius") ** 3
-    if shape.tag == "cylinder":
-        return math.pi * scalar("radius") ** 2 * scalar("length")
-    if shape.tag == "capsule":
-        radius = scalar("radius")
-        return math.pi * radius**2 * scalar("length") + 4.0 / 3.0 * math.pi * radius**3
-    if shape.tag == "ellipsoid":
-        radii = np.abs(_numbers(shape.findtext("radii"), 3, f"{what} ellipsoid <radii>"))
-        return 4.0 / 3.0 * math.pi * float(np.prod(sizes(radii, "radii")))
-    if shape.tag == "cone":
-        return math.pi * scalar("radius") ** 2 * scalar("length") / 3.0
-    if shape.tag == "plane":
-        return 0.0
-    raise InteropError(
-        f"{what}: {shape.tag} collision; import-gz takes the displaced volume from box, sphere, "
-        "cylinder, capsule, ellipsoid and cone collisions only (replace it by a primitive)"
-    )
-
-
-def _collision_volume(link: Element, name: str) -> tuple[float, np.ndarray]:
-    """Displaced volume [m^3] and centre of buoyancy [m] of an SDF link, as gz's Buoyancy has them."""
-    total, moment = 0.0, np.zeros(3)
-    for collision in link.findall("collision"):
-        what = f"SDF link '{name}' collision '{collision.get('name', '')}'"
-        pose = _pose(collision.find("pose"), what)
-        if pose.relative_to not in ("", name):
-            raise InteropError(f"{what}: pose relative_to '{pose.relative_to}' is not supported")
-        geometry = collision.find("geometry")
-        if geometry is None:
-            raise InteropError(f"{what}: no <geometry>")
-        volume = _shape_volume(geometry, what)
-        total += volume
-        moment += volume * pose.translation
-    return total, (moment / total if total > 0.0 else np.zeros(3))
-
-
-def _fluid_added_mass(element: Element, name: str) -> np.ndarray:
-    what = f"SDF link '{name}' <fluid_added_mass>"
-    entries = {key: (i, j) for key, i, j in FLUID_ADDED_MASS_ENTRIES}
-    matrix = np.zeros((6, 6))
-    seen = set()
-    for child in element:
-        if not isinstance(child.tag, str):
-            continue
-        if child.tag not in entries:
-            raise InteropError(f"{what}: unknown element <{child.tag}>")
-        if child.tag in seen:
-            raise InteropError(f"{what}: <{child.tag}> given twice")
-        seen.add(child.tag)
-        i, j = entries[child.tag]
-        matrix[i, j] = matrix[j, i] = _number(child.text, f"{what} <{child.tag}>")
-    return matrix
-
-
-@dataclass
-class _PluginTerms:
-    link_name: str
-    added_mass: np.ndarray = field(default_factory=lambda: np.zeros((6, 6)))
-    linear_damping: np.ndarray = field(default_factory=lambda: np.zeros((6, 6)))
-    quadratic_damping: np.ndarray = field(default_factory=lambda: np.zeros((6, 6)))
-    disable_added_mass: bool = False
-    added_mass_given: bool = False  # a non-zero <{i}Dot{J}> that is not disabled
-
-
-def _plugin_terms(plugin: Element, model_name: str) -> _PluginTerms:
-    link_name = (plugin.findtext("link_name") or "").strip()
-    if not link_name:
-        raise InteropError(f"SDF model '{model_name}': Hydrodynamics plugin without <link_name>")
-    what = f"Hydrodynamics plugin of link '{link_name}'"
-    terms = _PluginTerms(link_name)
-    seen: set[str] = set()
-    added_mass_given = False
-    for child in plugin:
-        if not isinstance(child.tag, str):
-            continue
-        tag = child.tag
-        if tag in seen:
-            raise InteropError(f"{what}: <{tag}> given twice")
-        seen.add(tag)
-        if tag == "link_name" or tag in _IGNORED_PLUGIN_ELEMENTS:
-            continue
-        if tag in _CURRENT_ELEMENTS:
-            warnings.warn(
-                f"{what}: <{tag}> not imported (the current is a scenario parameter here)",
-                stacklevel=3,
-            )
-            continue
-        if tag == "disable_added_mass":
-            terms.disable_added_mass = _parse_bool(child.text, f"{what} <{tag}>")
-            continue
-        if tag == "disable_coriolis":
-            if _parse_bool(child.text, f"{what} <{tag}>"):
-                warnings.warn(
-                    f"{what}: disable_coriolis ignored (the added-mass Coriolis terms are part of "
-                    "the model here)",
-                    stacklevel=3,
-                )
-            continue
-        match = _ADDED_MASS_RE.match(tag)
-        if match:
-            i, j = FORCE_AXES.index(match[1]), VELOCITIES.index(match[2])
-            terms.added_mass[i, j] = -_number(child.text, f"{what} <{tag}>")
-            added_mass_given = added_mass_given or terms.added_mass[i, j] != 0.0
-            continue
-        match = _LINEAR_RE.match(tag)
-        if match:
-            i, j = FORCE_AXES.index(match[1]), VELOCITIES.index(match[2])
-            terms.linear_damping[i, j] = -_number(child.text, f"{what} <{tag}>")
-            continue
-        match = _ABS_RE.match(tag)
-        if match:
-            i, j, k = (
-                FORCE_AXES.index(match[1]),
-                VELOCITIES.index(match[2]),
-                VELOCITIES.index(match[3]),
-            )
-            value = _number(child.text, f"{what} <{tag}>")
-            if j != k:
-                if value != 0.0:
-                    raise InteropError(
-                        f"{what}: <{tag}> (a force from |{match[3].lower()}| {match[2].lower()}) "
-                        "has no form in the <hydrodynamics> block, whose quadratic damping is "
-                        "D_Q (|nu| * nu)"
-                    )
-                continue
-            terms.quadratic_damping[i, j] = -value
-            continue
-        match = _QUADRATIC_RE.match(tag)
-        if match:
-            if _number(child.text, f"{what} <{tag}>") != 0.0:
-                raise InteropError(
-                    f"{what}: <{tag}> is a signed quadratic term (v_j v_k); the <hydrodynamics> block "
-                    f"has the |v| v form only (rename it <{match[1]}{match[2]}abs{match[3]}>, as gz "
-                    "itself advises)"
-                )
-            continue
-        warnings.warn(f"{what}: unknown element <{tag}> ignored (as gz ignores it)", stacklevel=3)
-    if terms.disable_added_mass:
-        terms.added_mass = np.zeros((6, 6))
-    terms.added_mass_given = added_mass_given and not terms.disable_added_mass
-    return terms
+#: Re-exported: the SDF size limit (:mod:`aiauv_pin.description.sdf_reading`).
+__all__ = ["MAX_SDF_BYTES", "POSE_TOLERANCE", "export_sdf", "import_gz", "read_gz_model"]
 
 
 @dataclass(frozen=True)
@@ -372,24 +113,9 @@ class GzModel:
 
 
 def _parse_sdf(path: Path) -> Element:
-    # regular files only (a FIFO would block, /dev/zero never end), at most MAX_SDF_BYTES, read
-    # with the cap enforced while reading
-    try:
-        text = read_text(path, "SDF model", MAX_SDF_BYTES)
-    except InputLimitError:
-        raise
-    except VehicleLoadError as exc:  # missing, a directory, unreadable, not UTF-8
-        raise InteropError(str(exc)) from None
-    check_xml_text(text, str(path))  # the URDF's element and attribute limits, before any tree
-    try:
-        root = SafeElementTree.fromstring(text.removeprefix("\ufeff"), forbid_dtd=True)
-    except defusedxml.DefusedXmlException:
-        raise InteropError(f"{path} refused: XML with a DTD/entities") from None
-    except ParseError as exc:
-        raise InteropError(f"{path} is not well-formed XML: {_one_line(exc)}") from None
-    if root.tag != "sdf":
-        raise InteropError(f"{path} is not an SDF file: root element is <{root.tag}>, not <sdf>")
-    return root
+    """The SDF file's ``<sdf>`` element (:func:`aiauv_pin.description.sdf_reading.read_sdf_file`:
+    regular files within MAX_SDF_BYTES, no DTD, undeclared prefixes such as ``gz:`` read)."""
+    return read_sdf_file(path)
 
 
 def read_gz_model(path: str | os.PathLike, model: str | None = None) -> GzModel:
@@ -429,10 +155,10 @@ def read_gz_model(path: str | os.PathLike, model: str | None = None) -> GzModel:
         if name in links:
             raise InteropError(f"SDF model '{model_name}': link '{name}' defined twice")
         links[name] = link
-    plugins = [p for p in chosen.findall("plugin") if _is_hydrodynamics_plugin(p)]
-    terms_of: dict[str, _PluginTerms] = {}
+    plugins = [p for p in chosen.findall("plugin") if is_hydrodynamics_plugin(p)]
+    terms_of: dict[str, PluginTerms] = {}
     for plugin in plugins:
-        terms = _plugin_terms(plugin, model_name)
+        terms = plugin_terms(plugin, model_name)
         if terms.link_name not in links:
             raise InteropError(
                 f"SDF model '{model_name}': Hydrodynamics plugin for link '{terms.link_name}', "
@@ -450,7 +176,7 @@ def read_gz_model(path: str | os.PathLike, model: str | None = None) -> GzModel:
         terms = terms_of.get(name)
         if fluid is None and terms is None:
             continue
-        terms = terms if terms is not None else _PluginTerms(name)
+        terms = terms if terms is not None else PluginTerms(name)
         added_mass = terms.added_mass
         if fluid is not None:
             if terms.added_mass_given:
@@ -459,8 +185,8 @@ def read_gz_model(path: str | os.PathLike, model: str | None = None) -> GzModel:
                     "Hydrodynamics plugin parameters (gz would count it twice); remove one or set "
                     "<disable_added_mass>true</disable_added_mass>"
                 )
-            added_mass = _fluid_added_mass(fluid, name)
-        volume, center = _collision_volume(link, name)
+            added_mass = fluid_added_mass(fluid, name)
+        volume, center = collision_volume(link, name)
         try:
             result.append(
                 LinkHydrodynamics(
@@ -478,8 +204,8 @@ def read_gz_model(path: str | os.PathLike, model: str | None = None) -> GzModel:
 
     fluid_density = None
     for plugin in root.iter("plugin"):
-        if _is_buoyancy_plugin(plugin) and plugin.find("uniform_fluid_density") is not None:
-            fluid_density = _number(
+        if is_buoyancy_plugin(plugin) and plugin.find("uniform_fluid_density") is not None:
+            fluid_density = number(
                 plugin.findtext("uniform_fluid_density"), "Buoyancy <uniform_fluid_density>"
             )
             if fluid_density <= 0.0:
@@ -489,8 +215,10 @@ def read_gz_model(path: str | os.PathLike, model: str | None = None) -> GzModel:
     gravity = None
     gravity_text = root.findtext("world/gravity")
     if gravity_text is not None:
-        gravity = float(np.linalg.norm(_numbers(gravity_text, 3, "world <gravity>")))
-    poses = {name: _pose(link.find("pose"), f"SDF link '{name}'") for name, link in links.items()}
+        gravity = float(np.linalg.norm(numbers(gravity_text, 3, "world <gravity>")))
+    poses = {
+        name: sdf_pose(link.find("pose"), f"SDF link '{name}'") for name, link in links.items()
+    }
     return GzModel(model_name, tuple(result), fluid_density, gravity, poses)
 
 

@@ -1,9 +1,8 @@
-"""The error of the interop commands."""
+"""The error of the interop commands (defined in :mod:`aiauv_pin.errors`, which the SDF reader of
+:mod:`aiauv_pin.description.sdf_reading` raises too)."""
 
 from __future__ import annotations
 
-from aiauv_pin.errors import AiauvError
+from aiauv_pin.errors import InteropError
 
-
-class InteropError(AiauvError, ValueError):
-    """A model that cannot be imported or exported; the message is one line naming the problem."""
+__all__ = ["InteropError"]

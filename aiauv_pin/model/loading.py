@@ -33,6 +33,7 @@ from aiauv_hydro.urdf.uuv_simulator import freeze_thruster_joints
 from aiauv_pin.description.input_limits import MAX_FILE_BYTES, check_xml_text, read_text
 from aiauv_pin.description.mjcf_reading import is_mjcf_text, read_mjcf
 from aiauv_pin.description.safe_names import check_name
+from aiauv_pin.description.sdf_reading import is_sdf_file, read_sdf_vehicle
 from aiauv_pin.description.urdf_validation import UrdfStructure, validate_urdf
 from aiauv_pin.description.xacro_loading import read_description
 from aiauv_pin.errors import VehicleLoadError
@@ -150,8 +151,10 @@ def load_vehicle(
     trust_xacro: bool = False,
     fixed_base: bool = False,
     lenient: bool = False,
+    model: str | None = None,
+    model_path: list[str | os.PathLike] | tuple = (),
 ) -> Vehicle:
-    """Load an underwater vehicle from a URDF with an optional ``<hydrodynamics>`` block.
+    """Load an underwater vehicle from a URDF with an optional ``<hydrodynamics>`` block, or an SDF.
 
     The URDF may also carry UUV Simulator hydrodynamic blocks
     (:mod:`aiauv_hydro.urdf.uuv_simulator`); they are
@@ -181,6 +184,11 @@ def load_vehicle(
             repair one :class:`aiauv_pin.errors.LenientRepairWarning`
             (:mod:`aiauv_pin.model.lenient_repairs`); the vehicle's ``lenient_repairs`` says what
             was done.
+        model: For an SDF file (``.sdf``, ``.world``): the model to load when it holds several
+            (a world); read by :mod:`aiauv_pin.description.sdf_reading` into a URDF with our
+            block, then loaded as any URDF.
+        model_path: For an SDF file: folders searched first for ``model://`` URIs and local
+            copies of Fuel models (then ``GZ_SIM_RESOURCE_PATH``).
 
     Returns:
         The vehicle, with a free-flyer joint on the URDF's root link (locked with a fixed base).
@@ -189,9 +197,18 @@ def load_vehicle(
         VehicleLoadError: One line naming the problem (missing file, not XML, not a URDF, unsafe
             XML, broken tree, unknown link, non-physical parameter, unsupported joint, ...).
     """
+    notes: tuple[str, ...] = ()
+    if (model is not None or model_path) and not (path is not None and is_sdf_file(path)):
+        raise VehicleLoadError("model and model_path are only for SDF files (.sdf, .world)")
     if path is None:
         source = bundled_urdf("uniform")
         text = _read_text(source)
+    elif isinstance(path, (str, os.PathLike)) and is_sdf_file(path):
+        source = Path(path)
+        if xacro_args:
+            raise VehicleLoadError(f"{path}: --arg is only for .xacro files")
+        sdf = read_sdf_vehicle(source, model, model_path)
+        text, notes = sdf.urdf_text, sdf.notes
     elif isinstance(path, (str, os.PathLike)):
         source = Path(path)
         # None unless .xacro
@@ -207,11 +224,8 @@ def load_vehicle(
     check_xml_text(text, str(source))
     if path is not None and is_mjcf_text(text):
         mjcf = read_mjcf(source)  # MuJoCo compiles it; we read the URDF it is
-        if mjcf.fixed_base:
-            raise VehicleLoadError(
-                f"{source}: the root body is not on a free joint: "
-                "fixed-base MJCF needs fixed_base support"
-            )
+        # a root body not on a free joint hangs from MuJoCo's world body: a fixed base
+        fixed_base = bool(fixed_base) or mjcf.fixed_base
         text = mjcf.urdf_text
     try:
         root = parse_robot_text(text, str(source))
@@ -274,5 +288,6 @@ def load_vehicle(
     vehicle.urdf_text = text  # the expanded description (xacro files have no URDF on disk)
     vehicle.package_path = tuple(package_path)
     vehicle.urdf_structure = structure
+    vehicle.description_notes = notes  # what an SDF's conversion changed or left out
     validate_mass_matrix(vehicle, str(source))
     return vehicle

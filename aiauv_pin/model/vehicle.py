@@ -171,6 +171,8 @@ class Vehicle:
         # set by load_vehicle(lenient=True): the repairs made, and {merged link: its carrier}
         self.lenient_repairs = None
         self.merged_links: dict[str, str] = {}
+        #: What the conversion of an SDF file changed or left out (one line each; set by load_vehicle)
+        self.description_notes: tuple[str, ...] = ()
         self.model.gravity = pin.Motion(
             np.array([0.0, 0.0, -hydro.gravity if restoring else 0.0]), np.zeros(3)
         )

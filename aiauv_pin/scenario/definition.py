@@ -71,8 +71,9 @@ CASES = ("uniform", "stabilised")
 #: (passive run), the thruster-turning baseline (:mod:`aiauv_pin.controllers.turning_controller`),
 #: a serpentine gait (:mod:`aiauv_pin.controllers.gait_controller`), station keeping or velocity
 #: control (:mod:`aiauv_pin.wholebody`), intervention (hold the end-effector's pose,
-#: :mod:`aiauv_pin.wholebody.intervention_controller`) or transit then intervention
-#: (:mod:`aiauv_pin.wholebody.intervention_transit`).
+#: :mod:`aiauv_pin.wholebody.intervention_controller`), transit then intervention
+#: (:mod:`aiauv_pin.wholebody.intervention_transit`), or constant thrusts (an open-loop command,
+#: :meth:`CompiledController.constant`).
 CONTROLLERS = (
     "paper",
     "none",
@@ -82,7 +83,10 @@ CONTROLLERS = (
     "velocity",
     "intervention",
     "transit_intervene",
+    "constant",
 )
+#: Controllers that follow no path (their runs have no path errors).
+OPEN_LOOP_CONTROLLERS = ("none", "constant", "station", "velocity", "intervention")
 
 
 @dataclass(frozen=True)
@@ -119,7 +123,9 @@ class Scenario:
         intervention: The settings of ``controller = "intervention"`` or ``"transit_intervene"``
             (:class:`aiauv_pin.wholebody.intervention_transit.InterventionSettings`; ``None``:
             its defaults).
-        vehicle: URDF file of the vehicle (``None``: the bundled vehicle of ``case``).
+        thrusts: The thrusts [N] of ``controller = "constant"``, one per thruster in the vehicle's
+            order (saturated to their ``max_thrust``).
+        vehicle: URDF (or SDF, MJCF) file of the vehicle (``None``: the bundled vehicle of ``case``).
         fixed_base, lenient, package_path: Load options of the vehicle
             (:func:`aiauv_pin.load_vehicle`).
         added_mass: ``"exact"`` or ``"lagged"`` (UUV Simulator's and gz-sim's scheme,
@@ -157,6 +163,7 @@ class Scenario:
     wholebody: Mapping[str, Any] | None = None
     waves: Waves | None = None
     intervention: InterventionSettings | None = None
+    thrusts: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         check_scheme(self.added_mass)
@@ -165,6 +172,13 @@ class Scenario:
             raise ValueError(
                 f"unknown controller '{self.controller}' (expected {' or '.join(CONTROLLERS)})"
             )
+        if self.thrusts is not None:
+            thrusts = tuple(float(x) for x in self.thrusts)
+            if not all(map(math.isfinite, thrusts)):
+                raise ValueError("thrusts must be finite numbers [N]")
+            object.__setattr__(self, "thrusts", thrusts)
+        if (self.controller == "constant") != (self.thrusts is not None):
+            raise ValueError("thrusts go with controller 'constant', and it needs them")
         if self.gait is not None and not isinstance(self.gait, Gait):
             raise ValueError(
                 f"gait must be a aiauv_pin.controllers.gait_controller.Gait, got "
@@ -382,9 +396,7 @@ def followed_path(scenario: Scenario) -> Path | None:
     """The path a run of ``scenario`` follows: its path in force with a path-following controller
     (``"paper"``, ``"thruster_turning"``), ``None`` for a passive run (``controller = "none"``),
     which follows nothing and so has no path errors."""
-    if scenario.controller in ("none", "station", "velocity", "intervention"):
-        return None
-    return scenario.path_to_follow
+    return None if scenario.controller in OPEN_LOOP_CONTROLLERS else scenario.path_to_follow
 
 
 #: Position unit of each one-degree-of-freedom joint type of Pinocchio that moves along an axis
@@ -468,6 +480,14 @@ def run_scenario(
             )
         law = CompiledController.passive() if use_compiled else None
         servo = None
+    elif scenario.controller == "constant" and controller is None:
+        if vehicle.fast is None or compiled is False:
+            raise ValueError("constant thrusts run in the compiled loop only")
+        law, servo, use_compiled = (
+            CompiledController.constant(vehicle, scenario.thrusts),
+            None,
+            True,
+        )
     elif scenario.controller == "gait" and controller is None:
         if compiled is False:
             raise ValueError(
@@ -557,7 +577,7 @@ def run_scenario(
         for key in ("cross_track", "path_s"):
             trajectory.info.pop(key, None)
     add_path_errors(vehicle, scenario, trajectory)
-    if not passive:  # rows logged once per controller sample
+    if not passive and scenario.controller != "constant":  # rows logged once per sample
         warn_if_oscillating(
             np.asarray(trajectory.v)[:, 6:],
             scenario.method,

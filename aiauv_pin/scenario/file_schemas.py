@@ -173,6 +173,7 @@ def gain(high: float, unit: str, meaning: str, *, zero: bool = False):
 
 
 CrossTrackGain = number(0.0, 100.0, low_open=True)
+FiniteThrust = number(-1.0e9, 1.0e9)
 
 
 class ControllerTable(BaseModel):
@@ -186,7 +187,8 @@ class ControllerTable(BaseModel):
         "-",
         "paper (path following), none (passive: thrusters and joints idle), thruster_turning, "
         "gait (serpentine swimming, [gait]), station ([station]), velocity ([velocity]), "
-        "intervention or transit_intervene ([intervention])",
+        "intervention or transit_intervene ([intervention]), or constant (constant thrusts, "
+        "joints idle)",
         "paper",
     )
     u_d: gain(MAX_SPEED, "m/s", f"desired surge speed (eq. 21, 25); default {_GAINS.u_d:g}")
@@ -233,6 +235,12 @@ class ControllerTable(BaseModel):
     )
     turn_moment_gain: gain(
         1.0e6, "N m/rad", "effective hydrodynamic moment per radian of base angle"
+    )
+    thrusts: key(
+        Annotated[list[FiniteThrust], Field(min_length=1)],
+        "N",
+        'type = "constant": one thrust per thruster, in the vehicle\'s order (saturated to '
+        "max_thrust)",
     )
 
 

@@ -165,6 +165,8 @@ def scenario_from_mapping(table: Mapping[str, Any], base_dir: str | Path = ".") 
         raise ScenarioFileError(" ".join(str(exc).split())) from None
     controller = _plain(checked.controller)
     options["controller"] = controller.pop("type", "paper")
+    if "thrusts" in controller:
+        options["thrusts"] = tuple(controller.pop("thrusts"))
     if controller:
         try:
             options["gains"] = PathFollowingGains.for_case(case, **controller)

@@ -31,8 +31,8 @@ controller):
   (:func:`aiauv_pin.kernels.articulated_body.actuators_into`: fin angles towards the controller's
   ``W.fin_command``, the thrust of thrusters with a lag or a rate limit towards the command that
   :func:`~aiauv_pin.kernels.articulated_body.thrust_into` recorded), and the value reached is held
-  over the step; the interpreted loop has no actuator state and refuses a Python controller on a
-  vehicle with fins or thruster dynamics.
+  over the step; the interpreted loop has no actuator state: it refuses a Python controller on a
+  vehicle with thruster dynamics and holds fins at zero angle.
 
 Which compiled controller the loop runs (:func:`run_controller`): a user's function, or a built-in
 one chosen by type. numba's on-disk cache cannot key a compiled function on an argument that is
@@ -50,7 +50,13 @@ from typing import NamedTuple
 
 from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled, is_project_function
 from aiauv_pin.controllers.gait_compiled import GaitParameters, serpentine_gait
-from aiauv_pin.controllers.paper_compiled import PaperParameters, paper_path_following, passive
+from aiauv_pin.controllers.paper_compiled import (
+    ConstantParameters,
+    PaperParameters,
+    constant_thrust,
+    paper_path_following,
+    passive,
+)
 from aiauv_pin.controllers.turning_compiled import TurningParameters, thruster_turning
 from aiauv_pin.kernels.articulated_body import (
     MIDPOINT,
@@ -109,7 +115,8 @@ def steps_to_next_event(k, n_total, steps_per_control, log_every):
 def run_controller(user, t, q, v, model, workspace, parameters, state, tau, info):
     """``user(...)``, or with ``user = None`` the built-in controller ``parameters`` select:
     :class:`PaperParameters` the paper's, :class:`TurningParameters` thruster turning,
-    :class:`GaitParameters` the serpentine gait, anything else passive. Compiled, the choice is
+    :class:`GaitParameters` the serpentine gait, :class:`ConstantParameters` constant thrusts,
+    anything else passive. Compiled, the choice is
     made at compile time (an overload)."""
     if user is not None:
         return user(t, q, v, model, workspace, parameters, state, tau, info)
@@ -119,6 +126,8 @@ def run_controller(user, t, q, v, model, workspace, parameters, state, tau, info
         return thruster_turning(t, q, v, model, workspace, parameters, state, tau, info)
     if isinstance(parameters, GaitParameters):
         return serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info)
+    if isinstance(parameters, ConstantParameters):
+        return constant_thrust(t, q, v, model, workspace, parameters, state, tau, info)
     return passive(t, q, v, model, workspace, parameters, state, tau, info)
 
 
@@ -155,6 +164,12 @@ if NUMBA_AVAILABLE:
                 serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info)
 
             return call_gait
+        if _is(parameters, ConstantParameters):
+
+            def call_constant(user, t, q, v, model, workspace, parameters, state, tau, info):
+                constant_thrust(t, q, v, model, workspace, parameters, state, tau, info)
+
+            return call_constant
 
         def call_passive(user, t, q, v, model, workspace, parameters, state, tau, info):
             passive(t, q, v, model, workspace, parameters, state, tau, info)

@@ -294,12 +294,12 @@ def simulate(
             after_first_chunk=after_first_chunk,
             compile_only=compile_only,
         )
-    carried = getattr(controller, "handles_thruster_dynamics", False) and not vehicle.hydro.fins
-    if controller is not None and has_actuator_state(vehicle) and not carried:
+    # a controller that carries the thrusters' state itself (station keeping, velocity control)
+    carried = getattr(controller, "handles_thruster_dynamics", False)
+    if controller is not None and has_thruster_dynamics(vehicle) and not carried:
         raise ArgumentError(
-            "this vehicle has fins or thruster dynamics, whose actuator state only the compiled "
-            "loop carries: give a CompiledController (it writes workspace.fin_command and "
-            "commands thrusts through thrust_into)"
+            "this vehicle has thrusters with a lag or a rate limit, whose state only the compiled "
+            "loop carries: give a CompiledController (it commands thrusts through thrust_into)"
         )
     if compile_only:
         return None
@@ -638,12 +638,11 @@ def _simulate_compiled(
     return trajectory
 
 
-def has_actuator_state(vehicle) -> bool:
-    """Whether ``vehicle`` has fins or thrusters with a lag or a rate limit (actuator state)."""
-    hydro = vehicle.hydro
-    return bool(hydro.fins) or any(
-        t.time_constant > 0.0 or t.max_rate != math.inf for t in hydro.thrusters
-    )
+def has_thruster_dynamics(vehicle) -> bool:
+    """Whether ``vehicle`` has thrusters with a lag or a rate limit (state the interpreted loop
+    does not carry). Its fins are held at zero angle under a Python controller, whose generalised
+    force cannot command them: fixed surfaces."""
+    return any(t.time_constant > 0.0 or t.max_rate != math.inf for t in vehicle.hydro.thrusters)
 
 
 def _generalized(value, nv: int) -> np.ndarray:

@@ -112,7 +112,7 @@ class ModelBasedBody:
 
     continuous_joints = True
     #: The simulation loop may run this Python controller on a vehicle whose thrusters have
-    #: dynamics (it carries their state; fins it does not drive).
+    #: dynamics (it carries their state; fins stay at zero angle, as for any Python controller).
     handles_thruster_dynamics = True
 
     def __init__(

@@ -170,10 +170,6 @@ BAD = {
         ('range="-45 60"', 'type="ball"'),
         "ball joint 'j1': not supported",
     ),
-    "fixed base": (
-        ('<freejoint name="root"/>', ""),
-        "fixed-base MJCF needs fixed_base support",
-    ),
     "loop": (
         (
             "</actuator>",
@@ -251,8 +247,8 @@ ARM = """<mujoco model="arm">
 @pytest.mark.filterwarnings("ignore::aiauv_pin.description.mjcf_reading.MjcfDroppedWarning")
 def test_a_base_fixed_to_the_world_is_a_world_link(tmp_path):
     """Without a free joint, MuJoCo's world body is the URDF's massless root link ``world``, the
-    root body hangs on its own joint below it, and the frames are MuJoCo's; the loader refuses it
-    in one line until it has a fixed base."""
+    root body hangs on its own joint below it, and the frames are MuJoCo's; the loader makes it a
+    fixed base (:attr:`Vehicle.fixed_base`)."""
     path = _write(tmp_path, ARM)
     read = read_mjcf(path)
     assert read.fixed_base
@@ -277,5 +273,27 @@ def test_a_base_fixed_to_the_world_is_a_world_link(tmp_path):
             np.testing.assert_allclose(
                 placement.rotation, mj_data.xmat[mj_body].reshape(3, 3), atol=1e-12
             )
-    with pytest.raises(VehicleLoadError, match=r"fixed-base MJCF needs fixed_base support$"):
-        _load(path)
+    assert _load(path).fixed_base
+
+
+@pytest.mark.filterwarnings("ignore::aiauv_pin.description.mjcf_reading.MjcfDroppedWarning")
+def test_a_fixed_base_mjcf_arm_moves_as_mujoco_moves_it(tmp_path):
+    """The arm hanging from MuJoCo's world body, in a fluid a million times thinner than water (the
+    fluid forces, and our added mass that MuJoCo leaves out of its mass matrix, vanish): its joint
+    accelerations are MuJoCo's at rest, on both backends, and the base does not move."""
+    path = _write(tmp_path, ARM.replace('density="1000"', 'density="0.001"'))
+    mj = mujoco.MjModel.from_xml_path(str(path))
+    mj_data = mujoco.MjData(mj)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MjcfDroppedWarning)
+        vehicles = [_load(path), load_vehicle(path, backend="numba")]
+    for angles in ([0.0, 0.0], [0.7, -1.1], [-2.0, 0.4]):
+        mj_data.qpos[:] = angles
+        mujoco.mj_forward(mj, mj_data)
+        q = np.zeros(vehicles[0].nq)
+        q[6], q[7:] = 1.0, angles
+        for vehicle in vehicles:
+            assert vehicle.fixed_base
+            dv = vehicle.acceleration(q, np.zeros(vehicle.nv), np.zeros(vehicle.nv))
+            assert np.all(dv[:6] == 0.0)
+            np.testing.assert_allclose(dv[6:], mj_data.qacc, rtol=1e-5, atol=1e-6)

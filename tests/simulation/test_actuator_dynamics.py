@@ -14,6 +14,7 @@ import aiauv_pin
 numba = pytest.importorskip("numba")
 
 from aiauv_pin.controllers.compiled_controller import CompiledController  # noqa: E402
+from aiauv_pin.errors import ArgumentError  # noqa: E402
 from aiauv_pin.kernels.articulated_body import kinematics, thrust_into  # noqa: E402
 
 TORPEDO = Path(__file__).resolve().parents[2] / "examples" / "vehicles" / "torpedo.urdf"
@@ -126,3 +127,25 @@ def test_rate_limits_and_instant_actuators(tmp_path):
     t = trajectory.t
     np.testing.assert_array_equal(fins, np.where(t > 2.0 + 1e-9, 0.3, 0.0))
     assert np.all(np.isnan(trajectory.info["thrust"]) | (trajectory.info["thrust"] == 0.0))
+
+
+def test_a_python_controller_holds_the_fins_at_zero_and_refuses_thruster_lag(tmp_path):
+    """Under a Python controller (a generalised force, which cannot command a fin) the fins are
+    fixed surfaces at zero angle: the run equals the compiled loop's with every fin commanded to
+    zero. A thruster with a lag has state only the compiled loop carries: one line."""
+    instant = variant(tmp_path, 'max_thrust="116" time_constant="1"', 'max_thrust="116"')
+    instant.write_text(instant.read_text().replace(' time_constant="1"/>', "/>"))
+    vehicle = aiauv_pin.load_vehicle(instant)
+    q0, v0 = vehicle.neutral_configuration(), np.zeros(vehicle.nv)
+    compiled = run(instant, 40.0, 0.0, 0.0, 0.0, 2.0)
+    thrust = np.array([40.0])
+    python = aiauv_pin.simulate(
+        vehicle, q0, v0, 2.0, DT, lambda t, q, v: vehicle.thrust_matrix(q) @ thrust
+    )
+    np.testing.assert_allclose(python.q[-1], compiled.q[-1], rtol=0.0, atol=1e-9)
+    np.testing.assert_allclose(python.v[-1], compiled.v[-1], rtol=0.0, atol=1e-9)
+    lagged = aiauv_pin.load_vehicle(TORPEDO)
+    assert any(t.time_constant > 0.0 for t in lagged.hydro.thrusters)
+    with pytest.raises(ArgumentError, match="thrusters with a lag") as caught:
+        aiauv_pin.simulate(lagged, q0, v0, 1.0, DT, lambda t, q, v: np.zeros(lagged.nv))
+    assert "\n" not in str(caught.value)
