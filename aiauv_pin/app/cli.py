@@ -470,6 +470,8 @@ def _load_options(args, scenario=None) -> dict:
     options = _description_options(args)
     options["fixed_base"] = bool(args.fixed_base or getattr(scenario, "fixed_base", False))
     options["lenient"] = bool(args.lenient or getattr(scenario, "lenient", False))
+    # the command line's folders first, then the scenario file's
+    options["package_path"] += list(getattr(scenario, "package_path", ()))
     return options
 
 

@@ -27,7 +27,14 @@ our ``<hydrodynamics>`` annotation) and what was done:
 * **a missing UUV Simulator ``center_of_buoyancy``** that our estimate (centroid of primitive
   collision shapes) cannot give is UUV Simulator's default, the link origin (``BuoyantObject.cc``,
   line 33, of uuv_gazebo_plugins; the block's value is only read when present,
-  ``HydrodynamicModel.cc``, lines 61-66).
+  ``HydrodynamicModel.cc``, lines 61-66);
+* **UUV Simulator thrusters without a thrust limit** (RexROV's: no ``clampMin/Max``, no
+  ``thrustMin/Max``; ThrusterPlugin.cc, lines 44-47 of uuv_gazebo_plugins, leaves them unbounded)
+  get the limit that UUV Simulator itself applies to them: ``max_thrust`` of its thruster manager's
+  configuration for the robot, ``config/<robot name>/thruster_manager.yaml`` of package
+  ``uuv_thruster_manager`` on the package path (RexROV: 2000 N), which its ``thruster_manager.py``
+  (lines 373-382) clips every thrust command to; written as the plugin's ``thrustMin/thrustMax``
+  (:func:`_thruster_limits`). Without that configuration they stay out, as without ``lenient``.
 
 A root link named ``world`` without mass fixed to the robot (:func:`world_root`) makes the vehicle
 fixed-base on any load, lenient or not.
@@ -35,15 +42,25 @@ fixed-base on any load, lenient or not.
 
 from __future__ import annotations
 
+import math
 import re
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from xml.etree.ElementTree import Element, SubElement
 
 import numpy as np
 
-from aiauv_hydro.urdf.uuv_simulator import collision_centroid_or_none, uuv_plugins
+from aiauv_hydro.spec import HydroError
+from aiauv_hydro.urdf.uuv_simulator import (
+    collision_centroid_or_none,
+    thrust_limits,
+    thruster_plugins,
+    uuv_plugins,
+)
 from aiauv_pin.description.plausible_ranges import PLAUSIBLE_RANGES
+from aiauv_pin.description.ros_packages import find_package, package_search_path
 from aiauv_pin.description.safe_names import MAX_NAME_LENGTH, is_safe_name, shown
 from aiauv_pin.errors import LenientRepairWarning
 from aiauv_pin.model.validation import TRIANGLE_TOLERANCE
@@ -379,12 +396,85 @@ def _buoyancy_centres(root: Element, source: str, repairs: LenientRepairs) -> No
             )
 
 
-def repair(root: Element, source: str) -> LenientRepairs:
+#: UUV Simulator's thruster manager package and its per-robot configuration (launch/
+#: thruster_manager.launch: ``$(find uuv_thruster_manager)/config/$(arg model_name)/...``).
+THRUSTER_MANAGER = ("uuv_thruster_manager", "config/{robot}/thruster_manager.yaml")
+
+
+def thruster_manager_limit(config: Path) -> list[float] | float | None:
+    """``thruster_manager: max_thrust`` [N] of a UUV Simulator thruster manager configuration:
+    a number or a one-line list (one per thruster; thruster_manager.py, lines 373-379), ``None``
+    when absent or not a positive finite number."""
+    section = None
+    for line in config.read_text(encoding="utf-8").splitlines():
+        text = line.split("#", 1)[0].rstrip()
+        if text and not text[0].isspace():
+            section = text.rstrip(":").strip()
+            continue
+        match = re.fullmatch(r"\s+max_thrust:\s*(.+)", text)
+        if section != "thruster_manager" or match is None:
+            continue
+        value = match.group(1).strip()
+        try:
+            numbers = [float(x) for x in value.strip("[]").split(",")]
+        except ValueError:
+            return None
+        if not all(math.isfinite(x) and x > 0.0 for x in numbers):
+            return None
+        return numbers if value.startswith("[") else numbers[0]
+    return None
+
+
+def _thruster_limits(
+    root: Element, source: str, repairs: LenientRepairs, package_path: Sequence
+) -> None:
+    unlimited = []
+    for plugin in thruster_plugins(root):
+        name = plugin.get("name") or (plugin.findtext("linkName") or "").strip()
+        try:
+            forward, backward = thrust_limits(plugin, f"UUV Simulator thruster '{name}'")
+        except HydroError:
+            continue  # refused with its one line when the hydrodynamics are read
+        if not (math.isfinite(forward) and math.isfinite(backward)):
+            unlimited.append(plugin)
+    if not unlimited:
+        return
+    package, relative = THRUSTER_MANAGER
+    robot = root.get("name", "")
+    folder = find_package(package, package_search_path(package_path))
+    config = folder / relative.format(robot=robot) if folder is not None else None
+    limit = thruster_manager_limit(config) if config is not None and config.is_file() else None
+    if limit is None:
+        return  # left out, each with its warning, as without lenient
+    for plugin in unlimited:
+        identifier = (plugin.findtext("thrusterID") or "").strip()
+        try:
+            value = limit[int(identifier)] if isinstance(limit, list) else limit
+        except (ValueError, IndexError):
+            return
+        for tag, bound in (("thrustMin", -value), ("thrustMax", value)):
+            element = plugin.find(tag)
+            if element is None:
+                element = SubElement(plugin, tag)
+            element.text = repr(float(bound))
+    shown_limit = f"{min(limit):g}-{max(limit):g} N" if isinstance(limit, list) else f"{limit:g} N"
+    repairs.say(
+        source,
+        f"{len(unlimited)} UUV Simulator thrusters without a thrust limit (the source file's data; "
+        f"ThrusterPlugin.cc l. 44-47 leaves them unbounded) limited to +-{shown_limit}, the "
+        f"max_thrust that UUV Simulator's thruster manager clips their commands to "
+        f"(thruster_manager.py l. 373-382), from {package}/{relative.format(robot=robot)}",
+    )
+
+
+def repair(root: Element, source: str, package_path: Sequence = ()) -> LenientRepairs:
     """Repair, in place, what published files trip (see the module docstring); warn each repair.
 
     Args:
         root: The parsed ``<robot>`` element.
         source: The file, named in the messages.
+        package_path: Folders searched first for ROS packages (UUV Simulator's thruster manager
+            configuration), as :func:`aiauv_pin.load_vehicle` takes them.
 
     Returns:
         What was repaired.
@@ -395,4 +485,5 @@ def repair(root: Element, source: str) -> LenientRepairs:
     _placeholder_collisions(root, source, repairs)
     _inertias(root, source, repairs)
     _buoyancy_centres(root, source, repairs)
+    _thruster_limits(root, source, repairs, package_path)
     return repairs

@@ -234,7 +234,7 @@ def load_vehicle(
     changed = bool(freeze_thruster_joints(root))  # UUV Simulator propellers: rigid joints
     repairs = None
     if lenient:
-        repairs = repair(root, str(source))
+        repairs = repair(root, str(source), package_path)
         changed = changed or bool(repairs.messages)
     if changed:
         text = ElementTree.tostring(root, encoding="unicode")

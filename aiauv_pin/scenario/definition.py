@@ -126,7 +126,8 @@ class Scenario:
         thrusts: The thrusts [N] of ``controller = "constant"``, one per thruster in the vehicle's
             order (saturated to their ``max_thrust``).
         vehicle: URDF (or SDF, MJCF) file of the vehicle (``None``: the bundled vehicle of ``case``).
-        fixed_base, lenient: Load options of the vehicle (:func:`aiauv_pin.load_vehicle`).
+        fixed_base, lenient, package_path: Load options of the vehicle
+            (:func:`aiauv_pin.load_vehicle`).
         added_mass: ``"exact"`` or ``"lagged"`` (UUV Simulator's and gz-sim's scheme,
             :mod:`aiauv_pin.dynamics.lagged_added_mass`; runs the Python controller, not the compiled loop).
         lagged_filter: The lagged scheme's filter coefficient in ``(0, 1]`` (0.3: UUV Simulator,
@@ -155,6 +156,7 @@ class Scenario:
     vehicle: str | None = None
     fixed_base: bool = False
     lenient: bool = False
+    package_path: tuple[str, ...] = ()
     added_mass: str = "exact"
     lagged_filter: float = UUV_SIMULATOR_FILTER
     gait: Gait | None = None
@@ -502,7 +504,12 @@ def run_scenario(
         if compiled:
             raise ValueError(f"{scenario.controller} runs as a Python controller")
         controller = controller_from_options(
-            vehicle, scenario.controller, scenario.wholebody or {}, scenario.water, q0
+            vehicle,
+            scenario.controller,
+            scenario.wholebody or {},
+            scenario.water,
+            q0,
+            actuator_period=scenario.dt * scenario.steps_per_control,
         )
         law, servo, use_compiled = controller, controller.joint_servo, False
     elif scenario.controller in ("intervention", "transit_intervene") and controller is None:

@@ -467,6 +467,11 @@ class ScenarioFile(BaseModel):
         "the vehicle's root link fixed to the world (default false; a massless 'world' root link "
         "fixes it anyway)",
     )
+    package_path: key(
+        Annotated[list[Annotated[str, Field(min_length=1, max_length=4096)]], Field(max_length=64)],
+        "-",
+        "folders searched first for ROS packages ($(find pkg), package://), relative to the file",
+    )
     lenient: key(
         bool,
         "-",

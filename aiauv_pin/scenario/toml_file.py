@@ -6,6 +6,7 @@ The format (every key optional; without a file ``aiauv simulate`` runs the paper
     vehicle = "my.urdf"          # or your own URDF (relative to this file)
     fixed_base = false           # its root link fixed to the world (a 'world' root link: always)
     lenient = false              # repair what published files trip, each repair a warning
+    package_path = ["packages"]  # folders searched first for ROS packages (relative to this file)
     duration = 120.0             # [s]
     dt = 0.004                   # [s]
     method = "euler"             # semi-implicit Euler, "rk4" or "midpoint"
@@ -126,7 +127,7 @@ def scenario_from_mapping(table: Mapping[str, Any], base_dir: str | Path = ".") 
 
     Args:
         table: The file's content (nested tables).
-        base_dir: Folder that a relative ``vehicle`` path is taken from.
+        base_dir: Folder that a relative ``vehicle`` or ``package_path`` is taken from.
 
     Raises:
         ScenarioFileError: Unknown key, wrong type, implausible, non-physical or degenerate value
@@ -145,6 +146,8 @@ def scenario_from_mapping(table: Mapping[str, Any], base_dir: str | Path = ".") 
     case = top.get("case", _DEFAULTS.case)
     if "vehicle" in top:
         options["vehicle"] = str(Path(base_dir) / top["vehicle"])
+    if "package_path" in top:
+        options["package_path"] = tuple(str(Path(base_dir) / p) for p in top["package_path"])
     start = given(checked.start)
     for key, option in (("position", "start_position"), ("heading", "heading")):
         if key in start:

@@ -295,7 +295,9 @@ def simulate(
             after_first_chunk=after_first_chunk,
             compile_only=compile_only,
         )
-    if controller is not None and has_thruster_dynamics(vehicle):
+    # a controller that carries the thrusters' state itself (station keeping, velocity control)
+    carried = getattr(controller, "handles_thruster_dynamics", False)
+    if controller is not None and has_thruster_dynamics(vehicle) and not carried:
         raise ArgumentError(
             "this vehicle has thrusters with a lag or a rate limit, whose state only the compiled "
             "loop carries: give a CompiledController (it commands thrusts through thrust_into)"

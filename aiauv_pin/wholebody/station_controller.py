@@ -17,7 +17,13 @@ actuators:
   Jacobian, constant while the joints hold, and the base acceleration is ``X^-1 a_d``;
 * the base wrench ``M_bb X^-1 a_d + n_b`` goes to the thrusters (the base rows of ``B(q)``); what
   they cannot produce is the residual, logged, and while a thruster is at a limit the integral is
-  frozen (conditional integration).
+  frozen (conditional integration);
+* thrusters with a first-order lag or a rate limit (UUV Simulator's ``FirstOrder`` thruster
+  dynamics, RexROV's 0.05 s) follow the allocated command through
+  :func:`aiauv_hydro.laws.actuators.actuator_response`, the law the compiled loop applies
+  (:func:`aiauv_pin.kernels.articulated_body.actuators_into`), over ``actuator_period`` (the
+  interval each command is held: the scenario's control period), the thrust reached held over
+  that interval (logged as ``thrust_produced``; ``thrust`` is the command).
 
 Runs as a Python controller (``controller(t, q, v) -> (tau, info)``, either backend) calling the
 compiled allocator; nothing is compiled per run.
@@ -43,6 +49,7 @@ from aiauv_control.laws.station_laws import (
     station_acceleration,
     unproducible_axes,
 )
+from aiauv_hydro.laws.actuators import actuator_response
 from aiauv_pin.dynamics.joint_servo import JointServo
 from aiauv_pin.errors import ArgumentError
 from aiauv_pin.model.vehicle import Vehicle
@@ -99,9 +106,14 @@ class ModelBasedBody:
         joint_stiffness, joint_damping: Servo gains (eq. 24) [N m/rad], [N m s/rad].
         what: The controller's name in messages.
         q_check: Configuration at which the actuators are checked against the held axes.
+        actuator_period: Interval each thrust command is held [s] (the control period): needed
+            when the vehicle's thrusters have a lag or a rate limit, ignored otherwise.
     """
 
     continuous_joints = True
+    #: The simulation loop may run this Python controller on a vehicle whose thrusters have
+    #: dynamics (it carries their state; fins stay at zero angle, as for any Python controller).
+    handles_thruster_dynamics = True
 
     def __init__(
         self,
@@ -116,6 +128,7 @@ class ModelBasedBody:
         joint_damping: float,
         what: str,
         q_check=None,
+        actuator_period: float | None = None,
     ) -> None:
         self.vehicle = vehicle
         self.what = what
@@ -139,6 +152,17 @@ class ModelBasedBody:
                 f"{what}: thrust limits must be {m} positive numbers [N], got {limits.tolist()}"
             )
         self.thrust_limits = limits
+        thrusters = vehicle.hydro.thrusters
+        self.dynamic = any(t.time_constant > 0.0 or t.max_rate != np.inf for t in thrusters)
+        if self.dynamic and not (
+            actuator_period is not None and np.isfinite(actuator_period) and actuator_period > 0
+        ):
+            raise ArgumentError(
+                f"{what}: the thrusters have a lag or a rate limit: give actuator_period, the "
+                f"interval each command is held [s], got {actuator_period!r:.40}"
+            )
+        self.actuator_period = actuator_period
+        self.thrust_produced = np.zeros(m)
         n = vehicle.nv - 6
         references = np.zeros(n) if joint_references is None else joint_references
         references = np.asarray(references, dtype=float).reshape(-1)
@@ -209,18 +233,31 @@ class ModelBasedBody:
         self._last_t = t
         frozen = bool(result.saturated.any())
         self.integral = integrate_error(self.integral, error, dt, frozen, self.held)
-        tau = B @ result.thrusts
+        if self.dynamic:
+            for k, thruster in enumerate(self.vehicle.hydro.thrusters):
+                self.thrust_produced[k] = actuator_response(
+                    self.thrust_produced[k],
+                    result.thrusts[k],
+                    thruster.max_thrust,
+                    thruster.time_constant,
+                    thruster.max_rate,
+                    self.actuator_period,
+                )
+            tau = B @ self.thrust_produced
+        else:
+            tau = B @ result.thrusts
         return tau, wrench, result
 
     def reset(self) -> None:
         """Clear the integral (before a new run)."""
         self.integral = np.zeros(6)
         self._last_t = None
+        self.thrust_produced[:] = 0.0
 
     def info_row(self, error, twist, wrench, result) -> dict:
         """The logged diagnostics (keys of :meth:`info_shapes`)."""
         residual = np.where(self.held, result.residual, 0.0)
-        return {
+        row = {
             "error": np.asarray(error, dtype=float),
             "twist": np.asarray(twist, dtype=float),
             "wrench": wrench,
@@ -228,6 +265,9 @@ class ModelBasedBody:
             "thrust": result.thrusts,
             "saturated": float(np.count_nonzero(result.saturated)),
         }
+        if self.dynamic:
+            row["thrust_produced"] = self.thrust_produced.copy()
+        return row
 
     def info_shapes(self) -> dict[str, tuple[int, ...]]:
         """Keys and shapes of the logged diagnostics."""
@@ -239,6 +279,7 @@ class ModelBasedBody:
             "residual": (6,),
             "thrust": (m,),
             "saturated": (),
+            **({"thrust_produced": (m,)} if self.dynamic else {}),
         }
 
 
@@ -258,6 +299,7 @@ class StationKeeping(ModelBasedBody):
         current: The current the model is told of (``None``: still water; the integral rejects
             the actual one).
         joint_references, joint_stiffness, joint_damping: The joint servo of an articulated vehicle.
+        actuator_period: Interval each thrust command is held [s] (thrusters with dynamics).
 
     Raises:
         ArgumentError: An unknown frame, gains or limits that are not positive, or held axes the
@@ -280,6 +322,7 @@ class StationKeeping(ModelBasedBody):
         joint_stiffness: float = DEFAULT_JOINT_STIFFNESS,
         joint_damping: float = DEFAULT_JOINT_DAMPING,
         q_check=None,
+        actuator_period: float | None = None,
     ) -> None:
         what = "station keeping"
         if gains is None:
@@ -299,6 +342,7 @@ class StationKeeping(ModelBasedBody):
             joint_damping=joint_damping,
             what=what,
             q_check=q_check,
+            actuator_period=actuator_period,
         )
         self.target_position = None
         self.target_rotation = None

@@ -15,10 +15,13 @@ from aiauv_pin.wholebody.station_controller import DEFAULT_OMEGA, StationKeeping
 from aiauv_pin.wholebody.velocity_controller import DEFAULT_BANDWIDTH, VelocityControl
 
 
-def controller_from_options(vehicle: Vehicle, kind: str, options: Mapping, current, q0=None):
+def controller_from_options(
+    vehicle: Vehicle, kind: str, options: Mapping, current, q0=None, actuator_period=None
+):
     """A :class:`StationKeeping` (``kind = "station"``) or :class:`VelocityControl`
     (``"velocity"``) from a table's keys; ``current`` is the scenario's (told to the model unless
-    ``known_current = false``), ``q0`` the start (where the actuators are checked)."""
+    ``known_current = false``), ``q0`` the start (where the actuators are checked),
+    ``actuator_period`` the control period [s] (thrusters with dynamics)."""
     table = dict(options)
     known = table.pop("known_current", True)
     model_current = current if known else None
@@ -40,6 +43,7 @@ def controller_from_options(vehicle: Vehicle, kind: str, options: Mapping, curre
                 axes=axes,
                 current=model_current,
                 q_check=q0,
+                actuator_period=actuator_period,
             )
         elif kind == "velocity":
             if "twist" not in table:
@@ -53,6 +57,7 @@ def controller_from_options(vehicle: Vehicle, kind: str, options: Mapping, curre
                 axes=axes,
                 current=model_current,
                 q_check=q0,
+                actuator_period=actuator_period,
             )
         else:
             raise ArgumentError(f"unknown whole-body controller {kind!r:.40}")

@@ -43,7 +43,8 @@ class VelocityControl(ModelBasedBody):
         gains: Per-axis gains (``k_d`` is ``K_v`` [1/s], ``k_i`` [1/s^2]); ``None``:
             :func:`~aiauv_control.laws.station_laws.velocity_gains` of ``bandwidth``.
         bandwidth: [rad/s] of the default gains.
-        axes, thrust_limits, current, joint_references, joint_stiffness, joint_damping: As for
+        axes, thrust_limits, current, joint_references, joint_stiffness, joint_damping,
+        actuator_period: As for
             :class:`aiauv_pin.wholebody.station_controller.StationKeeping`.
 
     Raises:
@@ -66,6 +67,7 @@ class VelocityControl(ModelBasedBody):
         joint_stiffness: float = DEFAULT_JOINT_STIFFNESS,
         joint_damping: float = DEFAULT_JOINT_DAMPING,
         q_check=None,
+        actuator_period: float | None = None,
     ) -> None:
         what = "velocity control"
         if gains is None:
@@ -95,6 +97,7 @@ class VelocityControl(ModelBasedBody):
             joint_damping=joint_damping,
             what=what,
             q_check=q_check,
+            actuator_period=actuator_period,
         )
 
     def __call__(self, t: float, q, v):

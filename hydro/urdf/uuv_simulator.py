@@ -654,13 +654,65 @@ def _efficiency(plugin: Element, tag: str, what: str) -> float:
     return value
 
 
+def steady_thrust(plugin: Element, command: float, what: str) -> float:
+    """Thrust [N] of a UUV Simulator thruster plugin held at rotor command ``command``, once its
+    dynamics settled (their fixed point is their input).
+
+    ThrusterPlugin.cc (uuv_gazebo_plugins, commit bfb40cb), ``Update``, lines 213-236: the command
+    clamped to ``[clampMin, clampMax]`` (l. 213-215), times ``gain`` (l. 217) and
+    ``propeller_efficiency`` (l. 225), through the conversion function (l. 230-231, ``Basic``: ``k x
+    |x|``, ThrusterConversionFcn.cc), times ``thrust_efficiency``, clamped to ``[thrustMin,
+    thrustMax]`` (l. 235-236). Unset bounds are the doubles' extremes (l. 44-47); inverted ones fall
+    back to them (l. 117-122, 131-136); efficiencies outside [0, 1] are 1 (l. 145-161).
+    """
+    clamp_min, clamp_max, thrust_min, thrust_max = _bounds(plugin, what)
+    gain = _optional(plugin, "gain", what)
+    rotor = (1.0 if gain is None else gain) * min(max(command, clamp_min), clamp_max)
+    rotor *= _efficiency(plugin, "propeller_efficiency", what)
+    thrust = _efficiency(plugin, "thrust_efficiency", what) * _conversion_thrust(
+        plugin.find("conversion"), rotor, what
+    )
+    return min(max(thrust, thrust_min), thrust_max)
+
+
+def _bounds(plugin: Element, what: str) -> tuple[float, float, float, float]:
+    """``clampMin, clampMax, thrustMin, thrustMax`` as ThrusterPlugin.cc takes them (l. 44-47,
+    110-136): unset is unbounded, an inverted pair falls back to unbounded."""
+    values = [
+        _optional(plugin, tag, what) for tag in ("clampMin", "clampMax", "thrustMin", "thrustMax")
+    ]
+    bounds = [
+        -math.inf if v is None and k % 2 == 0 else math.inf if v is None else v
+        for k, v in enumerate(values)
+    ]
+    for low in (0, 2):
+        if bounds[low] >= bounds[low + 1]:
+            bounds[low], bounds[low + 1] = -math.inf, math.inf
+    return tuple(bounds)
+
+
+def thrust_limits(plugin: Element, what: str) -> tuple[float, float]:
+    """Largest forward and reverse thrust [N] (both positive; ``inf``: unlimited) that a UUV
+    Simulator thruster plugin produces, :func:`steady_thrust` at its extreme commands.
+
+    The conversion functions are monotonic in the command (``Basic``, ``Bessa``; ``LinearInterp``
+    as the tables are published), so the extremes are at the clamps; with no clamp, the thrust
+    bounds (``thrustMax``, ``-thrustMin``) or nothing at all.
+    """
+    clamp_min, clamp_max, thrust_min, thrust_max = _bounds(plugin, what)
+    _conversion_thrust(plugin.find("conversion"), 0.0, what)  # a known, well-formed conversion
+    forward = steady_thrust(plugin, clamp_max, what) if math.isfinite(clamp_max) else thrust_max
+    backward = -steady_thrust(plugin, clamp_min, what) if math.isfinite(clamp_min) else -thrust_min
+    return forward, backward
+
+
 def uuv_thrusters(root: Element, links: dict[str, UrdfLink]) -> list[Thruster]:
     """Thrusters of the UUV Simulator thruster plugins, as this package's thrusters.
 
     ``max_thrust`` is the steady-state thrust at the largest command ``clampMax`` (positive
-    direction), capped by ``thrustMax``; a plugin with neither gives no finite limit and is left
-    out with a warning (add ``<thrustMax>``, or describe the thruster in our ``<hydrodynamics>``
-    block), so that the vehicle still loads. A
+    direction), capped by ``thrustMax`` (:func:`thrust_limits`); a plugin with neither gives no
+    finite limit and is left out with a warning (add ``<thrustMax>``, or describe the thruster in
+    our ``<hydrodynamics>`` block), so that the vehicle still loads. A
     negative-direction limit that differs by more than 1 % is reported by a warning, since ours is
     symmetric.
 
@@ -688,37 +740,13 @@ def uuv_thrusters(root: Element, links: dict[str, UrdfLink]) -> list[Thruster]:
             3,
             f"{what} joint axis",
         )
-        gain = _optional(plugin, "gain", what)
-        gain = 1.0 if gain is None else gain
-        clamp_min = _optional(plugin, "clampMin", what)
-        clamp_max = _optional(plugin, "clampMax", what)
-        thrust_min = _optional(plugin, "thrustMin", what)
-        thrust_max = _optional(plugin, "thrustMax", what)
-        if clamp_min is not None and clamp_max is not None and clamp_min >= clamp_max:
-            clamp_min = clamp_max = None  # the plugin falls back to no clamping
-        if thrust_min is not None and thrust_max is not None and thrust_min >= thrust_max:
-            thrust_min = thrust_max = None
-        scale = _efficiency(plugin, "propeller_efficiency", what) * gain
-        efficiency = _efficiency(plugin, "thrust_efficiency", what)
-        conversion = plugin.find("conversion")
-        _conversion_thrust(conversion, 0.0, what)  # a known, well-formed conversion
-
-        def steady(
-            command: float, conversion=conversion, scale=scale, efficiency=efficiency, what=what
-        ):
-            return efficiency * _conversion_thrust(conversion, scale * command, what)
-
-        forward = steady(clamp_max) if clamp_max is not None else math.inf
-        backward = -steady(clamp_min) if clamp_min is not None else math.inf
-        if thrust_max is not None:
-            forward = min(forward, thrust_max)
-        if thrust_min is not None:
-            backward = min(backward, -thrust_min)
+        forward, backward = thrust_limits(plugin, what)
         if not (math.isfinite(forward) and forward > 0.0):
             # as shipped for RexROV and ECA A9: UUV Simulator applies no limit at all
             warnings.warn(
                 f"{what}: no finite positive thrust limit, left out (give <thrustMax> or "
-                "<clampMax>, or describe the thruster in the <hydrodynamics> block)",
+                "<clampMax>, or describe the thruster in the <hydrodynamics> block; --lenient "
+                "takes the limit of UUV Simulator's thruster manager on the package path)",
                 stacklevel=3,
             )
             continue

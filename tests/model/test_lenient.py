@@ -17,7 +17,7 @@ from aiauv_pin.errors import (
     UnsafeNameError,
     VehicleLoadError,
 )
-from aiauv_pin.model.lenient_repairs import nearest_valid_inertia
+from aiauv_pin.model.lenient_repairs import nearest_valid_inertia, thruster_manager_limit
 
 DATA = Path(__file__).parents[1] / "data"
 PACKAGES = DATA / "uuv_simulator_packages"
@@ -115,6 +115,8 @@ def test_rexrov_with_and_without_the_arm():
     plain, _ = _load(PUBLISHED["rexrov"], lenient=True)
     armed, repairs = _load(PUBLISHED["rexrov_oberon7"], lenient=True)
     assert plain.nv == 6 and armed.nv == 14 and not armed.fixed_base
+    for vehicle in (plain, armed):  # the thruster manager's limit (test_rexrov_thrusters_...)
+        np.testing.assert_array_equal(vehicle.max_thrust, np.full(8, 2000.0))
     (line,) = [r for r in repairs if "center_of_buoyancy" in r]
     assert "'oberon7/base'" in line and "link origin" in line
     base = {link.link: link for link in armed.hydro.links}["oberon7/base"]
@@ -151,3 +153,63 @@ def test_example_robot_data_inertias():
         assert repairs and all("projected to the nearest valid tensor" in r for r in repairs)
     z1, repairs = _load(robots / "z1_description/urdf/z1.urdf")
     assert z1.fixed_base and repairs == []  # a massless 'world' root fixed to the arm
+
+
+def _tam(path: Path) -> np.ndarray:
+    """UUV Simulator's thruster allocation matrix (6 x m, base_link axes, about its origin) from
+    its TAM.yaml (``tam:`` then one ``- [...]`` list per row)."""
+    rows = path.read_text().split("- [")[1:]
+    return np.array([[float(x) for x in row.split("]")[0].split(",")] for row in rows])
+
+
+def test_rexrov_thrusters_get_uuv_simulators_own_limit(tmp_path):
+    """RexROV's eight thrusters are unlimited as published (no clamp or thrust bound: UUV
+    Simulator's ThrusterPlugin.cc leaves them unbounded); with ``lenient`` they get the 2000 N its
+    thruster manager clips them to (uuv_thruster_manager/config/rexrov/thruster_manager.yaml), and
+    their thrust matrix is UUV Simulator's own (its TAM.yaml, computed by its allocator from the
+    same xacro in Gazebo; single precision there)."""
+    vehicle, repairs = _load(PUBLISHED["rexrov"], lenient=True)
+    (line,) = [r for r in repairs if "thrust limit" in r]
+    assert "8 UUV Simulator thrusters" in line and "+-2000 N" in line
+    assert "uuv_thruster_manager/config/rexrov/thruster_manager.yaml" in line
+    assert "the source file's data" in line and "ThrusterPlugin.cc" in line
+    assert [t.name for t in vehicle.hydro.thrusters] == [
+        f"rexrov_{k}_thruster_model" for k in range(8)
+    ]
+    assert all(t.time_constant == 0.05 for t in vehicle.hydro.thrusters)  # FirstOrder, 0.05 s
+    np.testing.assert_array_equal(vehicle.max_thrust, np.full(8, 2000.0))
+    B = vehicle.thrust_matrix(vehicle.neutral_configuration())
+    tam = _tam(PACKAGES / "uuv_thruster_manager" / "config" / "rexrov" / "TAM.yaml")
+    assert tam.shape == (6, 8)
+    np.testing.assert_allclose(B, tam, rtol=0.0, atol=2e-6)
+    # without the thruster manager on the package path they stay out, as without lenient
+    for name in PUBLISHED_PACKAGES_BUT_THE_MANAGER:
+        (tmp_path / name).symlink_to(PACKAGES / name, target_is_directory=True)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        bare = aiauv_pin.load_vehicle(PUBLISHED["rexrov"], package_path=[tmp_path], lenient=True)
+    assert bare.hydro.thrusters == ()
+    left_out = [
+        str(w.message) for w in caught if "no finite positive thrust limit" in str(w.message)
+    ]
+    assert len(left_out) == 8 and all("thruster manager" in m for m in left_out)
+
+
+PUBLISHED_PACKAGES_BUT_THE_MANAGER = (
+    "uuv_descriptions",
+    "uuv_sensor_ros_plugins",
+    "uuv_gazebo_ros_plugins",
+)
+
+
+def test_thruster_manager_limit(tmp_path):
+    config = tmp_path / "thruster_manager.yaml"
+    config.write_text(
+        "thruster_manager:\n  tf_prefix: x\n  max_thrust: [10, 20.5] # per thruster\n"
+    )
+    assert thruster_manager_limit(config) == [10.0, 20.5]
+    config.write_text("other:\n  max_thrust: 5\nthruster_manager:\n  max_thrust: 1.5e3\n")
+    assert thruster_manager_limit(config) == 1500.0
+    for bad in ("  max_thrust: -1", "  max_thrust: inf", "  max_thrust: lots", "  timeout: -1"):
+        config.write_text(f"thruster_manager:\n{bad}\n")
+        assert thruster_manager_limit(config) is None
