@@ -100,10 +100,12 @@ def test_forward_speed_damping_wrench_jacobian(rng):
         assert_close_relative(exact, approx, 1e-8, "forward-speed damping")
 
 
-@pytest.mark.parametrize("case", ["split inside", "split at an end", "pure translation"])
+@pytest.mark.parametrize("case", ["split inside", "split at an end", "pure translation", "axial"])
 def test_crossflow_wrench_jacobian_is_the_quadrature_derivative(rng, case):
     nodes, weights = gauss_legendre_unit(laws.CROSSFLOW_NODES)
     length, coefficient = 0.7, 68.0
+    # cylinder-frame axial and roll drag of an off-axis cylinder (0: on-axis, in D_Q)
+    axial, roll = (1.4, 0.03) if case == "axial" else (0.0, 0.0)
     for _ in range(5):
         twist = rng.normal(size=6)
         if case == "split inside":  # sway and yaw rate of opposite signs: v_n = 0 inside
@@ -112,9 +114,13 @@ def test_crossflow_wrench_jacobian_is_the_quadrature_derivative(rng, case):
         elif case == "pure translation":
             twist[4:] = 0.0
         exact = np.zeros((6, 6))
-        laws.crossflow_wrench_jacobian(twist, length, coefficient, nodes, weights, exact)
+        laws.crossflow_wrench_jacobian(
+            twist, length, coefficient, axial, roll, nodes, weights, exact
+        )
         approx = _central(
-            lambda x: laws.crossflow_wrench(x, length, coefficient, nodes, weights), twist, 1e-6
+            lambda x: laws.crossflow_wrench(x, length, coefficient, axial, roll, nodes, weights),
+            twist,
+            1e-6,
         )
         assert_close_relative(exact, approx, 1e-7, f"crossflow ({case})")
 
@@ -253,6 +259,8 @@ def _random_fluid_model(rng, nb: int = 2) -> laws.FluidModel:
         cylinder_is_link=np.zeros(nl, dtype=np.int64),
         cylinder_length=np.array([0.6, 0.9]),
         strip_coefficient=np.array([50.0, 80.0]),
+        axial_coefficient=np.array([1.4, 0.0]),
+        roll_coefficient=np.array([0.03, 0.0]),
         gauss_nodes=nodes,
         gauss_weights=weights,
     )
