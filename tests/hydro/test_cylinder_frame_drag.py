@@ -19,6 +19,7 @@ from aiauv_hydro.estimate.slender_cylinder import (
 )
 from aiauv_hydro.laws.crossflow import crossflow_wrench
 from aiauv_hydro.numerics.spatial import motion_transform
+from aiauv_hydro.spec import HydroError
 from aiauv_hydro.urdf.annotate import format_annotation
 from aiauv_hydro.urdf.block_reader import read_hydrodynamics
 from aiauv_pin.app.annotate_command import annotate_file
@@ -202,6 +203,9 @@ def test_tilted_slender_link_in_a_hydrodynamics_block_loads():
     assert link.crossflow.axial_drag_coefficient == 0.25
     assert link.crossflow.roll_drag_coefficient == 0.05
     assert not np.any(link.quadratic_damping)
+    with pytest.raises(HydroError) as refused:  # the reader's plausible range still applies
+        read_hydrodynamics(text.replace('C_d1="0.25"', 'C_d1="1e20"'))
+    assert "C_d1" in str(refused.value) and "\n" not in str(refused.value)
 
 
 @pytest.fixture(scope="module")
