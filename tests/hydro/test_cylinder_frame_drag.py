@@ -19,7 +19,7 @@ from aiauv_hydro.estimate.slender_cylinder import (
 )
 from aiauv_hydro.laws.crossflow import crossflow_wrench
 from aiauv_hydro.numerics.spatial import motion_transform
-from aiauv_hydro.spec import HydroError
+from aiauv_hydro.spec import CrossflowDrag, HydroError
 from aiauv_hydro.urdf.annotate import format_annotation
 from aiauv_hydro.urdf.block_reader import read_hydrodynamics
 from aiauv_pin.app.annotate_command import annotate_file
@@ -28,6 +28,16 @@ from aiauv_pin.errors import VehicleLoadError
 RHO, LENGTH, RADIUS = 1025.0, 0.4, 0.03
 #: Only the axial and roll quadratic drag (the other terms are checked elsewhere).
 AXIAL_AND_ROLL = SlenderCylinderCoefficients(C_d1=0.3, C_d4=0.15, C_dC=0.0)
+
+#: One link on a tilted, offset collision cylinder, with a slender-cylinder block.
+TILTED = (
+    '<robot name="r"><link name="arm"><inertial><mass value="1"/>'
+    '<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>'
+    '<collision><origin xyz="0.2 0 0" rpy="0 1.0 0"/>'
+    '<geometry><cylinder length="0.4" radius="0.05"/></geometry></collision></link>'
+    '<hydrodynamics><link name="arm" model="slender_cylinder" C_d1="0.25" C_d4="0.05"/>'
+    "</hydrodynamics></robot>"
+)
 
 
 def _rotation(rng) -> np.ndarray:
@@ -116,8 +126,6 @@ def test_axial_and_roll_drag_match_a_direct_strip_sum(which, rng):
 def test_on_axis_cylinder_gives_the_same_wrench_through_the_new_terms(rng):
     """An on-axis cylinder: today's link-frame ``-D_Q |nu| nu`` and the cylinder-frame terms agree
     (1e-12), so moving a cylinder off the axis changes only where the term is evaluated."""
-    from aiauv_hydro.spec import CrossflowDrag
-
     d_q = quadratic_damping_matrix(LENGTH, RADIUS, RHO, AXIAL_AND_ROLL)
     swap = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
     for rotation in (np.eye(3), swap):
@@ -191,14 +199,7 @@ def test_the_new_terms_never_add_energy(rng):
 def test_tilted_slender_link_in_a_hydrodynamics_block_loads():
     """``<link model="slender_cylinder"/>`` on a tilted cylinder: refused before issue 32 (no exact
     link-frame form), now loaded with the axial and roll drag in the cylinder frame."""
-    text = (
-        '<robot name="r"><link name="arm"><inertial><mass value="1"/>'
-        '<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>'
-        '<collision><origin xyz="0.2 0 0" rpy="0 1.0 0"/>'
-        '<geometry><cylinder length="0.4" radius="0.05"/></geometry></collision></link>'
-        '<hydrodynamics><link name="arm" model="slender_cylinder" C_d1="0.25" C_d4="0.05"/>'
-        "</hydrodynamics></robot>"
-    )
+    text = TILTED
     (link,) = read_hydrodynamics(text).links
     assert link.crossflow.axial_drag_coefficient == 0.25
     assert link.crossflow.roll_drag_coefficient == 0.05
@@ -251,3 +252,14 @@ def test_annotated_z1_compiled_matches_reference(annotated_z1, rng):
             a = fast.acceleration(q, v, tau, current)
             b = reference.acceleration(q, v, tau, current)
             np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-9)
+
+
+def test_gz_export_says_the_off_axis_axial_drag_stays_behind(tmp_path):
+    from aiauv_pin.interop.gz import export_sdf
+
+    source = tmp_path / "tilted.urdf"
+    source.write_text(TILTED)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        notes = export_sdf(source, tmp_path / "tilted.sdf")
+    assert any("axial/roll drag of 1 off-axis cylinder(s)" in note for note in notes), notes
