@@ -11,6 +11,8 @@ The main entry points::
 
 from typing import TYPE_CHECKING
 
+# first: installs its import finder before numba loads its registries (no scipy.linalg)
+from aiauv_pin._internal import numba_blas as _numba_blas  # noqa: F401
 from aiauv_pin.errors import AiauvError, SimulationDiverged, VehicleLoadError
 from aiauv_pin.model.loading import BUNDLED_CASES, bundled_urdf, load_vehicle
 from aiauv_pin.model.vehicle import Vehicle

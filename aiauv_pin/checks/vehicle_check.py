@@ -119,7 +119,7 @@ def check_vehicle(path: str | os.PathLike, **load_options) -> CheckReport:
     rho, g = hydro.fluid_density, hydro.gravity
     model = vehicle.model
     q = vehicle.neutral_configuration()
-    smallest_eigenvalue = validate_mass_matrix(vehicle, str(path))
+    smallest_eigenvalue = validate_mass_matrix(vehicle, str(path), reference=True)
     data = model.createData()
     pin.framesForwardKinematics(model, data, q)
     by_link = {link.link: link for link in hydro.links}

@@ -44,14 +44,6 @@ import defusedxml.ElementTree as SafeElementTree
 import numpy as np
 import pinocchio as pin
 
-from aiauv_hydro.estimate.ellipsoid import Ellipsoid
-from aiauv_hydro.estimate.mujoco_fluid import (
-    FluidEllipsoid,
-    buoyant_volume,
-    fluid_ellipsoid_hydrodynamics,
-    geom_semi_axes,
-    inertia_box_hydrodynamics,
-)
 from aiauv_hydro.spec import HydroError, LinkHydrodynamics
 from aiauv_hydro.urdf.block_writer import format_number, format_numbers, fossen_link_element
 from aiauv_pin.description.safe_names import check_name
@@ -394,6 +386,16 @@ class _Reader:
     def hydrodynamics(
         self, body: int, shift: np.ndarray, density: float, viscosity: float
     ) -> LinkHydrodynamics | None:
+        # imported here: the ellipsoid's scipy.special costs every load_vehicle ~0.2 s otherwise
+        from aiauv_hydro.estimate.ellipsoid import Ellipsoid
+        from aiauv_hydro.estimate.mujoco_fluid import (
+            FluidEllipsoid,
+            buoyant_volume,
+            fluid_ellipsoid_hydrodynamics,
+            geom_semi_axes,
+            inertia_box_hydrodynamics,
+        )
+
         model, mj = self.model, self.mujoco
         mass = float(model.body_mass[body])
         name = self.body_name(body)

@@ -18,10 +18,12 @@ stage with the stage's own time:
 
 * ``current(t, x, y, z, parameters) -> (V_x, V_y, V_z)``: the water velocity [m/s] at a world
   point [m] (:mod:`aiauv_hydro.currents` has the built-in ones), sampled at each body's probe point
-  (:attr:`aiauv_hydro.laws.fluid_terms.FluidModel.current_probe`). A time- or space-varying current is applied
-  quasi-steadily: the relative-velocity form of Fossen 2021, eq. (10.5), which is exact for a
-  uniform steady current, with the current's own local acceleration (Froude-Krylov and its
-  added-mass reaction) neglected;
+  (:attr:`aiauv_hydro.laws.fluid_terms.FluidModel.current_probe`), with the water's acceleration
+  ``DV/Dt`` [m/s^2] at the same point (:func:`aiauv_hydro.currents.current_acceleration`): the
+  forces use the relative velocity (Fossen 2021, eq. (10.5)) and the water's acceleration adds
+  the Froude-Krylov force and the added mass's reaction
+  (:mod:`aiauv_hydro.laws.unsteady_flow`), unless the environment holds the quasi-steady model
+  (``current_unsteady`` false: the acceleration neglected);
 * ``disturbance(t, q, v, parameters, tau)``: adds a generalised force [N, N m] to ``tau`` (nv,).
 """
 
@@ -33,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 
 from aiauv_control.laws.paper_laws import joint_pd_implicit_terms, joint_pd_torque
-from aiauv_hydro.currents import current_velocity
+from aiauv_hydro.currents import current_acceleration, current_velocity
 from aiauv_hydro.laws.actuators import actuator_response
 from aiauv_hydro.laws.fluid_terms import (
     add_body_fluid_bias,
@@ -42,6 +44,7 @@ from aiauv_hydro.laws.fluid_terms import (
     stacked_row_dot,
 )
 from aiauv_hydro.laws.lift import add_fin_wrenches
+from aiauv_hydro.laws.unsteady_flow import add_flow_acceleration_bias
 from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled
 from aiauv_hydro.numerics.spatial import cross3, motion_cross, motion_to_child
 from aiauv_pin.kernels.disturbances import apply_disturbance
@@ -301,6 +304,23 @@ def sample_current(model, env, t, W):
 
 
 @compiled(fastmath=True)
+def acceleration_at_probes(
+    acceleration, function, kind, parameters, t, probe, rotation, position, water
+):
+    """``water[b]``: the water's acceleration ``DV/Dt`` at body ``b``'s probe point at time ``t``
+    [m/s^2], world axes (:func:`aiauv_hydro.currents.current_acceleration`).
+
+    Reference-counted, as :func:`current_at_probes`: it may call a user's functions.
+    """
+    for b in range(water.shape[0]):
+        x, y, z = point_in_world(rotation, position, b, probe[b, 0], probe[b, 1], probe[b, 2])
+        a = current_acceleration(acceleration, function, kind, t, x, y, z, parameters)
+        water[b, 0] = a[0]
+        water[b, 1] = a[1]
+        water[b, 2] = a[2]
+
+
+@compiled(fastmath=True)
 def current_at_probes(function, kind, parameters, t, probe, rotation, position, water):
     """``water[b]``: the current at body ``b``'s probe point ``p_b + R_b c_b`` at time ``t`` [m/s].
 
@@ -329,7 +349,8 @@ def body_bias(model, W):
     ``p = nu x* (I_RB nu)`` (rigid Coriolis, Featherstone 2008, eq. (2.67)) plus every fluid term of
     :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`, and the fins' lift and drag at the
     angles ``W.fin_angle`` (:func:`aiauv_hydro.laws.lift.add_fin_wrenches`); after
-    :func:`kinematics` and :func:`sample_current`.
+    :func:`kinematics` and :func:`sample_current`. The water's acceleration is added by
+    :func:`flow_acceleration_bias`.
     """
     rigid, twist, bias = model.bodies.rigid_inertia, W.twist, W.bias
     for b in range(bias.shape[0]):
@@ -355,6 +376,29 @@ def body_bias(model, W):
         model.fluid, W.rotation, W.twist, W.current, W.bias, W.relative, W.fluid_scratch
     )
     add_fin_wrenches(model.fins, W.fin_angle, W.rotation, W.twist, W.current, W.bias)
+
+
+@compiled(fastmath=True, borrows_only=True)
+def flow_acceleration_bias(model, env, t, W):
+    """The water's acceleration ``DV/Dt`` at every body's probe point at time ``t`` into
+    ``W.flow_acceleration`` and its wrench in each body's bias
+    (:func:`aiauv_hydro.laws.unsteady_flow.add_flow_acceleration_bias`), after :func:`body_bias`,
+    when ``env.current_unsteady``; nothing at all otherwise (a constant current, the quasi-steady
+    model: ``W.flow_acceleration`` is then left as it was), so those runs execute the code they
+    did before the term existed."""
+    if env.current_unsteady:
+        acceleration_at_probes(
+            env.current_acceleration_function,
+            env.current_function,
+            env.current_kind,
+            env.current_parameters,
+            t,
+            model.fluid.current_probe,
+            W.rotation,
+            W.position,
+            W.flow_acceleration,
+        )
+        add_flow_acceleration_bias(model.fluid, W.rotation, W.flow_acceleration, W.bias)
 
 
 # ---------------------------------------------------------------------- articulated-body algorithm
@@ -932,6 +976,7 @@ def workspace(nb: int, nq: int, nv: int, nf: int = 0, m: int = 0) -> Workspace:
         np.zeros(m),
         np.zeros(m),
         np.zeros(nv),
+        np.zeros((nb, 3)),
     )
 
 
@@ -957,6 +1002,7 @@ def acceleration_into(model, env, servo, t, q, v, tau, W, out, implicit_step):
     kinematics(model.bodies, q, v, W)
     sample_current(model, env, t, W)
     body_bias(model, W)
+    flow_acceleration_bias(model, env, t, W)
     tau_all = W.tau_total
     for i in range(tau.shape[0]):
         tau_all[i] = tau[i]

@@ -95,6 +95,9 @@ def environment(current=None, disturbance: Disturbance | None = None) -> Environ
         push.user_function,
         push.kind_code,
         push.parameters,
+        water.user_acceleration,
+        # a constant current never accelerates: not sampled, so its runs stay bit-identical
+        water.unsteady and water.kind != "constant",
     )
 
 
@@ -233,6 +236,7 @@ class FastModel:
         return (
             servo is self.no_servo
             and env.current_function is None
+            and env.current_acceleration_function is None
             and env.disturbance_function is None
         )
 

@@ -105,6 +105,10 @@ class Environment(NamedTuple):
 
     A built-in current or disturbance is chosen by its ``kind`` with ``*_function = None``; a user's
     own compiled function is passed in ``*_function`` (:func:`aiauv_hydro.numerics.jit.user_or_builtin`).
+    ``current_acceleration_function`` is a user's own acceleration of the water (``None``: the
+    built-in's, or differences of the user's velocity; :func:`aiauv_hydro.currents.current_acceleration`);
+    ``current_unsteady`` is ``False`` where the water never accelerates (a constant current) or
+    for the quasi-steady model, and then the water's acceleration is not sampled.
     """
 
     current_function: object
@@ -113,6 +117,8 @@ class Environment(NamedTuple):
     disturbance_function: object
     disturbance_kind: int
     disturbance_parameters: np.ndarray
+    current_acceleration_function: object
+    current_unsteady: bool
 
 
 class Workspace(NamedTuple):
@@ -160,6 +166,7 @@ class Workspace(NamedTuple):
     thrust_command: np.ndarray  # (m,) thrusts last commanded through thrust_into [N]
     thrust_delta: np.ndarray  # (m,) produced minus commanded thrust [N]
     tau_actuated: np.ndarray  # (nv,) the loop's held tau corrected for the thrusters' lag
+    flow_acceleration: np.ndarray  # (nb, 3) the water's acceleration DV/Dt at each probe, world
 
 
 def _joint_kind_axis(joint) -> tuple[int, np.ndarray] | None:

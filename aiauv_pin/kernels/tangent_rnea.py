@@ -23,6 +23,11 @@ forward mode, one tangent direction at a time, through the recursive Newton-Eule
 * a velocity direction changes twists and the velocity-product accelerations ``c_b = nu_b x S qd``;
 * a current direction changes each body's ``v_c`` by ``R^T dV_c``.
 
+The water's acceleration ``a`` (a tidal current's ``dV/dt``) enters each body's force as
+``-(M_F + M_A)[:, :3] R^T a`` (:mod:`aiauv_hydro.laws.unsteady_flow`): uniform in space and
+independent of ``V_c``'s value, it changes only with the body's rotation, like ``v_c``
+(:func:`aiauv_hydro.laws.unsteady_flow.add_flow_acceleration_rotation_jacobian`).
+
 Each body's force ``f_b = I_b a_b + p_b(nu_b, v_c, e)`` then changes by
 ``I_b d a_b + dp/dnu d nu_b + (dp/de [e] + dp/dv_c [v_c]) d theta_b (+ dp/dv_c R^T dV_c)``, with the
 fluid parts of ``dp/d*`` from :func:`aiauv_hydro.laws.fluid_terms.body_fluid_bias_jacobians` (the
@@ -48,6 +53,7 @@ from aiauv_hydro.laws.fluid_terms import (
     coriolis_of_momentum,
     coriolis_wrench_jacobian,
 )
+from aiauv_hydro.laws.unsteady_flow import add_flow_acceleration_rotation_jacobian
 from aiauv_hydro.numerics.jit import compiled
 from aiauv_hydro.numerics.spatial import (
     cross3,
@@ -59,6 +65,7 @@ from aiauv_pin.kernels.articulated_body import (
     _matvec6,
     _xT_add,
     body_bias,
+    flow_acceleration_bias,
     kinematics,
     sample_current,
 )
@@ -532,6 +539,7 @@ def acceleration_derivatives_into(
     kinematics(bodies, q, v, W)
     sample_current(model, env, t, W)
     body_bias(model, W)
+    flow_acceleration_bias(model, env, t, W)
     for b in range(nb):
         xl = W.placement[b]
         motion_transform_into(xl[:3], xl[3, 0], xl[3, 1], xl[3, 2], D.xform[b])
@@ -555,6 +563,11 @@ def acceleration_derivatives_into(
         # d e = [e] d theta and d v_c = [v_c] d theta (e = R^T z turns by -d theta)
         _times_skew(D.d_up[b], rot[2, 0], rot[2, 1], rot[2, 2], D.d_rotation[b], False)
         _times_skew(D.d_current[b], vc0, vc1, vc2, D.d_rotation[b], True)
+    # the water's acceleration in body axes turns like the current
+    if env.current_unsteady:
+        add_flow_acceleration_rotation_jacobian(
+            model.fluid, W.rotation, W.flow_acceleration, D.d_rotation
+        )
     _mass_matrix(bodies, D)
     _invert_spd(D.mass, D.cholesky, D.mass_inverse)
     if da_dthrust.shape[1] > 0:

@@ -96,6 +96,7 @@ def assemble(
     rho = hydro.fluid_density
     added = np.zeros((nb, 6, 6))
     buoyancy = np.zeros((nb, 4))  # (B, B c_B) per body [N, N m]
+    displaced = np.zeros((nb, 4))  # (rho V, rho V c_B) per body [kg, kg m]
     probe_moment = np.zeros((nb, 3))
     probe_volume = np.zeros(nb)
     link_body, link_from_body = [], []
@@ -112,6 +113,8 @@ def assemble(
             buoyancy[b, 0] += force
             buoyancy[b, 1:] += force * centre
             probe_moment[b] += link.volume * centre
+            displaced[b, 0] += rho * link.volume
+            displaced[b, 1:] += rho * link.volume * centre
             probe_volume[b] += link.volume
     weight = np.zeros((nb, 4))  # (W, W c_G) per body
     for b in range(nb):
@@ -147,6 +150,7 @@ def assemble(
             added_mass=np.ascontiguousarray(added),
             hydrostatics=np.ascontiguousarray(hydrostatics),
             current_probe=probe,
+            displaced=np.ascontiguousarray(displaced),
             link_body=np.array(link_body[:nl], dtype=np.int64),
             link_from_body=np.ascontiguousarray(link_from),
             link_is_body=np.array([np.array_equal(x, identity) for x in link_from], dtype=np.int64),

@@ -21,7 +21,10 @@ the derivative of each fluid law from :mod:`aiauv_hydro.laws.fluid_terms` (writt
   the fluid wrenches. The two share only the laws' derivatives, which tests check against
   central differences of the laws themselves.
 
-The current must be uniform in space (constant, or tidal at time ``t``).
+The current must be uniform in space (constant, or tidal at time ``t``); a tidal current's
+acceleration ``dV/dt`` (Froude-Krylov and the added mass's reaction,
+:mod:`aiauv_hydro.laws.unsteady_flow`) is in the dynamics and its derivatives unless the current is
+quasi-steady.
 """
 
 from __future__ import annotations
@@ -34,6 +37,10 @@ import pinocchio as pin
 
 from aiauv_hydro.currents import Current, as_current
 from aiauv_hydro.laws.fluid_terms import add_body_fluid_bias, body_fluid_bias_jacobians
+from aiauv_hydro.laws.unsteady_flow import (
+    add_flow_acceleration_bias,
+    add_flow_acceleration_rotation_jacobian,
+)
 from aiauv_pin._internal.array_checks import (
     configuration,
     finite_time,
@@ -103,7 +110,14 @@ class CompiledDerivatives:
 
     @project_errors("compiled derivatives")
     def __call__(
-        self, q, v, tau, velocity: np.ndarray, t: float, thrusts: np.ndarray | None = None
+        self,
+        q,
+        v,
+        tau,
+        velocity: np.ndarray,
+        t: float,
+        thrusts: np.ndarray | None = None,
+        water: Current | None = None,
     ) -> tuple[AccelerationDerivatives, np.ndarray]:
         """Derivatives at ``(q, v)`` with the generalised force ``tau + B(q) thrusts``.
 
@@ -112,6 +126,8 @@ class CompiledDerivatives:
             velocity: Uniform current (3,), world axes [m/s].
             t: Time [s].
             thrusts: Thruster forces (m,) [N] (default 0).
+            water: The uniform :class:`~aiauv_hydro.currents.Current` whose value at ``t`` is
+                ``velocity``, for its acceleration (a tidal current); ``None``: a constant one.
 
         Returns:
             The :class:`AccelerationDerivatives` and ``d dv / d thrusts = M^-1 B(q)`` (nv, m).
@@ -136,7 +152,10 @@ class CompiledDerivatives:
             np.empty((nv, 3)),
         )
         da_dthrust = np.empty((nv, m))
-        env = fast.environment(velocity if velocity.any() else None)
+        if water is not None and water.kind == "tidal":
+            env = fast.environment(water)
+        else:
+            env = fast.environment(velocity if velocity.any() else None)
         self._kernels.acceleration_derivatives_into(
             fast.model,
             env,
@@ -155,12 +174,24 @@ class CompiledDerivatives:
 
 @project_errors("acceleration_derivatives")
 def pinocchio_derivatives(
-    vehicle, q: np.ndarray, v: np.ndarray, tau: np.ndarray, velocity: np.ndarray
+    vehicle,
+    q: np.ndarray,
+    v: np.ndarray,
+    tau: np.ndarray,
+    velocity: np.ndarray,
+    water: Current | None = None,
+    t: float = 0.0,
 ) -> AccelerationDerivatives:
-    """The reference derivatives on Pinocchio (see the module docstring)."""
+    """The reference derivatives on Pinocchio (see the module docstring); ``water`` the uniform
+    current whose value at ``t`` is ``velocity`` (``None``: a constant one), for its acceleration."""
     model, data = vehicle.model, vehicle.data
     nb = model.njoints - 1
-    mass, bias = vehicle._hydro_terms(q, v, velocity, 0.0)
+    if water is not None and water.kind == "tidal":
+        mass, bias = vehicle._hydro_terms(q, v, water, t)
+        flow = np.tile(water.water_acceleration(t, np.zeros(3)), (nb, 1))
+    else:
+        mass, bias = vehicle._hydro_terms(q, v, velocity, 0.0)
+        flow = np.zeros((nb, 3))
     mass_inverse = np.linalg.inv(mass)
     dv = mass_inverse @ (tau - bias)
     fluid = vehicle.fluid_model(include_hydrostatics=False)
@@ -171,12 +202,15 @@ def pinocchio_derivatives(
     wrench = np.einsum("nij,nj->ni", fluid.added_mass, body_acceleration)
     relative = np.empty_like(twist)
     add_body_fluid_bias(fluid, rotation, twist, currents, wrench, relative, np.zeros((3, 6)))
+    add_flow_acceleration_bias(fluid, rotation, flow, wrench)
     d_twist = np.zeros((nb, 6, 6))
     d_current = np.zeros((nb, 6, 3))
     d_up = np.zeros((nb, 6, 3))
     body_fluid_bias_jacobians(
         fluid, rotation, twist, currents, d_twist, d_current, d_up, np.zeros((5, 6, 6))
     )
+    d_flow = np.zeros((nb, 6, 3))  # d bias / d theta of the water's acceleration
+    add_flow_acceleration_rotation_jacobian(fluid, rotation, flow, d_flow)
     fext = pin.StdVec_Force()
     fext.append(pin.Force.Zero())
     for b in range(nb):
@@ -189,7 +223,7 @@ def pinocchio_derivatives(
         dnu_dq, da_dq, da_dv, jac = pin.getJointAccelerationDerivatives(model, data, joint, _LOCAL)
         # d theta_b / d dq: the pose perturbation of body b in its own axes is J_b dq
         vc = rotation[b].T @ velocity
-        d_rotation = d_up[b] @ _skew(rotation[b][2]) + d_current[b] @ _skew(vc)
+        d_rotation = d_up[b] @ _skew(rotation[b][2]) + d_current[b] @ _skew(vc) + d_flow[b]
         d_wrench_dq = fluid.added_mass[b] @ da_dq + d_twist[b] @ dnu_dq + d_rotation @ jac[3:]
         d_wrench_dv = fluid.added_mass[b] @ da_dv + d_twist[b] @ jac
         d_id_dq += jac.T @ d_wrench_dq
@@ -235,15 +269,16 @@ def acceleration_derivatives(
     q, v, tau = vehicle._q(q), vehicle._v(v), vehicle._v(tau, "tau")
     t = finite_time(t)
     velocity = uniform_current(current, t)
+    water = as_current(optional_current(current))
     if backend is None:
         backend = vehicle.active_backend
     if not isinstance(backend, str):
         raise ArgumentError(f"backend must be numba or pinocchio, got {backend!r:.40}")
     if backend == "pinocchio":
-        return pinocchio_derivatives(vehicle, q, v, tau, velocity)
+        return pinocchio_derivatives(vehicle, q, v, tau, velocity, water, t)
     if backend != "numba":
         raise ArgumentError(f"unknown backend {backend!r:.40} (expected numba or pinocchio)")
-    return compiled_derivatives(vehicle)(q, v, tau, velocity, t)[0]
+    return compiled_derivatives(vehicle)(q, v, tau, velocity, t, water=water)[0]
 
 
 def refuse_fins(vehicle, what: str) -> None:

@@ -208,13 +208,31 @@ def validate_parameters(structure: UrdfStructure, hydro: HydroSpec, where: str =
             )
 
 
-def validate_mass_matrix(vehicle, where: str = "") -> float:
+#: From this many velocity coordinates on, a compiled vehicle's mass matrix is checked on the
+#: compiled accelerations (:func:`validate_mass_matrix`): Pinocchio's ``Data`` is then 2 MB or more.
+COMPILED_CHECK_FROM = 32
+
+
+def validate_mass_matrix(vehicle, where: str = "", *, reference: bool = False) -> float:
     """Refuse a vehicle whose ``M(q)`` at the neutral configuration is not finite and positive
     definite; return its smallest eigenvalue.
+
+    A vehicle running compiled (:attr:`aiauv_pin.Vehicle.fast`) with at least
+    :data:`COMPILED_CHECK_FROM` velocity coordinates is checked without Pinocchio's ``Data``
+    (about 150 MB at 127 links, its size growing as ``nv^3``; the compiled path never needs it;
+    below that size the ``Data`` is small and Pinocchio's check is cheaper than loading the
+    compiled entry point, 30-40 ms of CPU once): the columns of ``M^-1`` are the compiled
+    accelerations of unit generalised forces at rest, ``a(e_i) - a(0)`` (the equations of
+    motion are linear in ``tau``), and ``M`` is positive definite exactly when ``M^-1`` is, with
+    ``lambda_min(M) = 1 / lambda_max(M^-1)`` and the same ratio of extreme eigenvalues.
+    ``reference=True`` (``aiauv check``, which prints the eigenvalue), smaller vehicles and the
+    Pinocchio backend form ``M`` with Pinocchio (:meth:`aiauv_pin.Vehicle.mass_matrix`).
 
     Raises:
         PhysicalParameterError: One line.
     """
+    if vehicle.fast is not None and vehicle.nv >= COMPILED_CHECK_FROM and not reference:
+        return _validate_inverse_mass_matrix(vehicle, where)
     mass_matrix = vehicle.mass_matrix(vehicle.neutral_configuration())
     if getattr(vehicle, "fixed_base", False):  # the joints' block alone moves
         mass_matrix = mass_matrix[6:, 6:]
@@ -225,12 +243,39 @@ def validate_mass_matrix(vehicle, where: str = "") -> float:
     eigenvalues = np.linalg.eigvalsh(0.5 * (mass_matrix + mass_matrix.T))
     scale = max(float(np.max(np.abs(eigenvalues))), 1e-300)
     if eigenvalues[0] <= 1e-12 * scale:
-        raise _refuse(
-            where,
-            f"mass matrix M(q) is singular at the neutral configuration (smallest eigenvalue "
-            f"{eigenvalues[0]:.3g}): some body has neither mass nor added mass",
-        )
+        raise _singular(where, eigenvalues[0])
     return float(eigenvalues[0])
+
+
+def _singular(where: str, smallest: float) -> PhysicalParameterError:
+    return _refuse(
+        where,
+        f"mass matrix M(q) is singular at the neutral configuration (smallest eigenvalue "
+        f"{smallest:.3g}): some body has neither mass nor added mass",
+    )
+
+
+def _validate_inverse_mass_matrix(vehicle, where: str) -> float:
+    """:func:`validate_mass_matrix` on ``M^-1`` from the compiled accelerations (see there)."""
+    fast = vehicle.fast
+    q = vehicle.neutral_configuration()
+    rest = np.zeros(vehicle.nv)
+    # a fixed base (locked base, FORMATS.md) has no base accelerations: its joints' block only
+    free = np.arange(6 if getattr(vehicle, "fixed_base", False) else 0, vehicle.nv)
+    unit = np.zeros(vehicle.nv)
+    inverse = np.empty((free.size, free.size))
+    with np.errstate(all="ignore"):
+        base = fast.acceleration(q, rest, rest)
+        for column, i in enumerate(free):
+            unit[i] = 1.0
+            inverse[:, column] = (fast.acceleration(q, rest, unit) - base)[free]
+            unit[i] = 0.0
+    if not np.all(np.isfinite(inverse)):
+        raise _singular(where, 0.0)
+    eigenvalues = np.linalg.eigvalsh(0.5 * (inverse + inverse.T))
+    if eigenvalues[0] <= 1e-12 * max(float(np.max(np.abs(eigenvalues))), 1e-300):
+        raise _singular(where, 0.0 if eigenvalues[-1] <= 0.0 else 1.0 / eigenvalues[-1])
+    return float(1.0 / eigenvalues[-1])
 
 
 def divergence_suspect(vehicle, dt: float) -> str | None:

@@ -48,6 +48,7 @@ from aiauv_hydro.currents import Current, as_current
 from aiauv_hydro.laws.fluid_terms import FluidModel, add_body_fluid_bias
 from aiauv_hydro.laws.kirchhoff import momentum_in_world
 from aiauv_hydro.laws.lift import add_fin_wrenches
+from aiauv_hydro.laws.unsteady_flow import add_flow_acceleration_bias
 from aiauv_hydro.spec import HydroSpec
 from aiauv_pin._internal.array_checks import (
     configuration,
@@ -176,8 +177,7 @@ class Vehicle:
         self.model.gravity = pin.Motion(
             np.array([0.0, 0.0, -hydro.gravity if restoring else 0.0]), np.zeros(3)
         )
-        self._pinocchio = _PinocchioScratch()
-        self._pinocchio.data = model.createData()
+        self._pinocchio = _PinocchioScratch()  # Pinocchio data made on first use
         self._packed: Model | None = None
         # the description packed once (aiauv_pin.model.assembly): both backends evaluate it
         self._assembly = parts = assemble(
@@ -381,6 +381,17 @@ class Vehicle:
         probe = position + np.einsum("nij,nj->ni", rotation, self._fluid_reference.current_probe)
         return np.array([current.velocity(t, point) for point in probe])
 
+    def _flow_accelerations_at_probes(
+        self, current: Current, t: float, rotation: np.ndarray, position: np.ndarray
+    ) -> np.ndarray | None:
+        """The water's acceleration ``DV/Dt`` at each body's probe point (nb, 3) [m/s^2], world
+        axes; ``None`` where it is never sampled (a constant current, the quasi-steady model), as
+        in the compiled kernels (:func:`aiauv_pin.kernels.articulated_body.sample_current`)."""
+        if current.kind == "constant" or not current.unsteady:
+            return None
+        probe = position + np.einsum("nij,nj->ni", rotation, self._fluid_reference.current_probe)
+        return np.array([current.water_acceleration(t, point) for point in probe])
+
     def _q(self, q) -> np.ndarray:
         return configuration(q, self.model.nq)
 
@@ -409,20 +420,24 @@ class Vehicle:
 
         Pinocchio gives the rigid part (``computeAllTerms``: CRBA, RNEA bias with the weight,
         Jacobians, bias accelerations); every fluid term comes from
-        :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`, the function the compiled kernels call,
-        and the fins' lift and drag at ``fin_angles`` [rad] (zeros for ``None``) from
-        :func:`aiauv_hydro.laws.lift.add_fin_wrenches`, as in the kernels.
+        :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias` and
+        :func:`aiauv_hydro.laws.unsteady_flow.add_flow_acceleration_bias`, the functions the
+        compiled kernels call, and the fins' lift and drag at ``fin_angles`` [rad] (zeros for
+        ``None``) from :func:`aiauv_hydro.laws.lift.add_fin_wrenches`, as in the kernels.
         """
         model, data = self.model, self.data
         pin.computeAllTerms(model, data, q, v)
         mass = np.triu(data.M) + np.triu(data.M, 1).T
         bias = data.nle.copy()
-        if not self._has_fluid:
+        water = as_current(current)
+        accelerating = water.unsteady and water.kind != "constant" and self._has_buoyancy
+        if not self._has_fluid and not accelerating:
             if self.restoring and self._has_buoyancy:
                 bias -= pin.computeGeneralizedGravity(self._buoyancy_model, self._buoyancy_data, q)
             return mass, bias
         rotation, position, twist = self._body_states()
-        currents = self._currents_at_probes(as_current(current), t, rotation, position)
+        currents = self._currents_at_probes(water, t, rotation, position)
+        flow_accelerations = self._flow_accelerations_at_probes(water, t, rotation, position)
         if self.restoring and self._has_buoyancy:
             bias -= pin.computeGeneralizedGravity(self._buoyancy_model, self._buoyancy_data, q)
         fluid_bias, scratch = self._scratch
@@ -434,6 +449,10 @@ class Vehicle:
         if self.n_fins:
             angles = np.zeros(self.n_fins) if fin_angles is None else fin_angles
             add_fin_wrenches(self._fins, angles, rotation, twist, currents, fluid_bias)
+        if flow_accelerations is not None:
+            add_flow_acceleration_bias(
+                self._fluid_reference, rotation, flow_accelerations, fluid_bias
+            )
         jac = self._body_jacobians()
         if self.added_mass:
             # M_A times the bias acceleration J_dot v (data.a with zero dv after computeAllTerms);

@@ -128,12 +128,23 @@ def _current_type(name: str, default=...):
     return key(Literal[name], "-", "current type", default)
 
 
+def _unsteady():
+    return key(
+        bool,
+        "-",
+        "with the water's acceleration (Froude-Krylov force and the added mass's reaction); "
+        "false: the quasi-steady model, for comparison",
+        True,
+    )
+
+
 class ConstantCurrentTable(BaseModel):
     """``[current] type = "constant"`` (the default): uniform and steady."""
 
     model_config = strict_config("constant")
     type: _current_type("constant", "constant")
     velocity: key(Speed3, "m/s", "water velocity, world axes", ZERO)
+    unsteady: _unsteady()
 
 
 class TidalCurrentTable(BaseModel):
@@ -145,6 +156,7 @@ class TidalCurrentTable(BaseModel):
     amplitude: key(Speed3, "m/s", "amplitude A of the oscillation, world axes", ...)
     period: key(number(1.0, 1.0e7), "s", "period T of the oscillation (a tide: hours)", ...)
     phase: key(Angle, "rad", "phase phi", 0.0)
+    unsteady: _unsteady()
 
 
 class ShearCurrentTable(BaseModel):
@@ -155,6 +167,7 @@ class ShearCurrentTable(BaseModel):
     velocity: key(Speed3, "m/s", "water velocity V_0 at z_0, world axes", ZERO)
     gradient: key(vector(-1.0, 1.0), "1/s", "shear G, world axes", ...)
     reference_z: key(number(-1.0e4, 1.0e4), "m", "depth z_0 where the current is V_0", 0.0)
+    unsteady: _unsteady()
 
 
 #: The current tables by ``type`` (the keys of :data:`aiauv_hydro.currents.CURRENT_KEYS`).

@@ -24,6 +24,7 @@ from aiauv_pin._internal.array_checks import (
     optional_current,
     positive_seconds,
 )
+from aiauv_pin._internal.log_memory import empty_log
 from aiauv_pin.controllers.compiled_controller import CompiledController, check_compiled_controller
 from aiauv_pin.dynamics.joint_servo import JointServo
 from aiauv_pin.dynamics.lagged_added_mass import LaggedAddedMass, check_filter, check_scheme
@@ -540,7 +541,7 @@ def _simulate_compiled(
     log_every = int(log_every)
     n_logs = 1 if compile_only else n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
     width = controller.info_width
-    log = np.empty((n_logs, 1 + nq + 2 * nv + width))
+    log = empty_log((n_logs, 1 + nq + 2 * nv + width))  # (no huge-page faults)
     tau = np.zeros(nv)
     info = np.full(width, np.nan)
     workspace = fast.workspace

@@ -37,6 +37,7 @@ import numpy as np
 
 from aiauv_hydro.currents import Current, as_current
 from aiauv_pin._internal.array_checks import configuration, float_array
+from aiauv_pin._internal.log_memory import empty_log
 from aiauv_pin.controllers.compiled_controller import CompiledController, check_compiled_controller
 from aiauv_pin.dynamics.joint_servo import JointServo
 from aiauv_pin.errors import ArgumentError, bounds_checked_call
@@ -261,7 +262,7 @@ def rollout(
     n_logs = n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
     # written by the run that owns it, in its own thread (no serial first pass over what can be
     # gigabytes); rows a diverged run never reached are set to NaN after it
-    log = np.empty((n_runs, n_logs, 1 + nq + 2 * nv + width))
+    log = empty_log((n_runs, n_logs, 1 + nq + 2 * nv + width))  # (no huge-page faults)
     counts = np.zeros((n_runs, 2), dtype=np.int64)  # (rows logged, steps completed)
     method_marker = METHOD_MARKERS[method]
 

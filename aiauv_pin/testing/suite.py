@@ -77,3 +77,7 @@ def test_backends_agree(aiauv_vehicle, aiauv_seed):
 
 def test_thrusters(aiauv_vehicle, aiauv_seed):
     assert_check(checks.check_thrusters(aiauv_vehicle, seed=aiauv_seed))
+
+
+def test_unsteady_flow(aiauv_vehicle, aiauv_seed):
+    assert_check(checks.check_unsteady_flow(aiauv_vehicle, seed=aiauv_seed))

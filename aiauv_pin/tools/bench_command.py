@@ -595,7 +595,14 @@ def run_bench(
 
 
 #: Whole-run measurements of :mod:`aiauv_pin.tools.run_benchmarks` (``aiauv bench --only PART ...``).
-WHOLE_RUN_PARTS = ("throughput", "end-to-end", "first-run", "accuracy-per-cost", "gym")
+WHOLE_RUN_PARTS = (
+    "throughput",
+    "end-to-end",
+    "memory",
+    "first-run",
+    "accuracy-per-cost",
+    "gym",
+)
 
 
 def run_parts(
@@ -613,6 +620,12 @@ def run_parts(
             )
         elif part == "end-to-end":
             out["end_to_end"] = bench_run.end_to_end(case, seconds, repeats=1 if quick else 5)
+        elif part == "memory":
+            out["memory"] = bench_run.memory(
+                (9, 127) if quick else bench_run.MEMORY_LINKS,
+                duration=1.0 if quick else 10.0,
+                repeats=1 if quick else 3,
+            )
         elif part == "first-run":
             out["first_run"] = bench_run.first_run(
                 case, repeats=1 if quick else 3, compile_repeats=1 if quick else 2
@@ -818,8 +831,9 @@ def add_bench_parser(subparsers) -> None:
         metavar="PART",
         help="measure only these parts and update them in the JSON file (kernels: the dynamics, "
         "MuJoCo and scaling figures, no scenario runs; throughput: runs per minute of sweeps and "
-        "rollout; end-to-end: fresh 'aiauv simulate' processes; first-run: a new installation's first "
-        "run, shipped kernels against compiling everything; accuracy-per-cost: error against a "
+        "rollout; end-to-end: fresh 'aiauv simulate' processes; memory: peak memory of fresh "
+        "processes simulating 9- to 127-link chains; first-run: a new installation's first run, "
+        "shipped kernels against compiling everything; accuracy-per-cost: error against a "
         "converged reference per method and step; gym: the Gymnasium environments' steps per "
         "second against MuJoCo's Swimmer-v5, single and vectorised)",
     )

@@ -8,6 +8,7 @@
   both clusters are started and warmed up before the first round.
 * :func:`end_to_end`: wall time of fresh ``aiauv simulate`` processes (warm numba cache), with and
   without the playback page, interleaved.
+* :func:`memory`: peak resident memory of fresh processes simulating chains of 9 to 127 links.
 * :func:`first_run`: CPU and wall time of a new installation's first run (empty numba cache), with
   the kernels shipped with the package and, interleaved, with everything compiled.
 * :func:`accuracy_per_cost`: the largest end-effector distance over the whole path between each
@@ -42,6 +43,14 @@ def _spread(values: list[float]) -> dict:
 
 
 # ---------------------------------------------------------------------- throughput
+def _process_cpu() -> float:
+    """User plus system CPU time of this process, all threads [s]."""
+    import resource
+
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
 def _warm(duration: float) -> str:
     """One short run in a worker thread (loads the compiled code and this thread's vehicle)."""
     from aiauv_pin.model.loading import bundled_urdf
@@ -117,6 +126,9 @@ def throughput(
         "rollout_midpoint": [],
         "rollout_midpoint_sparse_log": [],
     }
+    # CPU time [s] of each rollout batch (this process's user + system time: the stable figure on
+    # a shared machine, where wall time depends on the other processes)
+    cpu: dict[str, list[float]] = {name: [] for name in times if name.startswith("rollout")}
     try:
         for cluster in clusters.values():
             with Client(cluster) as client:
@@ -165,6 +177,7 @@ def throughput(
                 ),
             ):
                 controllers = laws()
+                cpu_start = _process_cpu()
                 start = time.perf_counter()
                 batch = rollout(
                     vehicle,
@@ -178,6 +191,7 @@ def throughput(
                     log_every=log_every,
                 )
                 times[name].append(time.perf_counter() - start)
+                cpu[name].append(_process_cpu() - cpu_start)
                 if not (batch.status == "complete").all():
                     raise RuntimeError(f"{name}: a run diverged")
                 del batch  # up to 57 MB per run, freed before the next batch
@@ -201,6 +215,12 @@ def throughput(
             "wall_s": _spread(walls),
             "runs_per_minute": _spread([60.0 * runs / w for w in walls]),
         }
+        if name in cpu:
+            results[name]["cpu_per_run_s"] = _spread([c / runs for c in cpu[name]])
+            # what ``cores`` idle cores would give: cores x 60 s / CPU per run
+            results[name]["runs_per_minute_idle_cores"] = _spread(
+                [60.0 * cores * runs / c for c in cpu[name]]
+            )
     results["ratio_sweep_threads_to_processes"] = (
         results["sweep_threads"]["runs_per_minute"]["median"]
         / results["sweep_processes"]["runs_per_minute"]["median"]
@@ -322,6 +342,90 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
             for name, split in parts.items()
         },
     }
+
+
+# ---------------------------------------------------------------------- memory
+#: The links of :func:`memory`'s chains (:func:`aiauv_pin.tools.native_benchmarks.chain_spec`):
+#: the paper's 9, and the scaling figure's 65 and 127.
+MEMORY_LINKS = (9, 65, 127)
+
+#: The peak resident set of this process [MiB]: ``VmHWM`` of ``/proc/self/status`` (proc(5)),
+#: the high-water mark of this address space. ``ru_maxrss`` is not used: Linux carries it over
+#: ``fork`` and ``exec``, so a child reports at least the (large) benchmark process's peak.
+_PEAK = (
+    "def peak():\n"
+    "    for line in open('/proc/self/status'):\n"
+    "        if line.startswith('VmHWM:'):\n"
+    "            return int(line.split()[1]) / 1024\n"
+)
+
+#: A fresh process: load a vehicle, run it compiled (passive, no controller), print its peak
+#: resident set [MiB] and a digest of the trajectory (the same on every run).
+_MEMORY_SCRIPT = (
+    _PEAK
+    + """\
+import hashlib, json, sys
+import numpy as np
+import aiauv_pin
+vehicle = aiauv_pin.load_vehicle(sys.argv[1])
+q0, v0 = vehicle.neutral_configuration(), np.zeros(vehicle.nv)
+run = aiauv_pin.simulate(vehicle, q0, v0, float(sys.argv[2]), 0.01)
+digest = hashlib.sha256(np.ascontiguousarray(run.q).tobytes() + np.ascontiguousarray(run.v).tobytes())
+print(json.dumps({
+    "peak_mib": peak(),
+    "backend": vehicle.active_backend,
+    "trajectory_sha256": digest.hexdigest(),
+}))
+"""
+)
+
+
+def memory(links: tuple[int, ...] = MEMORY_LINKS, duration: float = 10.0, repeats: int = 3) -> dict:
+    """Peak resident memory [MiB] of a fresh process that loads a chain of ``links`` modules
+    (built by :mod:`aiauv_pin.builders`, as ``aiauv build`` does) and simulates ``duration``
+    seconds compiled, interleaved over ``repeats`` rounds; and the floor, a fresh
+    ``python -c "import aiauv_pin"`` (numpy, numba and Pinocchio imported)."""
+    import json
+
+    from aiauv_pin.builders.urdf_builder import build_urdf
+    from aiauv_pin.builders.vehicle_spec import spec_from_dict
+    from aiauv_pin.tools.native_benchmarks import chain_spec
+
+    import_only = [sys.executable, "-c", _PEAK_OF_IMPORT]
+    peaks: dict[str, list[float]] = {"import_only": [], **{str(n): [] for n in links}}
+    digests: dict[str, set[str]] = {str(n): set() for n in links}
+    backends: dict[str, str] = {}
+    with tempfile.TemporaryDirectory() as folder:
+        commands = {"import_only": import_only}
+        for n in links:
+            urdf = Path(folder) / f"chain{n}.urdf"
+            urdf.write_text(build_urdf(spec_from_dict(chain_spec(n))), encoding="utf-8")
+            commands[str(n)] = [sys.executable, "-c", _MEMORY_SCRIPT, str(urdf), f"{duration:g}"]
+        for _ in range(repeats):
+            for name, command in commands.items():
+                done = subprocess.run(command, capture_output=True, text=True, check=True)
+                row = json.loads(done.stdout.strip().splitlines()[-1])
+                peaks[name].append(row["peak_mib"])
+                if name in digests:
+                    digests[name].add(row["trajectory_sha256"])
+                    backends[name] = row["backend"]
+    return {
+        "duration_s": duration,
+        "repeats": repeats,
+        "import_only_peak_mib": _spread(peaks["import_only"]),
+        "rows": [
+            {
+                "links": n,
+                "backend": backends[str(n)],
+                "peak_mib": _spread(peaks[str(n)]),
+                "trajectory_sha256": sorted(digests[str(n)]),
+            }
+            for n in links
+        ],
+    }
+
+
+_PEAK_OF_IMPORT = _PEAK + "import json\nimport aiauv_pin\nprint(json.dumps({'peak_mib': peak()}))\n"
 
 
 # ---------------------------------------------------------------------- first run
@@ -648,6 +752,13 @@ def format_parts(results: dict) -> list[str]:
         spread(f"{head}: sweep, processes", tp["sweep_processes"]["runs_per_minute"], "")
         spread(f"{head}: sweep, threads", tp["sweep_threads"]["runs_per_minute"], "")
         spread(f"{head}: rollout()", tp["rollout"]["runs_per_minute"], "")
+        if "cpu_per_run_s" in tp["rollout"]:
+            spread(f"{head}: rollout(), CPU per run", tp["rollout"]["cpu_per_run_s"], "s")
+            spread(
+                f"{head}: rollout(), from CPU on idle cores",
+                tp["rollout"]["runs_per_minute_idle_cores"],
+                "",
+            )
         if "rollout_sparse_log" in tp:
             spread(
                 f"{head}: rollout(), log every {tp['rollout_sparse_log_every']}th step",
@@ -682,6 +793,12 @@ def format_parts(results: dict) -> list[str]:
         for name, label in labels:
             for part, values in e2e.get("breakdown", {}).get(name, {}).items():
                 spread(f"  {label}: {part[:-2]}", values, "s")
+    mem = results.get("memory")
+    if mem:
+        spread("peak memory, fresh 'import aiauv_pin'", mem["import_only_peak_mib"], "MiB")
+        for row in mem["rows"]:
+            label = f"peak memory, {row['links']} links, {mem['duration_s']:g} s {row['backend']}"
+            spread(label, row["peak_mib"], "MiB")
     first = results.get("first_run")
     if first:
         for name, label in (("shipped", "shipped kernels"), ("compiled", "all compiled")):

@@ -49,6 +49,9 @@ class FluidModel(NamedTuple):
             buoyancy alone (``F = B``, ``m = B c_B``) when the rigid-body code adds the weight.
         current_probe: Point of each body where the water velocity is sampled, body frame (nb, 3)
             [m] (its links' centre of buoyancy, or its origin).
+        displaced: ``(rho Vol, rho Vol c_B)`` of each body (nb, 4) [kg, kg m]: the mass of the
+            water its links displace and its first moment about the body origin, body axes (the
+            Froude-Krylov force of :mod:`aiauv_hydro.laws.unsteady_flow`).
         link_body: Body of each damped link (nl,).
         link_from_body: Motion transform ``X`` with ``nu_link = X nu_body`` (nl, 6, 6).
         link_is_body: 1 where that transform is the identity (skips the products) (nl,).
@@ -75,6 +78,7 @@ class FluidModel(NamedTuple):
     added_mass: np.ndarray
     hydrostatics: np.ndarray
     current_probe: np.ndarray
+    displaced: np.ndarray
     link_body: np.ndarray
     link_from_body: np.ndarray
     link_is_body: np.ndarray
@@ -387,7 +391,9 @@ def add_body_fluid_bias(fluid, rotation, twist, current, bias, relative, scratch
     with the damping ``tau_D`` of each link (linear, quadratic, forward-speed and crossflow) in
     its link frame (:func:`add_link_damping`, the walk over the links that the derivative
     :func:`body_fluid_bias_jacobians` shares).
-    The added-mass inertia term ``M_A dv`` is not here: it belongs to the mass matrix.
+    The added-mass inertia term ``M_A dv`` is not here: it belongs to the mass matrix; nor are the
+    water's own acceleration terms (Froude-Krylov and the added mass's reaction to it):
+    :func:`aiauv_hydro.laws.unsteady_flow.add_flow_acceleration_bias`.
 
     Args:
         fluid: The vehicle's :class:`FluidModel`.

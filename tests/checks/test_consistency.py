@@ -318,3 +318,22 @@ def test_table_counts_skipped_checks(tmp_path):
 def test_bad_sample_count_is_a_clear_error(paper_vehicle):
     with pytest.raises(ValueError, match="samples must be a positive whole number, got 0"):
         consistency.check_thrusters(paper_vehicle, samples=0)
+
+
+class QuasiSteadyOnly(Vehicle):
+    """A model that neglects the water's acceleration whatever the current says (issue 33)."""
+
+    def acceleration(self, q, v, tau, current=None, *, t=0.0):
+        if current is not None and hasattr(current, "quasi_steady"):
+            current = current.quasi_steady()
+        return super().acceleration(q, v, tau, current, t=t)
+
+
+def test_unsteady_flow_check_passes_and_catches_a_quasi_steady_model(paper_vehicle):
+    result = consistency.check_unsteady_flow(paper_vehicle)
+    assert result.passed, result.message()
+    assert result.measurements["backends"] <= 1e-9
+    broken = QuasiSteadyOnly(paper_vehicle.model, paper_vehicle.hydro, backend="pinocchio")
+    failed = consistency.check_unsteady_flow(broken)
+    assert not failed.passed and failed.figure > 1e-3
+    assert "Morison inertia force" in failed.message()

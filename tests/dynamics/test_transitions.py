@@ -9,6 +9,7 @@ import pytest
 from conftest import random_state
 
 import aiauv_pin
+from aiauv_hydro.currents import Current
 from aiauv_pin.dynamics.transitions import transition_jacobians
 from aiauv_pin.errors import ArgumentError
 from aiauv_pin.model.derivatives import compiled_derivatives
@@ -59,7 +60,16 @@ def _relative(exact, approx):
 
 
 @pytest.mark.parametrize("method", ["rk4", "euler"])
-@pytest.mark.parametrize("current", [None, np.array([0.2, -0.1, 0.05])], ids=["still", "current"])
+@pytest.mark.parametrize(
+    "current",
+    [
+        None,
+        np.array([0.2, -0.1, 0.05]),
+        # the water's acceleration in the step Jacobians (issue 33)
+        Current.tidal([0.2, -0.1, 0.05], [0.4, 0.3, -0.2], 5.0, 0.4),
+    ],
+    ids=["still", "current", "tidal"],
+)
 def test_transition_jacobians_match_central_differences(method, current, rng):
     vehicle = aiauv_pin.load_vehicle(aiauv_pin.bundled_urdf("stabilised"))
     q, v = random_state(vehicle.model, rng)

@@ -203,3 +203,37 @@ def test_bench_only_kernels_updates_the_json_and_redraws_the_scaling_figure(tmp_
     figure = tmp_path / "scaling.png"
     assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert f"-> {figure}" in capsys.readouterr().out
+
+
+def test_format_memory_and_rollout_cpu():
+    results = {
+        "throughput": {
+            "duration_s": 300.0,
+            "cores": 2,
+            "sweep_processes": {"runs_per_minute": _spread(140.0)},
+            "sweep_threads": {"runs_per_minute": _spread(141.0)},
+            "rollout": {
+                "runs_per_minute": _spread(150.0),
+                "cpu_per_run_s": _spread(0.4),
+                "runs_per_minute_idle_cores": _spread(300.0),
+            },
+        },
+        "memory": {
+            "duration_s": 10.0,
+            "import_only_peak_mib": _spread(166.0),
+            "rows": [{"links": 127, "backend": "numba", "peak_mib": _spread(236.0)}],
+        },
+    }
+    lines = bench_run.format_parts(results)
+    assert any("rollout(), CPU per run" in line and "0.40 s" in line for line in lines)
+    assert any("from CPU on idle cores" in line and "300.00" in line for line in lines)
+    assert any("'import aiauv_pin'" in line and "166.00 MiB" in line for line in lines)
+    assert any("127 links, 10 s numba" in line and "236.00 MiB" in line for line in lines)
+
+
+def test_memory_of_a_fresh_process_is_its_own_peak():
+    """The child's peak (VmHWM), not the benchmark process's (``ru_maxrss`` is inherited)."""
+    measured = bench_run.memory((3,), duration=0.1, repeats=1)
+    (row,) = measured["rows"]
+    assert row["backend"] == "numba" and len(row["trajectory_sha256"]) == 1
+    assert 0.0 < measured["import_only_peak_mib"]["median"] <= row["peak_mib"]["median"]
