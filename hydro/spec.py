@@ -38,6 +38,10 @@ class CrossflowDrag:
     The cylinder frame ``c`` has its x-axis on the cylinder axis and its origin at the cylinder's rear
     end; the strip integral runs over ``x`` in ``[0, length]`` of that frame.
 
+    The axial and roll quadratic drag of a cylinder placed off the link axis ride along here, in
+    the cylinder frame, where they are exact (:mod:`aiauv_hydro.laws.crossflow`); a cylinder on
+    the link axis keeps them in its link's ``D_Q`` and leaves both at 0.
+
     Attributes:
         length: Cylinder length [m].
         radius: Cylinder radius [m].
@@ -45,6 +49,10 @@ class CrossflowDrag:
         fluid_density: Water density [kg/m^3].
         rotation: Orientation of frame ``c`` in the link frame (3x3).
         translation: Origin of frame ``c`` in the link frame [m].
+        axial_drag_coefficient: Axial quadratic drag coefficient ``C_d1`` applied in the cylinder
+            frame [-] (0: none here).
+        roll_drag_coefficient: Roll quadratic drag coefficient ``C_d4`` applied in the cylinder
+            frame [-] (0: none here).
     """
 
     length: float
@@ -53,6 +61,8 @@ class CrossflowDrag:
     fluid_density: float
     rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
     translation: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    axial_drag_coefficient: float = 0.0
+    roll_drag_coefficient: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("length", "radius", "fluid_density"):
@@ -63,6 +73,14 @@ class CrossflowDrag:
             raise HydroError(
                 f"crossflow drag coefficient must be >= 0, got {self.drag_coefficient}"
             )
+        for name, label in (
+            ("axial_drag_coefficient", "axial drag coefficient C_d1"),
+            ("roll_drag_coefficient", "roll drag coefficient C_d4"),
+        ):
+            value = float(getattr(self, name))
+            if not (np.isfinite(value) and value >= 0.0):
+                raise HydroError(f"crossflow {label} must be finite and >= 0, got {value}")
+            object.__setattr__(self, name, value)
         object.__setattr__(self, "rotation", _frozen_array(self.rotation, (3, 3), "rotation"))
         object.__setattr__(
             self, "translation", _frozen_array(self.translation, (3,), "translation")
@@ -78,6 +96,33 @@ class CrossflowDrag:
     def strip_coefficient(self) -> float:
         """``rho * r * C_dC`` [kg/m^2]: drag per unit length is ``-strip_coefficient |v_n| v_n``."""
         return self.fluid_density * self.radius * self.drag_coefficient
+
+    @property
+    def axial_coefficient(self) -> float:
+        """``1/2 rho pi r^2 C_d1`` [kg/m]: the axial force is ``-axial_coefficient |u_a| u_a``.
+
+        The same coefficient as the ``D_Q[0, 0]`` of an on-axis cylinder
+        (:func:`aiauv_hydro.estimate.slender_cylinder.quadratic_damping_matrix`; Schmidt-Didlaukies
+        et al. 2018; Fossen 2021, Sec. 6.4).
+        """
+        return 0.5 * self.fluid_density * np.pi * self.radius**2 * self.axial_drag_coefficient
+
+    @property
+    def roll_coefficient(self) -> float:
+        """``1/2 rho pi L r^4 C_d4`` [kg m^2]: the roll moment is ``-roll_coefficient |p_a| p_a``.
+
+        The same coefficient as the ``D_Q[3, 3]`` of an on-axis cylinder
+        (:func:`aiauv_hydro.estimate.slender_cylinder.quadratic_damping_matrix`; Schmidt-Didlaukies
+        et al. 2018).
+        """
+        return (
+            0.5
+            * self.fluid_density
+            * np.pi
+            * self.length
+            * self.radius**4
+            * self.roll_drag_coefficient
+        )
 
 
 @dataclass(frozen=True)

@@ -554,8 +554,19 @@ def export_sdf(
     notes = []
     crossflow = [link.link for link in source.vehicle.hydro.links if link.crossflow is not None]
     if crossflow:
+        off_axis = [  # their axial / roll drag rides the crossflow record (no link-frame form)
+            link.link
+            for link in source.vehicle.hydro.links
+            if link.crossflow is not None
+            and (link.crossflow.axial_drag_coefficient or link.crossflow.roll_drag_coefficient)
+        ]
         notes.append(
             f"crossflow drag of {len(crossflow)} link(s) not exported (gz has no such term)"
+            + (
+                f", with the axial/roll drag of {len(off_axis)} off-axis cylinder(s)"
+                if off_axis
+                else ""
+            )
         )
     forward = [
         link.link for link in source.vehicle.hydro.links if np.any(link.forward_speed_damping)

@@ -133,12 +133,14 @@ def assemble(
     cylinder = np.tile(identity, (nl, 1, 1))
     length = np.zeros(nl)
     strip = np.zeros(nl)
+    axial, roll = np.zeros(nl), np.zeros(nl)  # cylinder-frame axial / roll drag (off-axis)
     has_crossflow = np.zeros(nl, dtype=np.int64)
     for k, link in enumerate(links):
         if link.crossflow:
             c = link.crossflow
             cylinder[k] = motion_transform(c.rotation, c.translation)
             length[k], strip[k] = c.length, c.strip_coefficient
+            axial[k], roll[k] = c.axial_coefficient, c.roll_coefficient
             has_crossflow[k] = 1
     link_from = np.array(link_from_body[:nl]).reshape(nl, 6, 6)
     nodes, weights = gauss_legendre_unit(CROSSFLOW_NODES)
@@ -167,6 +169,8 @@ def assemble(
             ),
             cylinder_length=length,
             strip_coefficient=strip,
+            axial_coefficient=axial,
+            roll_coefficient=roll,
             gauss_nodes=np.ascontiguousarray(nodes),
             gauss_weights=np.ascontiguousarray(weights),
         )

@@ -179,12 +179,12 @@ def validate_parameters(structure: UrdfStructure, hydro: HydroSpec, where: str =
         if crossflow is not None:
             check_range(crossflow.length, "geometry size", f"{what}: crossflow length", where)
             check_range(crossflow.radius, "geometry size", f"{what}: crossflow radius", where)
-            check_range(
-                crossflow.drag_coefficient,
-                "dimensionless coefficient",
-                f"{what}: crossflow drag coefficient C_dC",
-                where,
-            )
+            for value, label in (
+                (crossflow.drag_coefficient, "crossflow drag coefficient C_dC"),
+                (crossflow.axial_drag_coefficient, "cylinder-frame axial drag coefficient C_d1"),
+                (crossflow.roll_drag_coefficient, "cylinder-frame roll drag coefficient C_d4"),
+            ):
+                check_range(value, "dimensionless coefficient", f"{what}: {label}", where)
             check_range(
                 crossflow.strip_coefficient * crossflow.length,
                 "strip coefficient x length",
@@ -361,6 +361,8 @@ def _largest_relative_coefficient(hydro: HydroSpec) -> str | None:
         if link.crossflow is not None:
             c = link.crossflow
             candidates.append((c.drag_coefficient, "crossflow C_dC", MAX_DIMENSIONLESS))
+            candidates.append((c.axial_drag_coefficient, "crossflow C_d1", MAX_DIMENSIONLESS))
+            candidates.append((c.roll_drag_coefficient, "crossflow C_d4", MAX_DIMENSIONLESS))
             candidates.append(
                 (c.strip_coefficient * c.length, "crossflow rho r C_dC L", MAX_COEFFICIENT)
             )

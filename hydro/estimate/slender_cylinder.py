@@ -16,7 +16,11 @@ damping). The transverse quadratic (crossflow) drag is not a constant matrix; it
 When the cylinder frame is not the link frame, :func:`slender_cylinder_link` moves the matrices to
 the link frame exactly with the spatial motion transform ``X`` (``nu_c = X nu_link``):
 ``M_link = X^T M_c X`` (kinetic energy ``1/2 nu^T M nu`` is frame independent; Featherstone 2008,
-Ch. 2, and Fossen 2021, Sec. 3.3, for the same rule with ``H(r)``).
+Ch. 2, and Fossen 2021, Sec. 3.3, for the same rule with ``H(r)``). The axial and roll quadratic
+drag keep a constant link-frame ``D_Q`` only when the cylinder's axis is a link axis
+(:func:`exact_axial_and_roll`); otherwise they are evaluated in the cylinder frame with the
+crossflow term, where they are exact (:class:`aiauv_hydro.spec.CrossflowDrag`
+``axial_drag_coefficient`` / ``roll_drag_coefficient``, :mod:`aiauv_hydro.laws.crossflow`).
 """
 
 from __future__ import annotations
@@ -199,8 +203,9 @@ def exact_axial_and_roll(rotation: np.ndarray, translation: np.ndarray) -> tuple
 
     ``-D_Q |nu_c| nu_c`` stays of that form only where the cylinder's axial speed ``u_c`` (roll
     rate ``p_c``) is plus or minus one link velocity component: the axis parallel to a link axis
-    and through the link origin (parallel to a link axis). The transverse (crossflow) drag is a
-    strip integral evaluated by quadrature for any placement (:mod:`aiauv_hydro.laws.crossflow`).
+    and through the link origin (parallel to a link axis). Where it is not, the term is evaluated
+    in the cylinder frame with the crossflow strip integral (:mod:`aiauv_hydro.laws.crossflow`),
+    where it is exact for any placement.
     """
     transform = motion_transform(np.asarray(rotation, float), np.asarray(translation, float))
     return _is_signed_unit_row(transform[0]), _is_signed_unit_row(transform[3])
@@ -232,13 +237,12 @@ def slender_cylinder_link(
 
     Returns:
         The link's parameters in the link frame about its origin, with the crossflow drag placed by
-        ``rotation``/``translation``.
+        ``rotation``/``translation``. The axial (``C_d1``) and roll (``C_d4``) quadratic drag are
+        in ``D_Q`` where they have an exact link-frame form (:func:`exact_axial_and_roll`), else
+        carried by the crossflow record and evaluated in the cylinder frame.
 
     Raises:
-        HydroError: Bad dimensions, a rotation that is not a rotation, or a placement under which
-            the axial/roll quadratic damping has no exact diagonal form in the link frame (the
-            cylinder axis must be parallel to a link axis and pass through the link origin when
-            ``C_d1`` or ``C_d4`` is nonzero).
+        HydroError: Bad dimensions or a rotation that is not a rotation.
     """
     _check_dimensions(length, radius, fluid_density)
     rotation = np.eye(3) if rotation is None else np.asarray(rotation, dtype=float)
@@ -255,6 +259,7 @@ def slender_cylinder_link(
     quadratic = quadratic_damping_matrix(length, radius, fluid_density, coefficients)
 
     transform = motion_transform(rotation, translation)
+    in_cylinder_frame = {"axial_drag_coefficient": 0.0, "roll_drag_coefficient": 0.0}
     if not np.array_equal(transform, np.eye(6)):
         # M_link = X^T M_c X and D_link = X^T D_c X: same power / kinetic energy in both frames
         # (Featherstone 2008, Ch. 2; Fossen 2021, Sec. 3.3).
@@ -263,16 +268,15 @@ def slender_cylinder_link(
         linear = transform.T @ linear @ transform
         linear = 0.5 * (linear + linear.T)
         # -D_Q (|nu_c| * nu_c) only stays of that form in link coordinates when the axial speed u_c
-        # and the roll rate p_c are each +- one link velocity component.
-        for index, label, needed in (
-            (0, "C_d1 (axial)", "parallel to a link axis and pass through the link origin"),
-            (3, "C_d4 (roll)", "parallel to a link axis"),
+        # and the roll rate p_c are each +- one link velocity component; otherwise the term moves
+        # to the cylinder frame, evaluated with the crossflow drag (exact there for any placement)
+        for index, field_name, value in (
+            (0, "axial_drag_coefficient", coefficients.C_d1),
+            (3, "roll_drag_coefficient", coefficients.C_d4),
         ):
             if quadratic[index, index] != 0.0 and not _is_signed_unit_row(transform[index]):
-                raise HydroError(
-                    f"link '{name}': {label} quadratic drag has no exact form in the link frame; "
-                    f"the cylinder axis must be {needed}"
-                )
+                in_cylinder_frame[field_name] = value
+                quadratic[index, index] = 0.0
         quadratic = transform.T @ quadratic @ transform
         quadratic[
             np.abs(quadratic) < _EXACT_TOLERANCE * max(1.0, float(np.abs(quadratic).max()))
@@ -291,6 +295,7 @@ def slender_cylinder_link(
         fluid_density=float(fluid_density),
         rotation=rotation,
         translation=translation,
+        **in_cylinder_frame,
     )
     return LinkHydrodynamics(
         link=name,

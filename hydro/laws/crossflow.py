@@ -12,8 +12,20 @@ one slender cylindrical link"). The wrench about the cylinder origin is
     F_y = int_0^L f_y dx,   F_z = int_0^L f_z dx,
     M_y = -int_0^L x f_z dx,   M_z = int_0^L x f_y dx      (moment of (x, 0, 0) x f)
 
-with no axial force and no roll moment. The lever arm ``x`` is in metres (the lineage code's
-``x / L`` is exact only for ``L = 1``).
+The lever arm ``x`` is in metres (the lineage code's ``x / L`` is exact only for ``L = 1``).
+
+Axial and roll drag of a cylinder off its link's axis. The axial quadratic drag ``-c_1 |u_a| u_a``
+(``c_1 = 1/2 rho pi r^2 C_d1``) and the roll drag ``-c_4 |p_a| p_a`` (``c_4 = 1/2 rho pi L r^4
+C_d4``; Schmidt-Didlaukies et al. 2018, the coefficients of
+:func:`aiauv_hydro.estimate.slender_cylinder.quadratic_damping_matrix`) have a constant link-frame
+``D_Q`` form only when the cylinder's axis is a link axis (through the link origin, for the axial
+one). In the cylinder frame they are exact for any placement: a station at ``x`` moves along the
+axis with ``(v + omega x (x e1)) . e1 = u`` and spins about it with ``p``, the same at every
+station, so the strip sums of the axial drag per unit length (its resultant acts along the axis,
+with no moment about the rear end) and of the roll moment per unit length are the closed forms
+above. They are evaluated with the crossflow term, in the same frame, from the same twist
+(:func:`aiauv_hydro.laws.fluid_terms.crossflow_wrench`); ``c_1 = c_4 = 0`` (a cylinder on its
+link's axis, whose axial and roll drag stay in ``D_Q``) leaves ``F_x = M_x = 0``.
 
 Quadrature. ``|v_n| v_n`` is smooth except where ``v_n`` passes through zero, where its second
 derivative jumps; a plain Gauss-Legendre rule converges only like ``n^-3`` there (16 nodes: 1e-3
@@ -64,6 +76,8 @@ def crossflow_wrench(
     length: float | np.ndarray,
     strip_coefficient: float | np.ndarray,
     nodes: int = DEFAULT_NODES,
+    axial_coefficient: float | np.ndarray = 0.0,
+    roll_coefficient: float | np.ndarray = 0.0,
 ) -> np.ndarray:
     """Crossflow drag wrench about the cylinder origin, in cylinder coordinates.
 
@@ -73,9 +87,14 @@ def crossflow_wrench(
         length: Cylinder lengths ``L``, broadcastable to ``velocity_in_cylinder.shape[:-1]`` [m].
         strip_coefficient: ``rho r C_dC`` per cylinder, broadcastable like ``length`` [kg/m^2].
         nodes: Gauss-Legendre nodes on each of the two sub-intervals (see module docstring).
+        axial_coefficient: ``1/2 rho pi r^2 C_d1`` per cylinder, broadcastable like ``length``
+            [kg/m] (0: no axial drag here).
+        roll_coefficient: ``1/2 rho pi L r^4 C_d4`` per cylinder, broadcastable like ``length``
+            [kg m^2] (0: no roll drag here).
 
     Returns:
-        Wrenches ``(F_x, F_y, F_z, M_x, M_y, M_z)``, shape ``(..., 6)`` [N, N m]; ``F_x = M_x = 0``.
+        Wrenches ``(F_x, F_y, F_z, M_x, M_y, M_z)``, shape ``(..., 6)`` [N, N m]; ``F_x = M_x = 0``
+        when both axial and roll coefficients are 0.
     """
     velocity = np.asarray(velocity_in_cylinder, dtype=float)
     if velocity.ndim == 0 or velocity.shape[-1] != 6:
@@ -83,18 +102,33 @@ def crossflow_wrench(
     batch = velocity.shape[:-1]
     length = np.broadcast_to(np.asarray(length, dtype=float), batch)
     coefficient = np.broadcast_to(np.asarray(strip_coefficient, dtype=float), batch)
+    axial = np.broadcast_to(np.asarray(axial_coefficient, dtype=float), batch)
+    roll = np.broadcast_to(np.asarray(roll_coefficient, dtype=float), batch)
     if np.any(~(length > 0.0)) or np.any(~np.isfinite(length)):
         raise HydroError("crossflow length must be positive and finite")
-    if np.any(~(coefficient >= 0.0)) or np.any(~np.isfinite(coefficient)):
-        raise HydroError("crossflow strip coefficient must be finite and >= 0")
+    for values, name in (
+        (coefficient, "strip coefficient"),
+        (axial, "axial drag coefficient"),
+        (roll, "roll drag coefficient"),
+    ):
+        if np.any(~(values >= 0.0)) or np.any(~np.isfinite(values)):
+            raise HydroError(f"crossflow {name} must be finite and >= 0")
 
     unit_points, unit_weights = gauss_legendre_unit(nodes)
     flat_velocity = velocity.reshape(-1, 6)
     flat_length = length.reshape(-1)
     flat_coefficient = coefficient.reshape(-1)
+    flat_axial = axial.reshape(-1)
+    flat_roll = roll.reshape(-1)
     wrench = np.empty((flat_velocity.shape[0], 6))
     for k in range(flat_velocity.shape[0]):
         wrench[k] = laws.crossflow_wrench(  # the one implementation of the strip integral
-            flat_velocity[k], flat_length[k], flat_coefficient[k], unit_points, unit_weights
+            flat_velocity[k],
+            flat_length[k],
+            flat_coefficient[k],
+            flat_axial[k],
+            flat_roll[k],
+            unit_points,
+            unit_weights,
         )
     return wrench.reshape((*batch, 6))

@@ -67,6 +67,10 @@ class FluidModel(NamedTuple):
         cylinder_is_link: 1 where the cylinder frame is the link frame (nl,).
         cylinder_length: Cylinder length ``L`` (nl,) [m].
         strip_coefficient: ``rho r C_dC`` (nl,) [kg/m^2].
+        axial_coefficient: ``1/2 rho pi r^2 C_d1`` of the cylinder-frame axial drag (nl,) [kg/m]
+            (0 where it is in ``D_Q``).
+        roll_coefficient: ``1/2 rho pi L r^4 C_d4`` of the cylinder-frame roll drag (nl,)
+            [kg m^2] (0 where it is in ``D_Q``).
         gauss_nodes: Gauss-Legendre nodes on ``[0, 1]`` (n,).
         gauss_weights: Their weights (n,).
     """
@@ -88,6 +92,8 @@ class FluidModel(NamedTuple):
     cylinder_is_link: np.ndarray
     cylinder_length: np.ndarray
     strip_coefficient: np.ndarray
+    axial_coefficient: np.ndarray
+    roll_coefficient: np.ndarray
     gauss_nodes: np.ndarray
     gauss_weights: np.ndarray
 
@@ -269,7 +275,7 @@ def forward_speed_damping_wrench(forward, twist):
 
 
 @compiled(fastmath=True, inline=True)
-def crossflow_wrench(velocity, length, coefficient, nodes, weights):
+def crossflow_wrench(velocity, length, coefficient, axial, roll, nodes, weights):
     """Strip-theory crossflow drag of a slender cylinder, about its rear end, cylinder axes.
 
     A section at ``x`` in ``[0, L]`` moves through the water with the normal velocity
@@ -282,15 +288,25 @@ def crossflow_wrench(velocity, length, coefficient, nodes, weights):
     (16 nodes per part agree with a 200 000-point rule to better than 1e-7 relative;
     tests/hydro/test_slender_cylinder.py).
 
+    Axial and roll drag (a cylinder off its link's axis, where they have no link-frame ``D_Q``
+    form): every station of a rigid cylinder has the same axial speed ``u`` (``(omega x x e1) . e1
+    = 0``) and roll rate ``p``, so the strip sums are exact in closed form, the axial force
+    ``-c_1 |u| u`` along the axis (no moment about the rear end, which lies on it) and the roll
+    moment ``-c_4 |p| p``, with ``c_1 = 1/2 rho pi r^2 C_d1`` and ``c_4 = 1/2 rho pi L r^4 C_d4``,
+    the coefficients of the on-axis ``D_Q`` (Schmidt-Didlaukies et al. 2018; Fossen 2021,
+    Sec. 6.4; :func:`aiauv_hydro.estimate.slender_cylinder.quadratic_damping_matrix`).
+
     Args:
         velocity: Twist of the cylinder frame relative to the water, cylinder axes (6,).
         length: ``L`` [m].
         coefficient: ``k = rho r C_dC`` [kg/m^2].
+        axial: ``c_1 = 1/2 rho pi r^2 C_d1`` [kg/m] (0 for a cylinder on its link's axis).
+        roll: ``c_4 = 1/2 rho pi L r^4 C_d4`` [kg m^2] (0 for a cylinder on its link's axis).
         nodes: Gauss-Legendre nodes on ``[0, 1]`` (n,).
         weights: Their weights (n,).
 
     Returns:
-        6 floats [N, N m]; the axial force and roll moment are 0.
+        6 floats [N, N m].
     """
     a_y, a_z = velocity[1], velocity[2]
     b_y, b_z = velocity[5], -velocity[4]
@@ -319,7 +335,13 @@ def crossflow_wrench(velocity, length, coefficient, nodes, weights):
             fz -= w * speed * nz
             my += w * x * speed * nz
             mz -= w * x * speed * ny
-    return 0.0, coefficient * fy, coefficient * fz, 0.0, coefficient * my, coefficient * mz
+    fx = 0.0
+    mx = 0.0
+    if axial != 0.0:
+        fx = -axial * abs(velocity[0]) * velocity[0]
+    if roll != 0.0:
+        mx = -roll * abs(velocity[3]) * velocity[3]
+    return fx, coefficient * fy, coefficient * fz, mx, coefficient * my, coefficient * mz
 
 
 @compiled(fastmath=True)
@@ -595,7 +617,7 @@ def forward_speed_damping_wrench_jacobian(forward, twist, out):
 
 
 @compiled(fastmath=True, borrows_only=True)
-def crossflow_wrench_jacobian(velocity, length, coefficient, nodes, weights, out):
+def crossflow_wrench_jacobian(velocity, length, coefficient, axial, roll, nodes, weights, out):
     """``d/dnu`` of :func:`crossflow_wrench` (6, 6) into ``out``: exact for its quadrature.
 
     With ``n(x) = a + b x`` (``a = (v, w)``, ``b = (r, -q)``) and ``g = |n| n``,
@@ -609,9 +631,12 @@ def crossflow_wrench_jacobian(velocity, length, coefficient, nodes, weights, out
         velocity: Twist of the cylinder frame relative to the water (6,).
         length: ``L`` [m].
         coefficient: ``k = rho r C_dC`` [kg/m^2].
+        axial: ``c_1`` [kg/m]: ``d(-c_1 |u| u)/du = -2 c_1 |u|`` (the only entry of row 0).
+        roll: ``c_4`` [kg m^2]: ``d(-c_4 |p| p)/dp = -2 c_4 |p|`` (the only entry of row 3).
         nodes: Gauss-Legendre nodes on ``[0, 1]`` (n,).
         weights: Their weights (n,).
-        out: Output (6, 6) [N s/m, N s, N m s]; rows 0 and 3 and columns 0 and 3 are 0.
+        out: Output (6, 6) [N s/m, N s, N m s]; rows 0 and 3 and columns 0 and 3 are 0 except the
+            diagonal entries of the axial and roll drag.
     """
     a_y, a_z = velocity[1], velocity[2]
     b_y, b_z = velocity[5], -velocity[4]
@@ -708,6 +733,10 @@ def crossflow_wrench_jacobian(velocity, length, coefficient, nodes, weights, out
     out[2, 1], out[2, 2], out[2, 5], out[2, 4] = k * j10, k * j11, k * j12, -k * j13
     out[4, 1], out[4, 2], out[4, 5], out[4, 4] = k * j20, k * j21, k * j22, -k * j23
     out[5, 1], out[5, 2], out[5, 5], out[5, 4] = k * j30, k * j31, k * j32, -k * j33
+    if axial != 0.0:
+        out[0, 0] = -2.0 * axial * abs(velocity[0])
+    if roll != 0.0:
+        out[3, 3] = -2.0 * roll * abs(velocity[3])
 
 
 @compiled(fastmath=True, borrows_only=True)
@@ -782,6 +811,7 @@ def add_link_damping(fluid, rotation, twist, current, bias, d_twist, d_current, 
         fluid.cylinder_is_link,
     )
     cylinder_length, strip_coefficient = fluid.cylinder_length, fluid.strip_coefficient
+    axial_coefficient, roll_coefficient = fluid.axial_coefficient, fluid.roll_coefficient
     nodes, weights = fluid.gauss_nodes, fluid.gauss_weights
     relative = vectors[0]
     link_twist = vectors[1]
@@ -818,10 +848,13 @@ def add_link_damping(fluid, rotation, twist, current, bias, d_twist, d_current, 
         if has_crossflow[k]:
             length = cylinder_length[k]
             coefficient = strip_coefficient[k]
+            axial, roll = axial_coefficient[k], roll_coefficient[k]
             on_link = cylinder_is_link[k]
             _move_twist(cylinder_from_link, k, on_link, link_twist, cylinder_twist)
             if bias is not None:
-                w = crossflow_wrench(cylinder_twist, length, coefficient, nodes, weights)
+                w = crossflow_wrench(
+                    cylinder_twist, length, coefficient, axial, roll, nodes, weights
+                )
                 if on_link:
                     for i in range(6):
                         link_wrench[i] += w[i]
@@ -833,7 +866,7 @@ def add_link_damping(fluid, rotation, twist, current, bias, d_twist, d_current, 
                         link_wrench[i] += s
             if d_twist is not None:
                 crossflow_wrench_jacobian(
-                    cylinder_twist, length, coefficient, nodes, weights, matrices[0]
+                    cylinder_twist, length, coefficient, axial, roll, nodes, weights, matrices[0]
                 )
                 if on_link:
                     _add_matrix(matrices[0], matrices[1])

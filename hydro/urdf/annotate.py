@@ -4,11 +4,11 @@ Per link, from its first ``<collision>`` element with a geometry (else its first
 
 * ``<cylinder>``: the slender-cylinder model (``model="slender_cylinder"``,
   :mod:`aiauv_hydro.estimate.slender_cylinder`), which reads the same cylinder when the vehicle is loaded;
-  a cylinder off the link axis keeps its added mass, linear damping and transverse (crossflow)
-  drag, a strip integral evaluated by quadrature at any placement, while the axial or roll
-  quadratic drag, which has no exact constant form in the link frame there
-  (:func:`aiauv_hydro.estimate.slender_cylinder.exact_axial_and_roll`), is left out
-  (``C_d1="0"`` / ``C_d4="0"``, said in the table);
+  a cylinder off the link axis keeps its added mass and linear damping (moved exactly), its
+  transverse (crossflow) drag, a strip integral evaluated by quadrature at any placement, and its
+  axial or roll quadratic drag, which has no exact constant form in the link frame there
+  (:func:`aiauv_hydro.estimate.slender_cylinder.exact_axial_and_roll`) and is evaluated in the
+  cylinder frame with the crossflow term instead (exact there; said in the table);
 * ``<box>``, ``<sphere>``: the equivalent ellipsoid (same volume and axis proportions) with Lamb's
   added-mass coefficients (``model="fossen"``, :mod:`aiauv_hydro.estimate.ellipsoid`);
 * ``<mesh>``: the ellipsoid fitted to the mesh: centroid, principal axes and axis proportions of the
@@ -348,14 +348,12 @@ def annotate_robot(
             axial, roll = exact_axial_and_roll(placed.rotation, placed.translation)
             if not (axial and roll):
                 # off the link axis: the transverse drag stays the crossflow strip integral
-                # (quadrature, any placement); the axial / roll quadratic drag has no exact
-                # constant form in the link frame and is left out (C_d1 = 0, C_d4 = 0)
-                left_out = [c for c, exact in (("C_d1", axial), ("C_d4", roll)) if not exact]
-                for coefficient in left_out:
-                    element.set(coefficient, "0")
+                # (quadrature, any placement); the axial / roll quadratic drag, with no exact
+                # constant form in the link frame, is evaluated in the cylinder frame with it
+                moved = [c for c, exact in (("C_d1", axial), ("C_d4", roll)) if not exact]
                 label += (
                     " off the link axis (crossflow strip integral; "
-                    f"{'/'.join(left_out)} left out: no exact form in the link frame)"
+                    f"{'/'.join(moved)} in the cylinder frame)"
                 )
             if neutral:
                 ET.SubElement(element, "volume").text = repr(inertial.mass / rho)

@@ -2,7 +2,9 @@
 
 Links are written as ``model="fossen"`` with their full 6x6 matrices (36 numbers, row-major) and
 numbers in Python's shortest round-trip form, so that reading the block back reproduces every value
-exactly. A crossflow term (``slender_cylinder`` links) has no ``fossen`` form and is not written.
+exactly. A crossflow term (``slender_cylinder`` links) has no ``fossen`` form and is not written,
+nor is the axial/roll quadratic drag an off-axis cylinder carries with it (no link-frame ``D_Q``
+form; :class:`aiauv_hydro.spec.CrossflowDrag`).
 Thrusters and fins are written with every attribute that differs from its default
 (:func:`thruster_element`, :func:`fin_element`); :func:`hydrodynamics_element` writes a whole block.
 """
@@ -33,7 +35,8 @@ def fossen_link_element(link: LinkHydrodynamics) -> Element:
     """A ``<link model="fossen">`` element carrying ``link``'s volume, centre of buoyancy and matrices.
 
     Args:
-        link: The link's parameters (its crossflow, if any, is not written).
+        link: The link's parameters (its crossflow, with any cylinder-frame axial/roll drag, is
+            not written).
 
     Returns:
         The element, ready to append to a ``<hydrodynamics>`` block.

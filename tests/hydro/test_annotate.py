@@ -305,27 +305,32 @@ def test_cli_annotate_hostile_input_is_one_line(tmp_path, capfd, case, fragments
 
 
 @pytest.mark.parametrize(
-    ("origin", "left_out"),
+    ("origin", "moved"),
     [
         ('xyz="0.128 0 0.055" rpy="0 1.5707963267948966 0"', ["C_d1"]),  # Z1's link03: offset
         ('xyz="0 0 0" rpy="0.3 0.4 0"', ["C_d1", "C_d4"]),  # tilted: no link axis
     ],
 )
-def test_cylinder_off_the_link_axis_keeps_the_strip_integral(origin, left_out):
+def test_cylinder_off_the_link_axis_keeps_the_strip_integral(origin, moved):
     """An off-axis cylinder keeps added mass, linear damping and the crossflow strip integral
-    (any placement); the axial / roll quadratic drag, with no exact form there, is left out and
-    the table says so."""
+    (any placement); the axial / roll quadratic drag, with no exact form in the link frame there,
+    is evaluated in the cylinder frame with the crossflow term (issue 32), and the table says so."""
     geometry = (
         f"<collision><origin {origin}/>"
         '<geometry><cylinder length="0.4" radius="0.03"/></geometry></collision>'
     )
     annotation = annotate_robot(_one_link(geometry))
     (row,) = annotation.links
-    assert "off the link axis" in row.source and all(c in row.source for c in left_out)
+    assert "off the link axis" in row.source and "left out" not in row.source
+    assert "cylinder frame" in row.source and all(c in row.source for c in moved)
     element = annotation.root.find("hydrodynamics/link")
-    assert {c for c in ("C_d1", "C_d4") if element.get(c) == "0"} == set(left_out)
+    assert element.get("C_d1") is None and element.get("C_d4") is None  # the defaults, all kept
     link = _loaded(annotation)["body"]
     assert link.crossflow is not None and link.crossflow.length == pytest.approx(0.4)
+    assert link.crossflow.axial_drag_coefficient == (0.2 if "C_d1" in moved else 0.0)
+    assert link.crossflow.roll_drag_coefficient == (0.1 if "C_d4" in moved else 0.0)
+    roll_in_link_frame = np.abs(link.quadratic_damping).sum()  # what has an exact D_Q form
+    assert (roll_in_link_frame > 0.0) == ("C_d4" not in moved)
     assert np.linalg.eigvalsh(link.added_mass)[0] >= -1e-12
 
 

@@ -259,14 +259,6 @@ BAD_SOURCES = {
     ),
     "two blocks": (robot("<hydrodynamics/><hydrodynamics/>"), "blocks"),
     "bad density": (robot('<hydrodynamics fluid_density="0"/>'), "fluid_density"),
-    "tilted slender link": (
-        robot(
-            '<hydrodynamics><link name="arm" model="slender_cylinder"/></hydrodynamics>',
-            '<link name="arm"><collision><origin xyz="0.2 0 0" rpy="0 1.0 0"/>'
-            '<geometry><cylinder length="0.4" radius="0.05"/></geometry></collision></link>',
-        ),
-        "parallel to a link axis",
-    ),
     "not XML": ("<robot><link name='a'></robot>", "not well-formed"),
     "not a robot": ("<sdf version='1.6'><model name='m'/></sdf>", "<sdf>"),
     "DTD": (

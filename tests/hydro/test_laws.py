@@ -224,7 +224,8 @@ def test_single_vector_fluid_laws_compiled_equal_interpreted(rng):
             (hydro_laws.damping_wrench, (inertia, np.diag(rng.uniform(0, 5, 6)), True, twist)),
             (hydro_laws.damping_wrench, (inertia, a, False, twist)),
             (hydro_laws.forward_speed_damping_wrench, (a, twist)),
-            (hydro_laws.crossflow_wrench, (twist, 0.7, 68.0, nodes, weights)),
+            (hydro_laws.crossflow_wrench, (twist, 0.7, 68.0, 0.0, 0.0, nodes, weights)),
+            (hydro_laws.crossflow_wrench, (twist, 0.7, 68.0, 1.4, 0.03, nodes, weights)),
             (hydro_laws.hydrostatic_wrench, tuple(rng.normal(size=7))),
         ):
             got, expected = _both(function, *args)

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from aiauv_hydro import (
+    DEFAULT_COEFFICIENTS,
     HydroError,
     SlenderCylinderCoefficients,
     added_mass_matrix,
@@ -186,10 +187,17 @@ def test_cylinder_along_link_y_moves_axial_and_roll_drag_to_sway_and_pitch():
     np.testing.assert_allclose(link.quadratic_damping, expected, rtol=1e-15, atol=0.0)
 
 
-def test_axial_drag_offset_from_the_axis_is_refused_with_one_line():
-    with pytest.raises(HydroError) as error:
-        slender_cylinder_link("arm", LENGTH, RADIUS, RHO, translation=np.array([0, 0, 0.1]))
-    assert "\n" not in str(error.value) and "arm" in str(error.value)
+def test_axial_drag_offset_from_the_axis_moves_to_the_cylinder_frame():
+    """Refused before issue 32; now the axial drag rides the crossflow record (exact in the
+    cylinder frame; tests/hydro/test_cylinder_frame_drag.py) and the roll drag stays in D_Q."""
+    link = slender_cylinder_link("arm", LENGTH, RADIUS, RHO, translation=np.array([0, 0, 0.1]))
+    reference = quadratic_damping_matrix(LENGTH, RADIUS, RHO)
+    assert link.crossflow.axial_drag_coefficient == DEFAULT_COEFFICIENTS.C_d1
+    assert link.crossflow.axial_coefficient == pytest.approx(reference[0, 0], rel=1e-15)
+    assert link.crossflow.roll_drag_coefficient == 0.0
+    expected = np.zeros((6, 6))
+    expected[3, 3] = reference[3, 3]
+    np.testing.assert_allclose(link.quadratic_damping, expected, rtol=1e-15, atol=0.0)
 
 
 @pytest.mark.parametrize(

@@ -100,10 +100,12 @@ def test_forward_speed_damping_wrench_jacobian(rng):
         assert_close_relative(exact, approx, 1e-8, "forward-speed damping")
 
 
-@pytest.mark.parametrize("case", ["split inside", "split at an end", "pure translation"])
+@pytest.mark.parametrize("case", ["split inside", "split at an end", "pure translation", "axial"])
 def test_crossflow_wrench_jacobian_is_the_quadrature_derivative(rng, case):
     nodes, weights = gauss_legendre_unit(laws.CROSSFLOW_NODES)
     length, coefficient = 0.7, 68.0
+    # cylinder-frame axial and roll drag of an off-axis cylinder (0: on-axis, in D_Q)
+    axial, roll = (1.4, 0.03) if case == "axial" else (0.0, 0.0)
     for _ in range(5):
         twist = rng.normal(size=6)
         if case == "split inside":  # sway and yaw rate of opposite signs: v_n = 0 inside
@@ -112,9 +114,13 @@ def test_crossflow_wrench_jacobian_is_the_quadrature_derivative(rng, case):
         elif case == "pure translation":
             twist[4:] = 0.0
         exact = np.zeros((6, 6))
-        laws.crossflow_wrench_jacobian(twist, length, coefficient, nodes, weights, exact)
+        laws.crossflow_wrench_jacobian(
+            twist, length, coefficient, axial, roll, nodes, weights, exact
+        )
         approx = _central(
-            lambda x: laws.crossflow_wrench(x, length, coefficient, nodes, weights), twist, 1e-6
+            lambda x: laws.crossflow_wrench(x, length, coefficient, axial, roll, nodes, weights),
+            twist,
+            1e-6,
         )
         assert_close_relative(exact, approx, 1e-7, f"crossflow ({case})")
 
@@ -141,6 +147,8 @@ def _load(name: str, folder) -> aiauv_pin.Vehicle:
             f"</quadratic_damping><linear_damping_forward_speed>{forward}"
             "</linear_damping_forward_speed>",
         )
+    elif name == "off_axis_cylinder":
+        text = OFF_AXIS_CYLINDER
     else:
         n, seed = (int(x) for x in name.removeprefix("generated_").split("_"))
         text = build_urdf(spec_from_dict(generated_vehicle_table(n, seed)))
@@ -149,6 +157,26 @@ def _load(name: str, folder) -> aiauv_pin.Vehicle:
     return aiauv_pin.load_vehicle(path)
 
 
+#: A hull and an arm whose collision cylinder is tilted and offset: the arm's axial and roll drag
+#: are evaluated in the cylinder frame with the crossflow term (issue 32).
+OFF_AXIS_CYLINDER = """<robot name="off_axis">
+  <link name="hull"><inertial><mass value="20"/>
+    <inertia ixx="0.1" ixy="0" ixz="0" iyy="1.5" iyz="0" izz="1.5"/></inertial>
+    <collision><origin xyz="0.5 0 0" rpy="0 1.5707963267948966 0"/>
+      <geometry><cylinder length="1.0" radius="0.1"/></geometry></collision></link>
+  <link name="arm"><inertial><origin xyz="0.2 0 0"/><mass value="3"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.05" iyz="0" izz="0.05"/></inertial>
+    <collision><origin xyz="0.2 0.03 0.05" rpy="0.2 1.1 0.3"/>
+      <geometry><cylinder length="0.4" radius="0.05"/></geometry></collision></link>
+  <joint name="j" type="revolute"><parent link="hull"/><child link="arm"/>
+    <origin xyz="1.0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-2" upper="2" effort="50" velocity="2"/></joint>
+  <hydrodynamics>
+    <link name="hull" model="slender_cylinder"/>
+    <link name="arm" model="slender_cylinder" C_d1="0.6" C_d4="0.4"/>
+  </hydrodynamics>
+</robot>"""
+
 VEHICLES = [
     "uniform",
     "stabilised",
@@ -156,6 +184,7 @@ VEHICLES = [
     "single_body_forward_speed",
     "generated_4_3",
     "generated_7_11",
+    "off_axis_cylinder",
 ]
 
 
@@ -254,6 +283,8 @@ def _random_fluid_model(rng, nb: int = 2) -> laws.FluidModel:
         cylinder_is_link=np.zeros(nl, dtype=np.int64),
         cylinder_length=np.array([0.6, 0.9]),
         strip_coefficient=np.array([50.0, 80.0]),
+        axial_coefficient=np.array([1.4, 0.0]),
+        roll_coefficient=np.array([0.03, 0.0]),
         gauss_nodes=nodes,
         gauss_weights=weights,
     )
