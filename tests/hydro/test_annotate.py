@@ -269,6 +269,18 @@ def test_cli_annotate_bad_density_is_a_usage_error(capsys):
     assert "positive density" in capsys.readouterr().err
 
 
+def _hostile_input_helpers():
+    """tests/app/test_hostile_input.py as a module, by its path (this test runs alone too)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "app" / "test_hostile_input.py"
+    spec = importlib.util.spec_from_file_location("_hostile_input_helpers", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 @pytest.mark.parametrize(
     ("case", "fragments"),
     [
@@ -281,7 +293,9 @@ def test_cli_annotate_bad_density_is_a_usage_error(capsys):
     ],
 )
 def test_cli_annotate_hostile_input_is_one_line(tmp_path, capfd, case, fragments):
-    from test_hostile_input import BILLION_LAUGHS, assert_one_line_error, run_cli, vehicle_urdf
+    hostile = _hostile_input_helpers()
+    BILLION_LAUGHS, assert_one_line_error = hostile.BILLION_LAUGHS, hostile.assert_one_line_error
+    run_cli, vehicle_urdf = hostile.run_cli, hostile.vehicle_urdf
 
     path = tmp_path / "vehicle.urdf"
     if case == "laughs":
