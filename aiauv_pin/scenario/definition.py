@@ -57,6 +57,7 @@ from aiauv_pin.controllers.paper_controller import (
     VehiclePathFollowing,
     compiled_path_following_reason,
 )
+from aiauv_pin.controllers.torpedo_controller import Torpedo, VehicleTorpedo
 from aiauv_pin.dynamics.lagged_added_mass import check_filter, check_scheme
 from aiauv_pin.errors import ArgumentError
 from aiauv_pin.model.vehicle import Vehicle
@@ -69,8 +70,9 @@ CASES = ("uniform", "stabilised")
 #: Controllers a scenario can name: the paper's path following (turning with the body), none
 #: (passive run), the thruster-turning baseline (:mod:`aiauv_pin.controllers.turning_controller`),
 #: a serpentine gait (:mod:`aiauv_pin.controllers.gait_controller`), station keeping or velocity
-#: control (:mod:`aiauv_pin.wholebody`).
-CONTROLLERS = ("paper", "none", "thruster_turning", "gait", "station", "velocity")
+#: control (:mod:`aiauv_pin.wholebody`), or a torpedo AUV's path following by its fins
+#: (:mod:`aiauv_pin.controllers.torpedo_controller`).
+CONTROLLERS = ("paper", "none", "thruster_turning", "gait", "station", "velocity", "torpedo")
 
 
 @dataclass(frozen=True)
@@ -100,10 +102,13 @@ class Scenario:
         heading: Direction the straight vehicle points at the start (default: the path's tangent
             at the point closest to the start).
         controller: ``"paper"`` (path following), ``"none"`` (passive), ``"thruster_turning"``
-            (straight body steered by the tunnel thrusters, compiled backend only) or ``"gait"``
-            (a serpentine gait, :attr:`gait`, compiled backend only).
+            (straight body steered by the tunnel thrusters, compiled backend only), ``"gait"``
+            (a serpentine gait, :attr:`gait`, compiled backend only) or ``"torpedo"`` (a torpedo
+            AUV steered by its fins, :attr:`torpedo`, compiled backend only).
         gait: The gait of ``controller = "gait"``
             (:class:`aiauv_pin.controllers.gait_controller.Gait`; ``None``: its defaults).
+        torpedo: The options of ``controller = "torpedo"``
+            (:class:`aiauv_pin.controllers.torpedo_controller.Torpedo`; ``None``: its defaults).
         vehicle: URDF file of the vehicle (``None``: the bundled vehicle of ``case``).
         fixed_base, lenient: Load options of the vehicle (:func:`aiauv_pin.load_vehicle`).
         added_mass: ``"exact"`` or ``"lagged"`` (UUV Simulator's and gz-sim's scheme,
@@ -139,6 +144,7 @@ class Scenario:
     gait: Gait | None = None
     wholebody: Mapping[str, Any] | None = None
     waves: Waves | None = None
+    torpedo: Torpedo | None = None
 
     def __post_init__(self) -> None:
         check_scheme(self.added_mass)
@@ -151,6 +157,11 @@ class Scenario:
             raise ValueError(
                 f"gait must be a aiauv_pin.controllers.gait_controller.Gait, got "
                 f"{type(self.gait).__name__:.40}"
+            )
+        if self.torpedo is not None and not isinstance(self.torpedo, Torpedo):
+            raise ValueError(
+                f"torpedo must be a aiauv_pin.controllers.torpedo_controller.Torpedo, got "
+                f"{type(self.torpedo).__name__:.40}"
             )
         if self.path is not None and not isinstance(self.path, Path):
             raise ValueError(
@@ -443,6 +454,14 @@ def run_scenario(
             vehicle, scenario.gait, scenario.controller_gains, path=scenario.path_to_follow
         )
         law, servo, use_compiled = gait.compiled(), gait.joint_servo, True
+    elif scenario.controller == "torpedo" and controller is None:
+        if compiled is False:
+            raise ValueError(
+                "the torpedo controller runs in the compiled loop only"
+                + (" (not with added_mass = 'lagged')" if lagged else "")
+            )
+        torpedo = VehicleTorpedo(vehicle, scenario.torpedo, path=scenario.path_to_follow)
+        law, servo, use_compiled = torpedo.compiled(), None, True
     elif scenario.controller in ("station", "velocity") and controller is None:
         from aiauv_pin.wholebody.station_options import controller_from_options
 
@@ -582,7 +601,7 @@ def _parameters(scenario: Scenario) -> dict:
         value = getattr(scenario, f.name)
         if f.name == "gains":
             continue
-        if f.name == "gait":
+        if f.name in ("gait", "torpedo"):
             value = asdict(value) if value is not None else None
         if f.name == "path":
             value = scenario.path_to_follow.describe()

@@ -51,6 +51,7 @@ from typing import NamedTuple
 from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled, is_project_function
 from aiauv_pin.controllers.gait_compiled import GaitParameters, serpentine_gait
 from aiauv_pin.controllers.paper_compiled import PaperParameters, paper_path_following, passive
+from aiauv_pin.controllers.torpedo_compiled import TorpedoParameters, torpedo_path_following
 from aiauv_pin.controllers.turning_compiled import TurningParameters, thruster_turning
 from aiauv_pin.kernels.articulated_body import (
     MIDPOINT,
@@ -109,7 +110,8 @@ def steps_to_next_event(k, n_total, steps_per_control, log_every):
 def run_controller(user, t, q, v, model, workspace, parameters, state, tau, info):
     """``user(...)``, or with ``user = None`` the built-in controller ``parameters`` select:
     :class:`PaperParameters` the paper's, :class:`TurningParameters` thruster turning,
-    :class:`GaitParameters` the serpentine gait, anything else passive. Compiled, the choice is
+    :class:`GaitParameters` the serpentine gait, :class:`TorpedoParameters` a torpedo's path
+    following, anything else passive. Compiled, the choice is
     made at compile time (an overload)."""
     if user is not None:
         return user(t, q, v, model, workspace, parameters, state, tau, info)
@@ -119,6 +121,8 @@ def run_controller(user, t, q, v, model, workspace, parameters, state, tau, info
         return thruster_turning(t, q, v, model, workspace, parameters, state, tau, info)
     if isinstance(parameters, GaitParameters):
         return serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info)
+    if isinstance(parameters, TorpedoParameters):
+        return torpedo_path_following(t, q, v, model, workspace, parameters, state, tau, info)
     return passive(t, q, v, model, workspace, parameters, state, tau, info)
 
 
@@ -155,6 +159,12 @@ if NUMBA_AVAILABLE:
                 serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info)
 
             return call_gait
+        if _is(parameters, TorpedoParameters):
+
+            def call_torpedo(user, t, q, v, model, workspace, parameters, state, tau, info):
+                torpedo_path_following(t, q, v, model, workspace, parameters, state, tau, info)
+
+            return call_torpedo
 
         def call_passive(user, t, q, v, model, workspace, parameters, state, tau, info):
             passive(t, q, v, model, workspace, parameters, state, tau, info)
