@@ -27,6 +27,7 @@ from aiauv_pin.controllers.torpedo_controller import (
     propeller_signs,
 )
 from aiauv_pin.errors import ArgumentError
+from aiauv_pin.results.outputs import figures_of
 from aiauv_pin.scenario.definition import run_scenario
 from aiauv_pin.scenario.toml_file import ScenarioFileError, load_scenario, scenario_from_mapping
 
@@ -72,6 +73,7 @@ def test_torpedo_follows_our_paths(torpedo, name, steady):
     at_limit = np.any(np.abs(info["fin_angle"]) >= limit - 1e-6, axis=1)
     assert at_limit.sum() * (t[1] - t[0]) < 1.0
     assert np.abs(_roll(result.trajectory.q)[last]).max() < math.radians(5.0)
+    assert figures_of(result) == ("fig2_cross_track.png", "path_3d.png", "fins.png")
     speed = result.scenario.torpedo.speed
     if speed is not None:
         assert info["speed"][-1] == pytest.approx(speed, abs=1e-3)
