@@ -178,3 +178,26 @@ def test_scenario_file_torpedo_errors_are_one_line():
     assert str(caught.value) == "torpedo: given, but controller.type is not 'torpedo'"
     with pytest.raises(ScenarioFileError, match=r"torpedo\.lookahead"):
         scenario_from_mapping({**table, "torpedo": {"lookahead": -1.0}}, ROOT)
+
+
+def test_records_built_for_another_vehicle_are_refused(torpedo):
+    """The compiled loop checks the fin-sized records against the vehicle's fins (issue 29)."""
+    from dataclasses import replace
+
+    from aiauv_pin.errors import RecordSizeError
+
+    law = VehicleTorpedo(torpedo, Torpedo()).compiled()
+    short = law.parameters._replace(fin_limit=np.full(2, 0.5))
+    with pytest.raises(RecordSizeError) as caught:
+        aiauv_pin.simulate(
+            torpedo,
+            torpedo.neutral_configuration(),
+            np.zeros(6),
+            0.1,
+            0.01,
+            replace(law, parameters=short),
+        )
+    assert str(caught.value) == (
+        "CompiledController.parameters.fin_limit must have shape (4,) for this vehicle (0 joints, "
+        "1 thrusters, 4 fins), got (2,)"
+    )
