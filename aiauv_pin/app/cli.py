@@ -86,11 +86,12 @@ def _add_simulate(subparsers) -> None:
     )
     parser.add_argument(
         "--controller",
-        choices=("paper", "none", "thruster_turning", "gait", "station"),
+        choices=("paper", "none", "thruster_turning", "gait", "station", "torpedo"),
         default=None,
         help="the paper's path following, none (a passive run), the thruster-turning "
         "baseline, a serpentine gait (the file's [gait], else its defaults), or station keeping "
-        "(the file's [station], else hold the start pose) (paper)",
+        "(the file's [station], else hold the start pose), or a torpedo AUV's path following by "
+        "its fins (the file's [torpedo], else its defaults) (paper)",
     )
     parser.add_argument(
         "--added-mass",

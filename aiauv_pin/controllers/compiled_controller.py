@@ -49,6 +49,7 @@ from aiauv_pin.controllers.paper_compiled import (
     paper_path_following,
     passive,
 )
+from aiauv_pin.controllers.torpedo_compiled import torpedo_info_shapes, torpedo_path_following
 from aiauv_pin.controllers.turning_compiled import thruster_turning, turning_info_shapes
 from aiauv_pin.errors import ArgumentError, RecordSizeError
 
@@ -60,6 +61,7 @@ BUILTIN_CONTROLLERS = (
     thruster_turning,
     serpentine_gait,
     constant_thrust,
+    torpedo_path_following,
 )
 
 _BOUNDS_CHECKED: dict = {}
@@ -127,13 +129,17 @@ def bounds_checked(function, _seen: dict | None = None):
     return checked
 
 
-def _sizes_of_builtin(function, n_joints: int, n_thrusters: int):
+def _sizes_of_builtin(function, n_joints: int, n_thrusters: int, n_fins: int = 0):
     """``(info width, {parameter field: expected length})`` of a built-in controller, or ``None``."""
     if function is passive:
         return 0, {}
     if function is constant_thrust:
         return 2 * n_thrusters, {"thrusts": n_thrusters}
-    if function is paper_path_following:
+    if function is torpedo_path_following:
+        shapes = torpedo_info_shapes(n_thrusters, n_fins)
+        fields = {"surge_mask": n_thrusters}
+        fields.update(dict.fromkeys(("rudder_share", "stern_share", "fin_limit"), n_fins))
+    elif function is paper_path_following:
         shapes = paper_info_shapes(n_joints, n_thrusters)
         fields = {
             "axis_index": n_joints,
@@ -212,7 +218,7 @@ class CompiledController:
             return None
         return bounds_checked(self.function)
 
-    def check_records(self, nq: int, nv: int, n_thrusters: int) -> None:
+    def check_records(self, nq: int, nv: int, n_thrusters: int, n_fins: int = 0) -> None:
         """Refuse records the compiled loop would write or read past, for a vehicle of these sizes.
 
         ``function`` must be a numba function; ``info_shapes`` a mapping of names to shapes of
@@ -245,7 +251,7 @@ class CompiledController:
                     f"CompiledController.info_shapes[{key!r:.40}] must be a tuple of whole "
                     f"numbers in [0, {2**20}], got {shape!r:.40}"
                 )
-        sizes = _sizes_of_builtin(self.function, nv - 6, n_thrusters)
+        sizes = _sizes_of_builtin(self.function, nv - 6, n_thrusters, n_fins)
         if sizes is None:
             return
         width, fields = sizes
@@ -260,7 +266,7 @@ class CompiledController:
                 got = array.shape if isinstance(array, np.ndarray) else type(array).__name__
                 raise RecordSizeError(
                     f"CompiledController.parameters.{name} must have shape ({length},) for this "
-                    f"vehicle ({nv - 6} joints, {n_thrusters} thrusters), got {got}"
+                    f"vehicle ({nv - 6} joints, {n_thrusters} thrusters, {n_fins} fins), got {got}"
                 )
 
     @property
@@ -281,7 +287,7 @@ class CompiledController:
         return out
 
 
-def check_compiled_controller(controller, nq: int, nv: int, n_thrusters: int):
+def check_compiled_controller(controller, nq: int, nv: int, n_thrusters: int, n_fins: int = 0):
     """``controller`` (a :class:`~aiauv_pin.controllers.compiled_controller.CompiledController`)
     checked before the
     compiled loop runs it: its declared ``info_shapes`` at least what a built-in controller writes
@@ -300,5 +306,5 @@ def check_compiled_controller(controller, nq: int, nv: int, n_thrusters: int):
         raise ArgumentError(
             f"controller must be a CompiledController, got {type(controller).__name__:.40}"
         )
-    controller.check_records(nq, nv, n_thrusters)
+    controller.check_records(nq, nv, n_thrusters, n_fins)
     return controller

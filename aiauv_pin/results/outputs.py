@@ -568,6 +568,10 @@ WHOLEBODY_FIGURES = ("pose_error.png", "thrusts.png")
 #: Added for an intervention run (:mod:`aiauv_pin.wholebody`): the pose error to the reference
 #: (position [mm], attitude [deg]), the thrusts [N] and the joint angles [rad] against time.
 INTERVENTION_FIGURES = ("intervention.png",)
+#: Figure added by a torpedo AUV's path following (:mod:`aiauv_pin.controllers.torpedo_controller`):
+#: heading and pitch against their LOS references, the rudder and stern-plane deflections and the
+#: fin angles reached.
+TORPEDO_FIGURES = ("fins.png",)
 
 
 def figures_of(result: ScenarioResult) -> tuple[str, ...]:
@@ -581,6 +585,8 @@ def figures_of(result: ScenarioResult) -> tuple[str, ...]:
         return MOTION_FIGURES + extra
     if "u" in result.trajectory.info:
         return FIGURES + extra
+    if "fin_angle" in result.trajectory.info:  # a torpedo AUV
+        return PATH_FIGURES + TORPEDO_FIGURES + extra
     return PATH_FIGURES + extra
 
 
@@ -800,6 +806,23 @@ def _draw(
         _plot(ax_res, t, np.linalg.norm(residual[:, 3:], axis=1), label="moment [N m]")
         ax_res.set(xlabel="t [s]", ylabel="|residual|")
         ax_res.legend()
+    elif name == "fins.png":
+        fig, (ax_h, ax_p, ax_f) = plt.subplots(3, 1, figsize=(6, 6), sharex=True)
+        for ax, key, label in ((ax_h, "heading", "heading"), (ax_p, "pitch", "pitch")):
+            angles = np.asarray(info[key])
+            _plot(ax, t, np.unwrap(angles[:, 0]), label=f"{label}")
+            _plot(ax, t, np.unwrap(angles[:, 1]), label="LOS reference", ls="--")
+            ax.set(ylabel=f"{label} [rad]")
+            ax.legend(fontsize="small")
+        ax_h.set_title(f"Heading, pitch and fins ({case})")
+        deflection = np.asarray(info["deflection"])
+        _plot(ax_f, t, deflection[:, 0], label="rudder $\\delta_r$")
+        _plot(ax_f, t, deflection[:, 1], label="stern planes $\\delta_s$")
+        reached = np.asarray(info["fin_angle"])
+        for k in range(reached.shape[1]):
+            _plot(ax_f, t, reached[:, k], lw=0.6, alpha=0.6, label=f"fin {k} reached")
+        ax_f.set(xlabel="t [s]", ylabel="angle [rad]")
+        ax_f.legend(ncol=3, fontsize="x-small")
     elif name == "motion_3d.png":
         fig = plt.figure(figsize=(6, 4.5))
         ax = fig.add_subplot(projection="3d")
@@ -862,6 +885,7 @@ _LAYOUT_OF = {
     "base_motion.png": "error",
     "pose_error.png": "error",
     "thrusts.png": "error",
+    "fins.png": "three",
     "motion_3d.png": "3d",
     "fig2_cross_track.png": "error",
     "fig4_phi_tilde.png": "error",

@@ -57,6 +57,7 @@ from aiauv_pin.controllers.paper_controller import (
     VehiclePathFollowing,
     compiled_path_following_reason,
 )
+from aiauv_pin.controllers.torpedo_controller import Torpedo, VehicleTorpedo
 from aiauv_pin.dynamics.lagged_added_mass import check_filter, check_scheme
 from aiauv_pin.errors import ArgumentError
 from aiauv_pin.model.vehicle import Vehicle
@@ -72,8 +73,9 @@ CASES = ("uniform", "stabilised")
 #: a serpentine gait (:mod:`aiauv_pin.controllers.gait_controller`), station keeping or velocity
 #: control (:mod:`aiauv_pin.wholebody`), intervention (hold the end-effector's pose,
 #: :mod:`aiauv_pin.wholebody.intervention_controller`), transit then intervention
-#: (:mod:`aiauv_pin.wholebody.intervention_transit`), or constant thrusts (an open-loop command,
-#: :meth:`CompiledController.constant`).
+#: (:mod:`aiauv_pin.wholebody.intervention_transit`), constant thrusts (an open-loop command,
+#: :meth:`CompiledController.constant`), or a torpedo AUV's path following by its fins
+#: (:mod:`aiauv_pin.controllers.torpedo_controller`).
 CONTROLLERS = (
     "paper",
     "none",
@@ -84,6 +86,7 @@ CONTROLLERS = (
     "intervention",
     "transit_intervene",
     "constant",
+    "torpedo",
 )
 #: Controllers that follow no path (their runs have no path errors).
 OPEN_LOOP_CONTROLLERS = ("none", "constant", "station", "velocity", "intervention")
@@ -116,8 +119,9 @@ class Scenario:
         heading: Direction the straight vehicle points at the start (default: the path's tangent
             at the point closest to the start).
         controller: ``"paper"`` (path following), ``"none"`` (passive), ``"thruster_turning"``
-            (straight body steered by the tunnel thrusters, compiled backend only) or ``"gait"``
-            (a serpentine gait, :attr:`gait`, compiled backend only).
+            (straight body steered by the tunnel thrusters, compiled backend only), ``"gait"``
+            (a serpentine gait, :attr:`gait`, compiled backend only) or ``"torpedo"`` (a torpedo
+            AUV steered by its fins, :attr:`torpedo`, compiled backend only).
         gait: The gait of ``controller = "gait"``
             (:class:`aiauv_pin.controllers.gait_controller.Gait`; ``None``: its defaults).
         intervention: The settings of ``controller = "intervention"`` or ``"transit_intervene"``
@@ -125,6 +129,8 @@ class Scenario:
             its defaults).
         thrusts: The thrusts [N] of ``controller = "constant"``, one per thruster in the vehicle's
             order (saturated to their ``max_thrust``).
+        torpedo: The options of ``controller = "torpedo"``
+            (:class:`aiauv_pin.controllers.torpedo_controller.Torpedo`; ``None``: its defaults).
         vehicle: URDF (or SDF, MJCF) file of the vehicle (``None``: the bundled vehicle of ``case``).
         fixed_base, lenient, package_path: Load options of the vehicle
             (:func:`aiauv_pin.load_vehicle`).
@@ -164,6 +170,7 @@ class Scenario:
     waves: Waves | None = None
     intervention: InterventionSettings | None = None
     thrusts: tuple[float, ...] | None = None
+    torpedo: Torpedo | None = None
 
     def __post_init__(self) -> None:
         check_scheme(self.added_mass)
@@ -190,6 +197,11 @@ class Scenario:
             raise ValueError(
                 "intervention must be an aiauv_pin.wholebody.intervention_transit."
                 f"InterventionSettings, got {type(self.intervention).__name__:.40}"
+            )
+        if self.torpedo is not None and not isinstance(self.torpedo, Torpedo):
+            raise ValueError(
+                f"torpedo must be a aiauv_pin.controllers.torpedo_controller.Torpedo, got "
+                f"{type(self.torpedo).__name__:.40}"
             )
         if self.path is not None and not isinstance(self.path, Path):
             raise ValueError(
@@ -498,6 +510,14 @@ def run_scenario(
             vehicle, scenario.gait, scenario.controller_gains, path=scenario.path_to_follow
         )
         law, servo, use_compiled = gait.compiled(), gait.joint_servo, True
+    elif scenario.controller == "torpedo" and controller is None:
+        if compiled is False:
+            raise ValueError(
+                "the torpedo controller runs in the compiled loop only"
+                + (" (not with added_mass = 'lagged')" if lagged else "")
+            )
+        torpedo = VehicleTorpedo(vehicle, scenario.torpedo, path=scenario.path_to_follow)
+        law, servo, use_compiled = torpedo.compiled(), None, True
     elif scenario.controller in ("station", "velocity") and controller is None:
         from aiauv_pin.wholebody.station_options import controller_from_options
 
@@ -664,7 +684,7 @@ def _parameters(scenario: Scenario) -> dict:
         value = getattr(scenario, f.name)
         if f.name == "gains":
             continue
-        if f.name in ("gait", "intervention"):
+        if f.name in ("gait", "intervention", "torpedo"):
             value = asdict(value) if value is not None else None
         if f.name == "path":
             value = scenario.path_to_follow.describe()

@@ -200,8 +200,8 @@ class ControllerTable(BaseModel):
         "-",
         "paper (path following), none (passive: thrusters and joints idle), thruster_turning, "
         "gait (serpentine swimming, [gait]), station ([station]), velocity ([velocity]), "
-        "intervention or transit_intervene ([intervention]), or constant (constant thrusts, "
-        "joints idle)",
+        "intervention or transit_intervene ([intervention]), constant (constant thrusts, "
+        "joints idle) or torpedo (a torpedo AUV steered by its fins, [torpedo])",
         "paper",
     )
     u_d: gain(MAX_SPEED, "m/s", f"desired surge speed (eq. 21, 25); default {_GAINS.u_d:g}")
@@ -294,6 +294,31 @@ class GaitTable(BaseModel):
     depth_lookahead: key(Size, "m", "vertical LOS lookahead (default: the gait's lookahead)")
     depth_kp: gain(1.0e5, "N/m", "depth PI of the vertical thrusters: proportional", zero=True)
     depth_ki: gain(1.0e5, "N/(m s)", "depth PI of the vertical thrusters: integral", zero=True)
+
+
+class TorpedoTable(BaseModel):
+    """``[torpedo]``: a torpedo AUV's path following by its fins, ``controller.type = "torpedo"``
+    (:class:`aiauv_pin.controllers.torpedo_controller.Torpedo`; docs/source/torpedo.md)."""
+
+    model_config = strict_config("torpedo")
+    speed: gain(MAX_SPEED, "m/s", "desired speed, held by the propeller's PI (default 2)")
+    thrust: gain(1.0e5, "N", "constant thrust per propeller instead of the speed PI")
+    speed_kp: gain(1.0e5, "N s/m", "speed PI: proportional", zero=True)
+    speed_ki: gain(1.0e5, "N/m", "speed PI: integral", zero=True)
+    lookahead: key(Size, "m", "LOS lookahead distance Delta")
+    integral_los: key(bool, "-", "integral LOS (crab angles, currents) instead of LOS")
+    los_integral_gain: key(
+        number(0.0, 1.0e3, low_open=True), "-", "integral gain sigma of the integral LOS"
+    )
+    yaw_kp: gain(100.0, "rad/rad", "heading PID: rudder angle per heading error")
+    yaw_kd: gain(100.0, "s", "heading PID: derivative", zero=True)
+    yaw_ki: gain(100.0, "1/s", "heading PID: integral", zero=True)
+    pitch_kp: gain(100.0, "rad/rad", "pitch PID: stern-plane angle per pitch error")
+    pitch_kd: gain(100.0, "s", "pitch PID: derivative", zero=True)
+    pitch_ki: gain(100.0, "1/s", "pitch PID: integral", zero=True)
+    max_deflection: key(
+        number(0.0, math.pi, low_open=True), "rad", "rudder/stern saturation (default: fin limit)"
+    )
 
 
 AxisName = Literal["surge", "sway", "heave", "roll", "pitch", "yaw"]
@@ -489,6 +514,7 @@ class ScenarioFile(BaseModel):
     gait: key(GaitTable, "-", "the serpentine gait (controller.type = gait)")
     station: key(StationTable, "-", "station keeping (controller.type = station)")
     velocity: key(VelocityTable, "-", "velocity control (controller.type = velocity)")
+    torpedo: key(TorpedoTable, "-", "a torpedo AUV's path following (controller.type = torpedo)")
     waves: key(WavesTable, "-", "linear waves on the current (default: none)")
     intervention: key(InterventionTable, "-", "the intervention (controller.type = intervention)")
     output: key(OutputTable, "-", "outputs")

@@ -151,7 +151,7 @@ def _schema() -> dict[str, Parameter]:
         annotation = _plain(info.annotation)
         if isinstance(annotation, type) and issubclass(annotation, BaseModel):
             for field in annotation.model_fields:
-                sweepable = name not in ("output", "station", "velocity")
+                sweepable = name not in ("output", "station", "velocity", "torpedo")
                 out.append(_parameter(f"{name}.{field}", annotation, field, sweepable=sweepable))
             continue
         sweepable = name not in ("added_mass", "lagged_filter")
@@ -175,6 +175,7 @@ TABLES: dict[str, tuple[str, ...] | None] = {
     "velocity": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("velocity.")),
     "waves": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("waves.")),
     "intervention": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("intervention.")),
+    "torpedo": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("torpedo.")),
     "output": tuple(n.split(".", 1)[1] for n in SCHEMA if n.startswith("output.")),
 }
 

@@ -68,6 +68,7 @@ from aiauv_hydro.spec import HydroError
 from aiauv_hydro.waves.sea_state import Waves
 from aiauv_pin._internal.schema_validation import given, validate
 from aiauv_pin.controllers.gait_controller import Gait
+from aiauv_pin.controllers.torpedo_controller import Torpedo
 from aiauv_pin.errors import AiauvError
 from aiauv_pin.scenario.definition import Scenario
 from aiauv_pin.scenario.file_schemas import ScenarioFile
@@ -175,6 +176,16 @@ def scenario_from_mapping(table: Mapping[str, Any], base_dir: str | Path = ".") 
     if checked.gait is not None:
         try:
             options["gait"] = Gait(**_plain(checked.gait))
+        except ValueError as exc:
+            raise ScenarioFileError(" ".join(str(exc).split())) from None
+    if checked.torpedo is not None:
+        if options["controller"] != "torpedo":
+            raise ScenarioFileError("torpedo: given, but controller.type is not 'torpedo'")
+        table = _plain(checked.torpedo)
+        if "thrust" in table and "speed" not in table:
+            table["speed"] = None
+        try:
+            options["torpedo"] = Torpedo(**table)
         except ValueError as exc:
             raise ScenarioFileError(" ".join(str(exc).split())) from None
     for name in ("station", "velocity"):

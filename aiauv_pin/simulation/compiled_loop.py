@@ -57,6 +57,7 @@ from aiauv_pin.controllers.paper_compiled import (
     paper_path_following,
     passive,
 )
+from aiauv_pin.controllers.torpedo_compiled import TorpedoParameters, torpedo_path_following
 from aiauv_pin.controllers.turning_compiled import TurningParameters, thruster_turning
 from aiauv_pin.kernels.articulated_body import (
     MIDPOINT,
@@ -116,7 +117,8 @@ def run_controller(user, t, q, v, model, workspace, parameters, state, tau, info
     """``user(...)``, or with ``user = None`` the built-in controller ``parameters`` select:
     :class:`PaperParameters` the paper's, :class:`TurningParameters` thruster turning,
     :class:`GaitParameters` the serpentine gait, :class:`ConstantParameters` constant thrusts,
-    anything else passive. Compiled, the choice is
+    :class:`TorpedoParameters` a torpedo's path following, anything else passive. Compiled, the
+    choice is
     made at compile time (an overload)."""
     if user is not None:
         return user(t, q, v, model, workspace, parameters, state, tau, info)
@@ -128,6 +130,8 @@ def run_controller(user, t, q, v, model, workspace, parameters, state, tau, info
         return serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info)
     if isinstance(parameters, ConstantParameters):
         return constant_thrust(t, q, v, model, workspace, parameters, state, tau, info)
+    if isinstance(parameters, TorpedoParameters):
+        return torpedo_path_following(t, q, v, model, workspace, parameters, state, tau, info)
     return passive(t, q, v, model, workspace, parameters, state, tau, info)
 
 
@@ -170,6 +174,12 @@ if NUMBA_AVAILABLE:
                 constant_thrust(t, q, v, model, workspace, parameters, state, tau, info)
 
             return call_constant
+        if _is(parameters, TorpedoParameters):
+
+            def call_torpedo(user, t, q, v, model, workspace, parameters, state, tau, info):
+                torpedo_path_following(t, q, v, model, workspace, parameters, state, tau, info)
+
+            return call_torpedo
 
         def call_passive(user, t, q, v, model, workspace, parameters, state, tau, info):
             passive(t, q, v, model, workspace, parameters, state, tau, info)

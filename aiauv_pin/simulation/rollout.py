@@ -231,7 +231,7 @@ def rollout(
         v_rows[:, :6] = 0.0  # a fixed base does not move
     laws, n_c = _controllers(controller)
     for law in laws:
-        check_compiled_controller(law, nq, nv, fast.n_thrusters)
+        check_compiled_controller(law, nq, nv, fast.n_thrusters, fast.model.fins.max_angle.shape[0])
     waters, n_w = _currents(current)
     n_runs = _batch_size({"q0": n_q, "v0": n_v, "controller": n_c, "current": n_w})
     if disturbance is not None and not isinstance(disturbance, Disturbance):

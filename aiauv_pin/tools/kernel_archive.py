@@ -54,6 +54,17 @@ WORKLOADS = (
         "--vehicle",
         str(Path(__file__).resolve().parents[2] / "examples" / "vehicles" / "rov8.urdf"),
     ),
+    # a torpedo AUV steered by its fins (aiauv_pin.controllers.torpedo_compiled)
+    (
+        "simulate",
+        "--duration",
+        "1",
+        "--no-html",
+        "--controller",
+        "torpedo",
+        "--vehicle",
+        str(Path(__file__).resolve().parents[2] / "examples" / "vehicles" / "torpedo.urdf"),
+    ),
     ("rollout",),
     ("envs",),
 )
