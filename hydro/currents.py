@@ -411,15 +411,16 @@ class Current:
         return cls(shear_current, parameters, "shear", description, unsteady=unsteady)
 
     @classmethod
-    def waves(cls, sea: Waves, velocity=(0.0, 0.0, 0.0)) -> Current:
+    def waves(cls, sea: Waves, velocity=(0.0, 0.0, 0.0), *, unsteady: bool = True) -> Current:
         """The water of the sea ``sea`` (:class:`aiauv_hydro.waves.sea_state.Waves`) on a uniform
         current ``velocity`` (3,) [m/s]: the two velocities add (linear superposition, no
-        wave-current interaction)."""
+        wave-current interaction); ``unsteady=False``: the quasi-steady model (the waves'
+        acceleration neglected)."""
         if not isinstance(sea, Waves):
             raise HydroError(f"current.waves: expected a Waves, got {type(sea).__name__:.40}")
         velocity = _vector3(velocity, "current.velocity")
         description = {"type": "waves", "velocity": velocity.tolist(), "waves": sea.describe()}
-        return cls(wave_velocity, sea.parameters(velocity), "waves", description)
+        return cls(wave_velocity, sea.parameters(velocity), "waves", description, unsteady=unsteady)
 
     @property
     def kind_code(self) -> int:

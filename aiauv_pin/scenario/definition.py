@@ -263,6 +263,24 @@ class Scenario:
                     f"{as_current(self.current).kind} current"
                 )
             self.waves.check_point(float(self.start[2]), "the start (end-effector)")
+            self._check_path_in_the_water()
+
+    def _check_path_in_the_water(self) -> None:
+        """Refuse a followed path that leaves the water (below the sea floor or above the
+        still-water level) within the run's reach: from its point closest to the start, ahead
+        by the desired speed times the duration (64 points; one line). A user's own path is not
+        sampled (its arc length may be costly to invert)."""
+        path = followed_path(self)
+        if path is None or path.kind_code < 0:
+            return
+        first = path.closest(self.start).s
+        reach = self.controller_gains.u_d * self.duration
+        for s, z in zip(
+            np.linspace(0.0, reach, 64),
+            path.points_at(np.linspace(first, first + reach, 64))[:, 2],
+            strict=True,
+        ):
+            self.waves.check_point(float(z), f"the path {s:.3g} m ahead of the start")
 
     @property
     def steps_per_control(self) -> int:
@@ -286,11 +304,11 @@ class Scenario:
     @property
     def water(self) -> Current:
         """The water's motion as a :class:`aiauv_hydro.currents.Current`: the current, with the
-        waves on it when there are waves."""
+        waves on it when there are waves (the current's ``unsteady`` choice kept)."""
         current = as_current(self.current)
         if self.waves is None:
             return current
-        return Current.waves(self.waves, velocity=current.parameters[:3])
+        return Current.waves(self.waves, velocity=current.parameters[:3], unsteady=current.unsteady)
 
     @property
     def on_x_axis(self) -> bool:

@@ -54,6 +54,23 @@ def test_waves_add_to_a_constant_current():
     np.testing.assert_array_equal(direct.parameters, scenario.water.parameters)
 
 
+def test_quasi_steady_waves_from_the_current_table():
+    """``[current] unsteady = false`` reaches the waves' water (the quasi-steady model)."""
+    table = {
+        "start": {"position": [0.0, 0.0, 0.0]},
+        "waves": {"height": 1.0, "period": 6.0, "surface_z": 5.0},
+    }
+    assert scenario_from_mapping(table).water.unsteady
+    quasi = scenario_from_mapping({**table, "current": {"unsteady": False}})
+    assert not quasi.water.unsteady and quasi.water.kind_code == WAVES
+    assert not quasi.water.water_acceleration(1.0, (0.0, 0.0, 0.0)).any()
+    sea = quasi.waves
+    assert not Current.waves(sea, unsteady=False).unsteady
+    assert Current.waves(sea).water_acceleration(1.0, (0.0, 0.0, 0.0)).any()
+    rebuilt = scenario_from_parameters(scenario_parameters(quasi))
+    assert not rebuilt.water.unsteady
+
+
 @pytest.mark.parametrize(
     ("waves", "extra", "message"),
     [
@@ -65,6 +82,16 @@ def test_waves_add_to_a_constant_current():
             {"type": "jonswap", "height": 4.0, "period": 6.0, "surface_z": 5.0},
             {},
             r"^waves\.period: T_p = 6 s is below",
+        ),
+        (
+            {"height": 1.0, "period": 6.0, "surface_z": 5.0, "depth": 20.0},
+            {"path": {"type": "line", "point": [0.0, 0.0, 0.0], "direction": [1.0, 0.0, -0.2]}},
+            r"^waves\.depth: the sea floor \(z = -15 m\) is above the path 78\.6 m ahead of",
+        ),
+        (
+            {"height": 1.0, "period": 6.0, "surface_z": 5.0},
+            {"path": {"type": "line", "point": [0.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.1]}},
+            r"^waves\.surface_z: the path 52\.4 m ahead of the start .* above the still-water",
         ),
         (
             {"height": 1.0, "period": 6.0, "surface_z": 5.0},
