@@ -34,11 +34,11 @@ The checks (:data:`CHECKS`, in the order :func:`run_checks` runs them):
    declared direction at the declared point, ``Q_k = f . dx/dxi_k`` by finite differences of the
    thruster point's world position (so moments come from the lever arm).
 10. ``unsteady_flow``: in a tidal (uniformly accelerating) current, what the water's acceleration
-   ``a`` adds to the dynamics, ``M(q) (dv - dv_quasi-steady)``, is Morison's inertia force of
-   every link, ``sum_links J_l^T (rho V_l (a, c_B,l x a) + M_A,l[:, :3] a)`` in link axes
-   (``C_M = 1 + C_a``; :mod:`aiauv_hydro.laws.unsteady_flow`), summed here link by link from the
-   URDF with Pinocchio's frame Jacobians; and the compiled and Pinocchio backends agree with that
-   current to 1e-9.
+    ``a`` adds to the dynamics, ``M(q) (dv - dv_quasi-steady)``, is Morison's inertia force of
+    every link, ``sum_links J_l^T (rho V_l (a, c_B,l x a) + M_A,l[:, :3] a)`` in link axes
+    (``C_M = 1 + C_a``; :mod:`aiauv_hydro.laws.unsteady_flow`), summed here link by link from the
+    URDF with Pinocchio's frame Jacobians; and the compiled and Pinocchio backends agree with that
+    current to 1e-9.
 
 Errors are mixed absolute/relative where a check compares vectors of mixed units: the figure
 ``max_i |a_i - b_i| / (1 + |b_i|)`` passes a tolerance ``t`` exactly when
