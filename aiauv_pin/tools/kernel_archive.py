@@ -52,7 +52,7 @@ WORKLOADS = (
         "--controller",
         "station",
         "--vehicle",
-        str(Path(__file__).resolve().parents[2] / "examples" / "vehicles" / "rov8.urdf"),
+        "{example_vehicles}/rov8.urdf",
     ),
     # a torpedo AUV steered by its fins (aiauv_pin.controllers.torpedo_compiled)
     (
@@ -63,13 +63,17 @@ WORKLOADS = (
         "--controller",
         "torpedo",
         "--vehicle",
-        str(Path(__file__).resolve().parents[2] / "examples" / "vehicles" / "torpedo.urdf"),
+        "{example_vehicles}/torpedo.urdf",
     ),
     ("rollout",),
     ("envs",),
 )
 
 _ROOT = Path(__file__).resolve().parents[2]  # the checkout (this file: aiauv_pin/tools/)
+#: Environment variable naming the checkout's ``examples/vehicles`` folder for the workloads'
+#: ``{example_vehicles}``: the examples are not installed, so a build in another Python's virtual
+#: environment (:func:`build_with`) takes them from the checkout that started it.
+EXAMPLES_VARIABLE = "AIAUV_ARCHIVE_EXAMPLE_VEHICLES"
 
 
 def compiled_folders() -> list[str]:
@@ -139,6 +143,8 @@ def _run_workloads(out: Path) -> None:
             _envs_workload()
             continue
         # as a user runs it: the command in a process of its own, with this one's environment
+        examples = os.environ.get(EXAMPLES_VARIABLE, str(_ROOT / "examples" / "vehicles"))
+        workload = tuple(w.replace("{example_vehicles}", examples) for w in workload)
         command = [sys.executable, "-m", "aiauv_pin", *workload, "--out", str(out / f"run{number}")]
         code = subprocess.run(command, check=False).returncode
         if code != 0:
@@ -237,7 +243,8 @@ def build_with(python: str, out_dir: Path) -> None:
             "--out-dir",
             str(out_dir),
         ]
-        subprocess.run(build, check=True, cwd=temporary)
+        examples = {**os.environ, EXAMPLES_VARIABLE: str(_ROOT / "examples" / "vehicles")}
+        subprocess.run(build, check=True, cwd=temporary, env=examples)
 
 
 def main(argv: list[str] | None = None) -> int:
