@@ -1194,6 +1194,41 @@ def _tree_order(flat: _Flat, joints: dict[str, tuple[str, str]]) -> list[str]:
     return order
 
 
+def link_hydrodynamics(
+    name: str, fluid: Element | None, terms: PluginTerms | None, volume: float, center
+) -> LinkHydrodynamics:
+    """Our ``fossen`` record of SDF link ``name``: the Hydrodynamics plugin's ``terms`` (``None``:
+    none), the link's ``<fluid_added_mass>`` element ``fluid`` (``None``: none; not both: gz would
+    count the added mass twice), and its displaced ``volume`` [m^3] and centre of buoyancy
+    ``center`` [m] (link frame). Used by the SDF reader and by ``aiauv import-gz``.
+
+    Raises:
+        InteropError: One line.
+    """
+    terms = terms if terms is not None else PluginTerms(name)
+    added_mass = terms.added_mass
+    if fluid is not None:
+        if terms.added_mass_given:
+            raise InteropError(
+                f"SDF link '{name}': added mass given both as <fluid_added_mass> and as "
+                "Hydrodynamics plugin parameters (gz would count it twice); remove one or set "
+                "<disable_added_mass>true</disable_added_mass>"
+            )
+        added_mass = fluid_added_mass(fluid, name)
+    try:
+        return LinkHydrodynamics(
+            link=name,
+            model="fossen",
+            volume=volume,
+            center_of_buoyancy=center,
+            added_mass=added_mass,
+            linear_damping=terms.linear_damping,
+            quadratic_damping=terms.quadratic_damping,
+        )
+    except HydroError as exc:
+        raise InteropError(f"SDF {exc}") from None
+
+
 def _urdf(flat: _Flat, search, world_plugins, world_pose: Pose, gravity: float):
     convert = _Converter(flat, search)
     pose_of = convert.pose_of
@@ -1312,29 +1347,7 @@ def _urdf(flat: _Flat, search, world_plugins, world_pose: Pose, gravity: float):
             volume, center = collision_volume(element, link, resolve)
         if fluid is None and terms is None and volume == 0.0:
             continue
-        terms = terms if terms is not None else PluginTerms(link)
-        added_mass = terms.added_mass
-        if fluid is not None:
-            if terms.added_mass_given:
-                raise InteropError(
-                    f"SDF link '{link}': added mass given both as <fluid_added_mass> and as "
-                    "Hydrodynamics plugin parameters (gz would count it twice)"
-                )
-            added_mass = fluid_added_mass(fluid, link)
-        try:
-            hydro_links.append(
-                LinkHydrodynamics(
-                    link=link,
-                    model="fossen",
-                    volume=volume,
-                    center_of_buoyancy=center,
-                    added_mass=added_mass,
-                    linear_damping=terms.linear_damping,
-                    quadratic_damping=terms.quadratic_damping,
-                )
-            )
-        except HydroError as exc:
-            raise InteropError(f"SDF {exc}") from None
+        hydro_links.append(link_hydrodynamics(link, fluid, terms, volume, center))
     for joint in flat.joints:
         parent, child = flat.joint_refs[joint]
         kind = "fixed" if joint in frozen else flat.joints[joint].get("type")

@@ -71,9 +71,9 @@ from aiauv_pin.description.sdf_reading import (
     PluginTerms,
     Pose,
     collision_volume,
-    fluid_added_mass,
     is_buoyancy_plugin,
     is_hydrodynamics_plugin,
+    link_hydrodynamics,
     number,
     numbers,
     plugin_terms,
@@ -176,31 +176,8 @@ def read_gz_model(path: str | os.PathLike, model: str | None = None) -> GzModel:
         terms = terms_of.get(name)
         if fluid is None and terms is None:
             continue
-        terms = terms if terms is not None else PluginTerms(name)
-        added_mass = terms.added_mass
-        if fluid is not None:
-            if terms.added_mass_given:
-                raise InteropError(
-                    f"SDF link '{name}': added mass given both as <fluid_added_mass> and as "
-                    "Hydrodynamics plugin parameters (gz would count it twice); remove one or set "
-                    "<disable_added_mass>true</disable_added_mass>"
-                )
-            added_mass = fluid_added_mass(fluid, name)
         volume, center = collision_volume(link, name)
-        try:
-            result.append(
-                LinkHydrodynamics(
-                    link=name,
-                    model="fossen",
-                    volume=volume,
-                    center_of_buoyancy=center,
-                    added_mass=added_mass,
-                    linear_damping=terms.linear_damping,
-                    quadratic_damping=terms.quadratic_damping,
-                )
-            )
-        except HydroError as exc:
-            raise InteropError(f"SDF {exc}") from None
+        result.append(link_hydrodynamics(name, fluid, terms, volume, center))
 
     fluid_density = None
     for plugin in root.iter("plugin"):
