@@ -30,19 +30,11 @@ from aiauv_pin._internal.atomic import write_text
 from aiauv_pin.model.loading import bundled_urdf
 from aiauv_pin.scenario.definition import run_scenario
 from aiauv_pin.scenario.toml_file import load_scenario
+from aiauv_pin.tools.run_benchmarks import _spread
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "waves_cost.json"
 COMPONENTS = (10, 30, 100, 300, 1000)
-
-
-def _spread(values: list[float]) -> dict:
-    return {
-        "median": statistics.median(values),
-        "min": min(values),
-        "max": max(values),
-        "all": values,
-    }
 
 
 def main() -> None:
