@@ -443,55 +443,59 @@ def joint_position_units(vehicle: Vehicle) -> list[str]:
     ]
 
 
-def run_scenario(
+@dataclass(frozen=True)
+class RunPlan:
+    """A scenario made ready to run on a vehicle (:func:`plan_run`): the controller built once and
+    every argument of :func:`aiauv_pin.simulate`, for the warm-up and the run alike.
+
+    ``simulate(*plan.arguments, **plan.options)`` runs it; :func:`finish_run` turns the trajectory
+    into a :class:`ScenarioResult`.
+
+    Attributes:
+        vehicle: The vehicle.
+        scenario: The scenario.
+        arguments: ``(vehicle, q0, v0, duration [s], dt [s], controller)``, the positional
+            arguments of :func:`aiauv_pin.simulate`.
+        options: Its keyword arguments (method, current, servo, control period, log period, ...).
+        compiled: The compiled loop runs the controller (``after_first_chunk`` applies).
+        passive: A passive run (``controller = "none"``).
+    """
+
+    vehicle: Vehicle
+    scenario: Scenario
+    arguments: tuple
+    options: Mapping[str, Any]
+    compiled: bool
+    passive: bool
+
+
+def plan_run(
     vehicle: Vehicle,
     scenario: Scenario,
     *,
-    progress: bool = False,
-    on_log=None,
     controller: VehiclePathFollowing | None = None,
     compiled: bool | None = None,
-    after_first_chunk: Callable[[], None] | None = None,
-    compile_only: bool = False,
-) -> ScenarioResult | None:
-    """Simulate a scenario on a vehicle.
-
-    ``on_log(t, q, info)`` is called at every logged sample (see :func:`aiauv_pin.simulate`).
-
-    With the numba backend and the paper's controller the whole run (dynamics, controller every
-    step, logging) executes in compiled code (:func:`aiauv_pin.simulation.compiled_loop.run_chunk`), in chunks
-    of simulated time between which the progress bar and ``on_log`` run; otherwise (Pinocchio
-    backend, a subclass of :class:`VehiclePathFollowing` or of its controller) the Python controller
-    is called every step. A passive run (``controller="none"``) is compiled too. Both give the same trajectory
-    and the same logged keys.
+) -> RunPlan:
+    """Build ``scenario``'s controller for ``vehicle`` and the arguments of its run (a
+    :class:`RunPlan`), without simulating: :func:`run_scenario`'s first half.
 
     Args:
         vehicle: The vehicle.
         scenario: What to run.
-        progress: Show a progress bar.
-        on_log: Callback at every logged sample.
-        after_first_chunk: Called once the compiled loop's first chunk has run, for work that can
-            overlap the rest in a background thread (the loop releases the GIL), e.g.
-            :func:`aiauv_pin.results.outputs.preload_plotting`.
-        controller: The controller callback; ``None`` builds the paper's for ``scenario``.
+        controller: The controller callback; ``None`` builds the one ``scenario`` names.
         compiled: ``True`` requires the compiled path, ``False`` forbids it, ``None`` (default)
             uses it when :func:`compiled_path_following_reason` allows.
-        compile_only: Build the controller and load (or compile) the compiled loop for the run,
-            then return ``None`` without simulating (:func:`aiauv_pin.simulate`'s
-            ``compile_only``; :func:`warm_up`).
 
     Raises:
-        SimulationDiverged: With the partial trajectory, if the state became non-finite.
-        ValueError: ``compiled=True`` but the compiled path cannot run this controller.
+        ValueError: ``compiled=True`` but the compiled path cannot run this controller, or a task
+            the actuators cannot produce (one line, before the run).
     """
     q0, v0 = initial_state(vehicle, scenario)
     options = dict(
         method=scenario.method,
         current=scenario.water,
-        progress=progress,
         control_period=scenario.control_period,
         log_every=scenario.steps_per_control,
-        on_log=on_log,
     )
     lagged = scenario.added_mass == "lagged"
     if lagged:
@@ -595,22 +599,27 @@ def run_scenario(
         use_compiled = reason is None and compiled is not False
         law = controller.compiled() if use_compiled else controller
         servo = controller.joint_servo if controller.continuous_joints else None
-    start = time.perf_counter()
-    trajectory = simulate(
+    return RunPlan(
         vehicle,
-        q0,
-        v0,
-        scenario.duration,
-        scenario.dt,
-        law,
-        servo=servo,
-        after_first_chunk=after_first_chunk if use_compiled else None,
-        compile_only=compile_only,
-        **options,
+        scenario,
+        (vehicle, q0, v0, scenario.duration, scenario.dt, law),
+        {**options, "servo": servo},
+        use_compiled,
+        passive,
     )
-    if compile_only:
-        return None
-    wall_time = time.perf_counter() - start
+
+
+def finish_run(plan: RunPlan, trajectory: Trajectory, wall_time: float) -> ScenarioResult:
+    """The :class:`ScenarioResult` of ``plan``'s run: ``trajectory`` with its path errors, after a
+    check for oscillating joints; :func:`run_scenario`'s second half.
+
+    Args:
+        plan: The run's :class:`RunPlan`.
+        trajectory: What :func:`aiauv_pin.simulate` returned for it.
+        wall_time: The simulation's wall time [s].
+    """
+    vehicle, scenario = plan.vehicle, plan.scenario
+    passive, use_compiled = plan.passive, plan.compiled
     if scenario.controller == "transit_intervene":  # the path errors of both phases, from p
         for key in ("cross_track", "path_s"):
             trajectory.info.pop(key, None)
@@ -631,6 +640,63 @@ def run_scenario(
         extra={"backend": vehicle.active_backend, "compiled_controller": use_compiled},
         joint_units=joint_position_units(vehicle),
     )
+
+
+def run_scenario(
+    vehicle: Vehicle,
+    scenario: Scenario,
+    *,
+    progress: bool = False,
+    on_log=None,
+    controller: VehiclePathFollowing | None = None,
+    compiled: bool | None = None,
+    after_first_chunk: Callable[[], None] | None = None,
+    compile_only: bool = False,
+) -> ScenarioResult | None:
+    """Simulate a scenario on a vehicle: :func:`plan_run`, :func:`aiauv_pin.simulate`,
+    :func:`finish_run`.
+
+    ``on_log(t, q, info)`` is called at every logged sample (see :func:`aiauv_pin.simulate`).
+
+    With the numba backend and the paper's controller the whole run (dynamics, controller every
+    step, logging) executes in compiled code (:func:`aiauv_pin.simulation.compiled_loop.run_chunk`), in chunks
+    of simulated time between which the progress bar and ``on_log`` run; otherwise (Pinocchio
+    backend, a subclass of :class:`VehiclePathFollowing` or of its controller) the Python controller
+    is called every step. A passive run (``controller="none"``) is compiled too. Both give the same trajectory
+    and the same logged keys.
+
+    Args:
+        vehicle: The vehicle.
+        scenario: What to run.
+        progress: Show a progress bar.
+        on_log: Callback at every logged sample.
+        after_first_chunk: Called once the compiled loop's first chunk has run, for work that can
+            overlap the rest in a background thread (the loop releases the GIL), e.g.
+            :func:`aiauv_pin.results.outputs.preload_plotting`.
+        controller: The controller callback; ``None`` builds the paper's for ``scenario``.
+        compiled: ``True`` requires the compiled path, ``False`` forbids it, ``None`` (default)
+            uses it when :func:`compiled_path_following_reason` allows.
+        compile_only: Build the controller and load (or compile) the compiled loop for the run,
+            then return ``None`` without simulating (:func:`aiauv_pin.simulate`'s
+            ``compile_only``; :func:`warm_up`).
+
+    Raises:
+        SimulationDiverged: With the partial trajectory, if the state became non-finite.
+        ValueError: ``compiled=True`` but the compiled path cannot run this controller.
+    """
+    plan = plan_run(vehicle, scenario, controller=controller, compiled=compiled)
+    if compile_only:
+        simulate(*plan.arguments, **plan.options, compile_only=True)
+        return None
+    start = time.perf_counter()
+    trajectory = simulate(
+        *plan.arguments,
+        **plan.options,
+        progress=progress,
+        on_log=on_log,
+        after_first_chunk=after_first_chunk if plan.compiled else None,
+    )
+    return finish_run(plan, trajectory, time.perf_counter() - start)
 
 
 def add_path_errors(vehicle: Vehicle, scenario: Scenario, trajectory: Trajectory) -> None:
