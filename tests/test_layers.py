@@ -392,3 +392,21 @@ def test_tests_mirror_the_packages():
             misplaced.append(f"{'/'.join(parts)} (no package {parts[0]!r})")
     assert not misplaced, "tests not in their package's folder: " + ", ".join(misplaced)
     assert folders - {"data"} >= {"hydro", "control", "kernels", "model", "simulation"}
+
+
+def test_the_map_lists_every_package_and_module():
+    """docs/source/architecture.md's table of packages names each package of the tree with its
+    modules, no more and no fewer."""
+    text = (ROOT / "docs" / "source" / "architecture.md").read_text()
+    listed = {}
+    for line in text.splitlines():
+        cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+        if len(cells) == 3 and cells[0].startswith("`aiauv_"):
+            listed[cells[0].strip("`")] = sorted(
+                name.strip("`") for name in cells[2].split(", ") if name
+            )
+    real = {}
+    for name, (path, is_package) in _modules().items():
+        if is_package:
+            real[name] = sorted(p.stem for p in path.parent.glob("*.py") if p.stem != "__init__")
+    assert listed == real

@@ -40,17 +40,28 @@ from typing import Any
 
 import numpy as np
 
-from aiauv_pin.controllers.gait_compiled import gait_info_shapes, serpentine_gait
+from aiauv_pin.controllers.gait_compiled import GaitInfo, gait_info_shapes, serpentine_gait
+from aiauv_pin.controllers.info_rows import field_spans, info_offsets
 from aiauv_pin.controllers.paper_compiled import (
-    ConstantParameters,
+    PaperInfo,
+    ThrustInfo,
     constant_info_shapes,
+    constant_parameters,
     constant_thrust,
     paper_info_shapes,
     paper_path_following,
     passive,
 )
-from aiauv_pin.controllers.torpedo_compiled import torpedo_info_shapes, torpedo_path_following
-from aiauv_pin.controllers.turning_compiled import thruster_turning, turning_info_shapes
+from aiauv_pin.controllers.torpedo_compiled import (
+    TorpedoInfo,
+    torpedo_info_shapes,
+    torpedo_path_following,
+)
+from aiauv_pin.controllers.turning_compiled import (
+    TurningInfo,
+    thruster_turning,
+    turning_info_shapes,
+)
 from aiauv_pin.errors import ArgumentError, RecordSizeError
 
 #: The built-in compiled controllers: given to the compiled loop as ``None``, which chooses them by
@@ -130,17 +141,18 @@ def bounds_checked(function, _seen: dict | None = None):
 
 
 def _sizes_of_builtin(function, n_joints: int, n_thrusters: int, n_fins: int = 0):
-    """``(info width, {parameter field: expected length})`` of a built-in controller, or ``None``."""
+    """``(info shapes, record of their offsets, {parameter field: expected length})`` of a
+    built-in controller for these sizes, or ``None`` (a user's controller)."""
     if function is passive:
-        return 0, {}
+        return {}, None, {}
     if function is constant_thrust:
-        return 2 * n_thrusters, {"thrusts": n_thrusters}
+        return constant_info_shapes(n_thrusters), ThrustInfo, {"thrusts": n_thrusters}
     if function is torpedo_path_following:
-        shapes = torpedo_info_shapes(n_thrusters, n_fins)
+        shapes, record = torpedo_info_shapes(n_thrusters, n_fins), TorpedoInfo
         fields = {"surge_mask": n_thrusters}
         fields.update(dict.fromkeys(("rudder_share", "stern_share", "fin_limit"), n_fins))
     elif function is paper_path_following:
-        shapes = paper_info_shapes(n_joints, n_thrusters)
+        shapes, record = paper_info_shapes(n_joints, n_thrusters), PaperInfo
         fields = {
             "axis_index": n_joints,
             "reference_scale": n_joints,
@@ -148,11 +160,11 @@ def _sizes_of_builtin(function, n_joints: int, n_thrusters: int, n_fins: int = 0
             "surge_mask": n_thrusters,
         }
     elif function is thruster_turning:
-        shapes = turning_info_shapes(n_joints, n_thrusters)
+        shapes, record = turning_info_shapes(n_joints, n_thrusters), TurningInfo
         fields = dict.fromkeys(("plane", "force_coeff", "moment_coeff", "surge_mask"), n_thrusters)
         fields.update(dict.fromkeys(("joint_stiffness", "joint_damping"), n_joints))
     elif function is serpentine_gait:
-        shapes = gait_info_shapes(n_joints, n_thrusters)
+        shapes, record = gait_info_shapes(n_joints, n_thrusters), GaitInfo
         fields = dict.fromkeys(
             ("tail_index", "joint_sign", "servo_references", "joint_stiffness", "joint_damping"),
             n_joints,
@@ -161,7 +173,7 @@ def _sizes_of_builtin(function, n_joints: int, n_thrusters: int, n_fins: int = 0
         fields["link_mass"] = n_joints + 1
     else:
         return None
-    return sum(int(np.prod(s, dtype=int)) for s in shapes.values()), fields
+    return shapes, record, fields
 
 
 @dataclass(frozen=True)
@@ -206,7 +218,7 @@ class CompiledController:
                 f"constant thrusts: expected {limits.size} finite numbers (one per thruster), "
                 f"got {np.asarray(thrusts).size}"
             )
-        parameters = ConstantParameters(np.clip(values, -limits, limits))
+        parameters = constant_parameters(np.clip(values, -limits, limits))
         return cls(constant_thrust, parameters, info_shapes=constant_info_shapes(limits.size))
 
     @property
@@ -254,7 +266,8 @@ class CompiledController:
         sizes = _sizes_of_builtin(self.function, nv - 6, n_thrusters, n_fins)
         if sizes is None:
             return
-        width, fields = sizes
+        shapes, record, fields = sizes
+        width = sum(size for _, _, size in field_spans(shapes))
         if self.info_width < width:
             raise RecordSizeError(
                 f"CompiledController.info_shapes declare {self.info_width} floats per info row; "
@@ -268,22 +281,28 @@ class CompiledController:
                     f"CompiledController.parameters.{name} must have shape ({length},) for this "
                     f"vehicle ({nv - 6} joints, {n_thrusters} thrusters, {n_fins} fins), got {got}"
                 )
+        if record is not None and getattr(self.parameters, "info", None) != info_offsets(
+            shapes, record
+        ):
+            raise RecordSizeError(
+                f"CompiledController.parameters.info must be the offsets of "
+                f"{self.function.__name__}'s info row for this vehicle "
+                f"({info_offsets(shapes, record)}), got {getattr(self.parameters, 'info', None)!r:.200}"
+            )
 
     @property
     def info_width(self) -> int:
         """Number of floats in one info row."""
-        return sum(int(np.prod(shape, dtype=int)) for shape in self.info_shapes.values())
+        return sum(size for _, _, size in field_spans(self.info_shapes))
 
     def unpack(self, block: np.ndarray, *, copy: bool = True) -> dict[str, np.ndarray]:
         """Split info rows ``(..., info_width)`` into the named diagnostics: copies, or with
         ``copy=False`` views into ``block`` (no memory of their own)."""
         out = {}
-        offset = 0
-        for key, shape in self.info_shapes.items():
-            size = int(np.prod(shape, dtype=int))
+        for key, offset, size in field_spans(self.info_shapes):
+            shape = self.info_shapes[key]
             part = block[..., offset : offset + size].reshape(block.shape[:-1] + tuple(shape))
             out[key] = np.array(part) if copy else part
-            offset += size
         return out
 
 

@@ -23,6 +23,25 @@ from aiauv_pin.controllers.paper_compiled import thrusts_and_power_into
 from aiauv_pin.kernels.articulated_body import kinematics, restoring_into, thrust_into
 
 
+class GaitInfo(NamedTuple):
+    """Offsets of the fields of :func:`gait_info_shapes` in the info row of
+    :func:`serpentine_gait` (:func:`aiauv_pin.controllers.info_rows.info_offsets`)."""
+
+    centre: int
+    speed: int
+    heading: int
+    heading_ref: int
+    gait_offset: int
+    joint_references: int
+    thrust: int
+    thruster_power: int
+    joint_torque: int
+    cross_track: int
+    path_s: int
+    elevation: int
+    depth: int
+
+
 class GaitParameters(NamedTuple):
     """What :func:`serpentine_gait` needs besides the state (built in Python once)."""
 
@@ -43,6 +62,7 @@ class GaitParameters(NamedTuple):
     joint_damping: np.ndarray  # (n,) [N m s/rad]
     pitch_scale: np.ndarray  # (n,) eq. (22)'s signed scale of the pitch joints, 0 for the others
     heave_sign: np.ndarray  # (m,) sign of the vertical thrusters of the depth PI, 0 for the others
+    info: GaitInfo  # where the info row's fields start
 
 
 class GaitState(NamedTuple):
@@ -175,21 +195,18 @@ def serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info):
         P.servo_references[j] = out.joint_references[j]
     thrust_into(model, W, out.thrusts, tau)  # eq. (20)
     g = W.restoring
-    o = 0
+    # the info row, at the offsets of gait_info_shapes
+    L = P.info
     for i in range(3):
-        info[o + i] = centre[i]
-    o += 3
-    info[o] = u
-    info[o + 1] = heading
-    info[o + 2] = out.heading_ref[0]
-    info[o + 3] = out.offset[0]
-    o += 4
+        info[L.centre + i] = centre[i]
+        info[L.depth + i] = out.depth[i]
+    info[L.speed] = u
+    info[L.heading] = heading
+    info[L.heading_ref] = out.heading_ref[0]
+    info[L.gait_offset] = out.offset[0]
     for j in range(n):
-        info[o + j] = out.joint_references[j]
-    o += n
-    o = thrusts_and_power_into(model, W, out.thrusts, info, o)
-    for j in range(n):
-        info[o + j] = joint_pd_torque(
+        info[L.joint_references + j] = out.joint_references[j]
+        info[L.joint_torque + j] = joint_pd_torque(
             q[7 + j],
             v[6 + j],
             out.joint_references[j],
@@ -197,10 +214,8 @@ def serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info):
             P.joint_stiffness[j],
             P.joint_damping[j],
         )
-    o += n
-    info[o] = out.cross_track[0]
-    info[o + 1] = out.cross_track[1]
-    info[o + 2] = out.path_s[0]
-    info[o + 3] = elevation
-    for i in range(3):
-        info[o + 4 + i] = out.depth[i]
+    thrusts_and_power_into(model, W, out.thrusts, info, L.thrust, L.thruster_power)
+    info[L.cross_track] = out.cross_track[0]
+    info[L.cross_track + 1] = out.cross_track[1]
+    info[L.path_s] = out.path_s[0]
+    info[L.elevation] = elevation

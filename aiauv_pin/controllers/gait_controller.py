@@ -45,11 +45,13 @@ from aiauv_control.path_following import DEFAULT_LOS_INTEGRAL_GAIN, PathFollowin
 from aiauv_control.paths import Path
 from aiauv_pin.controllers.compiled_controller import CompiledController
 from aiauv_pin.controllers.gait_compiled import (
+    GaitInfo,
     GaitParameters,
     GaitState,
     gait_info_shapes,
     serpentine_gait,
 )
+from aiauv_pin.controllers.info_rows import info_offsets
 from aiauv_pin.controllers.paper_controller import joint_axis_labels, surge_thruster_indices
 from aiauv_pin.dynamics.joint_servo import JointServo
 from aiauv_pin.errors import ArgumentError
@@ -314,6 +316,7 @@ class VehicleGait:
             joint_damping=self.joint_servo.damping,
             pitch_scale=self.pitch_scale,
             heave_sign=self.heave_sign,
+            info=info_offsets(self.info_shapes(), GaitInfo),
         )
         state = GaitState(
             surge=new_surge_state(),

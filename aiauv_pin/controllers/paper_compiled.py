@@ -32,6 +32,7 @@ from aiauv_control.laws.paper_laws import (
     thruster_power,
 )
 from aiauv_hydro.numerics.jit import compiled
+from aiauv_pin.controllers.info_rows import info_offsets
 from aiauv_pin.kernels.articulated_body import (
     frame_of_body_into,
     kinematics,
@@ -47,15 +48,30 @@ def passive(t, q, v, model, workspace, parameters, state, tau, info):
         tau[i] = 0.0
 
 
+class ThrustInfo(NamedTuple):
+    """Offsets of the fields of :func:`constant_info_shapes` in the info row of
+    :func:`constant_thrust` (:func:`aiauv_pin.controllers.info_rows.info_offsets`)."""
+
+    thrust: int
+    thruster_power: int
+
+
 class ConstantParameters(NamedTuple):
-    """Parameters of :func:`constant_thrust`: one thrust per thruster [N] (within their limits)."""
+    """Parameters of :func:`constant_thrust`: one thrust per thruster [N] (within their limits),
+    and where its info row's fields start (:func:`constant_parameters` builds it)."""
 
     thrusts: np.ndarray
+    info: ThrustInfo
 
 
 def constant_info_shapes(n_thrusters: int) -> dict[str, tuple[int, ...]]:
     """Keys and shapes of the info row of :func:`constant_thrust`."""
     return {"thrust": (n_thrusters,), "thruster_power": (n_thrusters,)}
+
+
+def constant_parameters(thrusts: np.ndarray) -> ConstantParameters:
+    """:class:`ConstantParameters` for the thrusts ``thrusts`` (m,) [N]."""
+    return ConstantParameters(thrusts, info_offsets(constant_info_shapes(thrusts.size), ThrustInfo))
 
 
 @compiled
@@ -64,7 +80,10 @@ def constant_thrust(t, q, v, model, workspace, parameters, state, tau, info):
     logged. An open-loop command, as a thrust command on gz-sim's Thruster topic."""
     kinematics(model.bodies, q, v, workspace)
     thrust_into(model, workspace, parameters.thrusts, tau)
-    thrusts_and_power_into(model, workspace, parameters.thrusts, info, 0)
+    layout = parameters.info
+    thrusts_and_power_into(
+        model, workspace, parameters.thrusts, info, layout.thrust, layout.thruster_power
+    )
 
 
 class FrameMeasurement(NamedTuple):
@@ -132,15 +151,32 @@ def thruster_power_into(model, W, thrusts, info, offset):
 
 
 @compiled(borrows_only=True)
-def thrusts_and_power_into(model, W, thrusts, info, offset):
+def thrusts_and_power_into(model, W, thrusts, info, thrust_at, power_at):
     """The info row's ``thrust`` [N] and ``thruster_power`` [W] fields, ``m`` floats each, from
-    ``info[offset]`` (after kinematics); returns the offset after them. Every built-in controller
-    logs its thrusters this way."""
-    m = thrusts.shape[0]
-    for k in range(m):
-        info[offset + k] = thrusts[k]
-    thruster_power_into(model, W, thrusts, info, offset + m)
-    return offset + 2 * m
+    ``info[thrust_at]`` and ``info[power_at]`` (after kinematics). Every built-in controller logs
+    its thrusters this way."""
+    for k in range(thrusts.shape[0]):
+        info[thrust_at + k] = thrusts[k]
+    thruster_power_into(model, W, thrusts, info, power_at)
+
+
+class PaperInfo(NamedTuple):
+    """Offsets of the fields of :func:`paper_info_shapes` in the info row of
+    :func:`paper_path_following` (:func:`aiauv_pin.controllers.info_rows.info_offsets`)."""
+
+    p: int
+    u: int
+    phi_tilde: int
+    omega_tilde: int
+    base_angles: int
+    joint_references: int
+    x_ref: int
+    pointing: int
+    thrust: int
+    thruster_power: int
+    joint_torque: int
+    cross_track: int
+    path_s: int
 
 
 class PaperParameters(NamedTuple):
@@ -158,6 +194,7 @@ class PaperParameters(NamedTuple):
     frame_translation: np.ndarray  # (3,) [m]
     continuous_joints: bool  # eq. (24) as a servo at every stage (True) or sampled
     servo_references: np.ndarray  # (n,) the servo's references, updated in place
+    info: PaperInfo  # where the info row's fields start
 
 
 class PaperState(NamedTuple):
@@ -243,29 +280,20 @@ def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info
     else:
         for j in range(n):
             tau[6 + j] += out.joint_torques[j]
-    # info row, in the order of paper_info_shapes
-    o = 0
+    # the info row, at the offsets of paper_info_shapes
+    L = P.info
     for i in range(3):
-        info[o + i] = p[i]
-    o += 3
-    info[o] = twist[0]
-    info[o + 1] = out.phi_tilde[0]
-    info[o + 2] = out.omega_tilde[0]
-    info[o + 3] = out.omega_tilde[1]
-    info[o + 4] = out.base_angles[0]
-    info[o + 5] = out.base_angles[1]
-    o += 6
+        info[L.p + i] = p[i]
+        info[L.x_ref + i] = out.x_ref[i]
+        info[L.pointing + i] = R[i, 0]
+    info[L.u] = twist[0]
+    info[L.phi_tilde] = out.phi_tilde[0]
+    for i in range(2):
+        info[L.omega_tilde + i] = out.omega_tilde[i]
+        info[L.base_angles + i] = out.base_angles[i]
+        info[L.cross_track + i] = out.cross_track[i]
     for j in range(n):
-        info[o + j] = out.joint_references[j]
-    o += n
-    for i in range(3):
-        info[o + i] = out.x_ref[i]
-        info[o + 3 + i] = R[i, 0]
-    o += 6
-    o = thrusts_and_power_into(model, W, out.thrusts, info, o)
-    for j in range(n):
-        info[o + j] = out.joint_torques[j]
-    o += n
-    info[o] = out.cross_track[0]
-    info[o + 1] = out.cross_track[1]
-    info[o + 2] = out.path_s[0]
+        info[L.joint_references + j] = out.joint_references[j]
+        info[L.joint_torque + j] = out.joint_torques[j]
+    thrusts_and_power_into(model, W, out.thrusts, info, L.thrust, L.thruster_power)
+    info[L.path_s] = out.path_s[0]

@@ -28,7 +28,9 @@ from aiauv_control.paths import Path
 from aiauv_control.surge import SurgePIController
 from aiauv_hydro.numerics.jit import interpreted
 from aiauv_pin.controllers.compiled_controller import CompiledController
+from aiauv_pin.controllers.info_rows import info_offsets
 from aiauv_pin.controllers.paper_compiled import (
+    PaperInfo,
     PaperParameters,
     PaperState,
     new_frame_measurement,
@@ -249,6 +251,7 @@ class VehiclePathFollowing:
             frame_translation=translation,
             continuous_joints=self.continuous_joints,
             servo_references=self.joint_servo.references,
+            info=info_offsets(self.info_shapes(), PaperInfo),
         )
         state = PaperState(
             surge=new_surge_state(),

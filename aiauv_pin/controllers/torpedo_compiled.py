@@ -26,6 +26,23 @@ from aiauv_pin.controllers.paper_compiled import thrusts_and_power_into
 from aiauv_pin.kernels.articulated_body import kinematics, thrust_into
 
 
+class TorpedoInfo(NamedTuple):
+    """Offsets of the fields of :func:`torpedo_info_shapes` in the info row of
+    :func:`torpedo_path_following` (:func:`aiauv_pin.controllers.info_rows.info_offsets`)."""
+
+    p: int
+    cross_track: int
+    path_s: int
+    speed: int
+    heading: int
+    pitch: int
+    deflection: int
+    fin_command: int
+    fin_angle: int
+    thrust: int
+    thruster_power: int
+
+
 class TorpedoParameters(NamedTuple):
     """What :func:`torpedo_path_following` needs besides the state (built in Python once)."""
 
@@ -37,6 +54,7 @@ class TorpedoParameters(NamedTuple):
     rudder_share: np.ndarray  # (nf,) share of delta_r [-]
     stern_share: np.ndarray  # (nf,) share of delta_s [-]
     fin_limit: np.ndarray  # (nf,) [rad]
+    info: TorpedoInfo  # where the info row's fields start
 
 
 class TorpedoState(NamedTuple):
@@ -112,21 +130,18 @@ def torpedo_path_following(t, q, v, model, workspace, parameters, state, tau, in
     for k in range(nf):
         W.fin_command[k] = out.fins[k]
     thrust_into(model, W, out.thrusts, tau)  # eq. (20)
-    o = 0
+    # the info row, at the offsets of torpedo_info_shapes
+    L = P.info
     for i in range(3):
-        info[o + i] = position[i]
-    o += 3
-    info[o] = out.cross_track[0]
-    info[o + 1] = out.cross_track[1]
-    info[o + 2] = out.path_s[0]
-    info[o + 3] = nu[0]
-    for i in range(4):
-        info[o + 4 + i] = out.angles[i]
-    info[o + 8] = out.deflection[0]
-    info[o + 9] = out.deflection[1]
-    o += 10
+        info[L.p + i] = position[i]
+    info[L.path_s] = out.path_s[0]
+    info[L.speed] = nu[0]
+    for i in range(2):
+        info[L.cross_track + i] = out.cross_track[i]
+        info[L.heading + i] = out.angles[i]  # psi, psi_d
+        info[L.pitch + i] = out.angles[2 + i]  # theta, theta_d
+        info[L.deflection + i] = out.deflection[i]
     for k in range(nf):
-        info[o + k] = out.fins[k]
-        info[o + nf + k] = W.fin_angle[k]
-    o += 2 * nf
-    thrusts_and_power_into(model, W, out.thrusts, info, o)
+        info[L.fin_command + k] = out.fins[k]
+        info[L.fin_angle + k] = W.fin_angle[k]
+    thrusts_and_power_into(model, W, out.thrusts, info, L.thrust, L.thruster_power)

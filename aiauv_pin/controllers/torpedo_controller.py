@@ -39,7 +39,9 @@ from aiauv_control.laws.torpedo_laws import (
 from aiauv_control.path_following import DEFAULT_LOS_INTEGRAL_GAIN
 from aiauv_control.paths import Path
 from aiauv_pin.controllers.compiled_controller import CompiledController
+from aiauv_pin.controllers.info_rows import info_offsets
 from aiauv_pin.controllers.torpedo_compiled import (
+    TorpedoInfo,
     TorpedoParameters,
     TorpedoState,
     torpedo_info_shapes,
@@ -248,6 +250,7 @@ class VehicleTorpedo:
             rudder_share=np.ascontiguousarray(self.rudder_share, dtype=float),
             stern_share=np.ascontiguousarray(self.stern_share, dtype=float),
             fin_limit=self.fin_limit,
+            info=info_offsets(self.info_shapes(), TorpedoInfo),
         )
         state = TorpedoState(
             surge=new_surge_state(),

@@ -23,6 +23,27 @@ from aiauv_pin.controllers.paper_compiled import (
 from aiauv_pin.kernels.articulated_body import thrust_into
 
 
+class TurningInfo(NamedTuple):
+    """Offsets of the fields of :func:`turning_info_shapes` in the info row of
+    :func:`thruster_turning` (:func:`aiauv_pin.controllers.info_rows.info_offsets`)."""
+
+    p: int
+    u: int
+    phi_tilde: int
+    omega_tilde: int
+    base_angles: int
+    joint_references: int
+    x_ref: int
+    pointing: int
+    turning_moment: int
+    saturation_scale: int
+    thrust: int
+    thruster_power: int
+    joint_torque: int
+    cross_track: int
+    path_s: int
+
+
 class TurningParameters(NamedTuple):
     """What :func:`thruster_turning` needs besides the state (built in Python once)."""
 
@@ -41,6 +62,7 @@ class TurningParameters(NamedTuple):
     frame_translation: np.ndarray  # (3,) [m]
     joint_stiffness: np.ndarray  # (n,) servo gains, for logging its torque [N m/rad]
     joint_damping: np.ndarray  # (n,) [N m s/rad]
+    info: TurningInfo  # where the info row's fields start
 
 
 class TurningState(NamedTuple):
@@ -127,35 +149,25 @@ def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
     )
     thrust_into(model, W, out.thrusts, tau)  # eq. (20)
     n = q.shape[0] - 7
-    # info row, in the order of turning_info_shapes
-    o = 0
+    # the info row, at the offsets of turning_info_shapes (the body is held straight: zero
+    # base angles and joint references)
+    L = P.info
     for i in range(3):
-        info[o + i] = p[i]
-    o += 3
-    info[o] = twist[0]
-    info[o + 1] = out.phi_tilde[0]
-    info[o + 2] = out.omega_tilde[0]
-    info[o + 3] = out.omega_tilde[1]
-    info[o + 4] = 0.0
-    info[o + 5] = 0.0
-    o += 6
+        info[L.p + i] = p[i]
+        info[L.x_ref + i] = out.x_ref[i]
+        info[L.pointing + i] = R[i, 0]
+    info[L.u] = twist[0]
+    info[L.phi_tilde] = out.phi_tilde[0]
+    for i in range(2):
+        info[L.omega_tilde + i] = out.omega_tilde[i]
+        info[L.base_angles + i] = 0.0
+        info[L.turning_moment + i] = out.moments[i]
+        info[L.cross_track + i] = out.cross_track[i]
+    info[L.saturation_scale] = out.saturation_scale[0]
+    thrusts_and_power_into(model, W, out.thrusts, info, L.thrust, L.thruster_power)
     for j in range(n):
-        info[o + j] = 0.0
-    o += n
-    for i in range(3):
-        info[o + i] = out.x_ref[i]
-        info[o + 3 + i] = R[i, 0]
-    o += 6
-    info[o] = out.moments[0]
-    info[o + 1] = out.moments[1]
-    info[o + 2] = out.saturation_scale[0]
-    o += 3
-    o = thrusts_and_power_into(model, W, out.thrusts, info, o)
-    for j in range(n):
-        info[o + j] = joint_pd_torque(
+        info[L.joint_references + j] = 0.0
+        info[L.joint_torque + j] = joint_pd_torque(
             q[7 + j], v[6 + j], 0.0, g[6 + j], P.joint_stiffness[j], P.joint_damping[j]
         )
-    o += n
-    info[o] = out.cross_track[0]
-    info[o + 1] = out.cross_track[1]
-    info[o + 2] = out.path_s[0]
+    info[L.path_s] = out.path_s[0]

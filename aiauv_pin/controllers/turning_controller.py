@@ -26,9 +26,11 @@ from aiauv_control.laws.turning_laws import (
 from aiauv_control.path_following import PathFollowingGains
 from aiauv_control.paths import Path
 from aiauv_pin.controllers.compiled_controller import CompiledController
+from aiauv_pin.controllers.info_rows import info_offsets
 from aiauv_pin.controllers.paper_compiled import new_frame_measurement
 from aiauv_pin.controllers.paper_controller import END_EFFECTOR, surge_thruster_indices
 from aiauv_pin.controllers.turning_compiled import (
+    TurningInfo,
     TurningParameters,
     TurningState,
     thruster_turning,
@@ -165,6 +167,7 @@ class VehicleThrusterTurning:
             frame_translation=translation,
             joint_stiffness=self.joint_servo.stiffness,
             joint_damping=self.joint_servo.damping,
+            info=info_offsets(self.info_shapes(), TurningInfo),
         )
         state = TurningState(
             surge=new_surge_state(),
