@@ -3,7 +3,7 @@
 The joint layout is the sequence of axis labels of the actuated joints in model order, tail to
 head, e.g. ``("z", "y", "z", "y", ...)`` for the paper's vehicle (joints 1, 3, 5, 7 about z; 2, 4,
 6, 8 about y). The paper's vehicle has equally many of each; the law below takes any numbers in any
-order (issue 31): each axis's joints get the exponential pattern of eq. (22) counted from the
+order: each axis's joints get the exponential pattern of eq. (22) counted from the
 tail, a joint about a negative axis the opposite sign, and a joint about the body axis x none.
 
 * Base angles ``q0 = (q_y0, q_z0)`` (eq. 23) are the reduced-attitude law of Section 2 evaluated on

@@ -3,11 +3,9 @@
 NumPy asks Linux for transparent huge pages on every array of 4 MiB or more
 (``madvise(MADV_HUGEPAGE)``; numpy's ``NUMPY_MADVISE_HUGEPAGE``). With the kernel's usual
 ``/sys/kernel/mm/transparent_hugepage/defrag = madvise``, a page fault in such an array may
-compact memory synchronously to find a free 2 MiB page: on this project's shared machine the
-first write to a rollout's fresh log (57 MB per 300 s run at the default step) cost 0.12-0.14 s of
-system time per run, a quarter of the run, against 0.02-0.03 s in ordinary pages (issue 34;
-measured with ``getrusage``; the runs' user time was the same either way, so the huge pages bought
-nothing here). :func:`empty_log` gives the same C-ordered float64 array in an anonymous memory
+compact memory synchronously to find a free 2 MiB page: the first write to a rollout's fresh
+log then costs several times the system time of ordinary pages (the figures are on the docs'
+performance page), and the huge pages buy nothing for a log written once, row by row. :func:`empty_log` gives the same C-ordered float64 array in an anonymous memory
 map (Python's :mod:`mmap`), which numpy does not advise: the values written, and so the results,
 are unchanged.
 """

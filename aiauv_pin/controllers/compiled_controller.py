@@ -84,7 +84,7 @@ def bounds_checked(function, _seen: dict | None = None):
 
     Why: the compiled loop gives the controller arrays allocated for what it declares (``info`` of
     :attr:`CompiledController.info_width` floats, ``tau`` of ``nv``) and its own records; numba
-    does not check indices, so a controller that writes past them corrupts the heap (issue 29).
+    does not check indices, so a controller that writes past them corrupts the heap.
     Checked indexing is the cheapest sound guard: a compare per access in the user's own code
     (the project's kernels it calls stay unchecked; they size their writes by the vehicle), where
     a guard zone after ``info`` would catch only writes that land in it, and a first sample only

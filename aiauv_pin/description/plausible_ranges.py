@@ -10,9 +10,9 @@ Why these bounds: each is orders of magnitude beyond any underwater vehicle, and
 every force the laws compute stays finite: with coefficients up to 1e9 SI, lengths up to 1e3 m and
 speeds up to 100 m/s, a quadratic drag is at most ``1e9 * 1e2 * 1e2 = 1e13`` N, a moment ``1e16``
 N m, and the products the kinematics, the viewer and the JSON writers form stay far below the
-float64 limit (1.8e308), where a length of 1e308 overflowed (issue 29: a visual origin of 1e308
-passed ``check`` and failed writing JSON at the end of the run; ``C_dC = 1e20`` ran until it
-diverged; a cylinder length of 1e308 raised ``OverflowError``).
+float64 limit (1.8e308). Without them, a visual origin of 1e308 would pass ``check`` and fail
+writing JSON at the end of the run, ``C_dC = 1e20`` would run until it diverged, and a cylinder
+length of 1e308 would raise ``OverflowError``.
 
 =========================  =============  ======  =========================================
 parameter                  range          unit    reason

@@ -9,7 +9,7 @@ Why these values: :mod:`aiauv_pin.scenario.definition` (module docstring) and ``
 #: midpoint method (``"midpoint"``).
 DEFAULT_METHOD = "euler"
 #: Integration step of the scenario [s]: the cheapest within 2 mm of the converged path whose
-#: sampled attitude loop keeps a gain margin of 2 (issue 15; :mod:`aiauv_pin.scenario.definition`).
+#: sampled attitude loop keeps a gain margin of 2 (:mod:`aiauv_pin.scenario.definition`).
 DEFAULT_DT = 0.004
 #: Time between rows of ``timeseries.csv`` [s] (every tenth step of :data:`DEFAULT_DT`).
 DEFAULT_CSV_PERIOD = 0.04

@@ -11,7 +11,7 @@ With the midpoint method (:class:`~aiauv_pin.kernels.articulated_body.MidpointMe
 sampled inside every step, at the stage ``t + dt/2`` (:func:`sample_inside_step`; the step is then
 completed by :func:`complete_step`). Its output is held over the step it is centred on, so the
 sampling costs second-order error instead of the first-order lag that holding it from the start of
-each step costs (issue 15's accuracy per cost). A row at ``t`` holds, as for the other methods, the
+each step costs. A row at ``t`` holds, as for the other methods, the
 output applied from ``t`` to ``t + dt``, with the diagnostics of its sample at ``t + dt/2``. When
 the loop samples, logs and stops is :func:`step_actions`, shared with the interpreted loop.
 
@@ -25,7 +25,7 @@ controller):
   step's stage ``t + dt/2`` instead, and once more at the end of the run (for the last row's
   diagnostics); there is no sample at ``t = 0``: the first stage runs with no input (``tau = 0``),
   since a sample there would be held by a controller's integrators as if it applied over
-  ``[0, dt/2]`` (a visible offset along the path on the paper's surge integral, issue 15);
+  ``[0, dt/2]`` (a visible offset along the path on the paper's surge integral);
 * a row is logged every ``log_every`` steps and at the last step, after the sample of that step;
 * before each step, the actuators advance over it
   (:func:`aiauv_pin.kernels.articulated_body.actuators_into`: fin angles towards the controller's

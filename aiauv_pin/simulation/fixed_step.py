@@ -535,7 +535,7 @@ def _simulate_compiled(
     v = np.array(v0, dtype=float)
     if q.shape != (nq,) or v.shape != (nv,):
         raise ArgumentError(f"q0 must have {nq} and v0 {nv} entries")
-    check_compiled_controller(  # records it writes (issue 29)
+    check_compiled_controller(  # the records it writes
         controller, nq, nv, fast.n_thrusters, fast.model.fins.max_angle.shape[0]
     )
     if controller.reset is not None:

@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-#: The issue's targets (issue 16), as ratios to one evaluation.
+#: The targets of the derivatives' cost, as ratios to one evaluation.
 TARGETS = {"all_jacobians": 8.0, "rk4_transition": 40.0}
 
 

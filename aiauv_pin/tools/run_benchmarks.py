@@ -493,7 +493,7 @@ def first_run(case: str = "uniform", repeats: int = 3, compile_repeats: int = 2)
 
 # ---------------------------------------------------------------------- accuracy per cost
 #: Largest end-effector distance [m] from the converged path over the whole 300 s run that the
-#: scenario's default step may have (issue 15: the default is the cheapest setting within it).
+#: scenario's default step may have (the default is the cheapest setting within it).
 ACCURACY_TARGET = 0.002
 
 #: Factors by which :func:`accuracy_per_cost` scales the paper's attitude gains ``k_p, k_d``
@@ -552,7 +552,7 @@ def accuracy_per_cost(
     ``controller`` is ``"paper"`` (the paper's path following) or ``"none"`` (a passive run);
     ``current`` a constant water velocity in the world [m/s]. Each row also gives the largest
     distance across the path (in the y-z plane; the rest is a lag along it). The result names the
-    cheapest candidate within :data:`ACCURACY_TARGET` over the whole path (issue 15's rule for the
+    cheapest candidate within :data:`ACCURACY_TARGET` over the whole path (the rule for the
     default step) and whether it is the scenario's default (:mod:`aiauv_pin.scenario.defaults`,
     added to ``candidates`` if missing).
 

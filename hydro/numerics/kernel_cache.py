@@ -3,7 +3,7 @@
 numba compiles the project's kernels on their first call and keeps the machine code in its
 on-disk cache (:mod:`aiauv_hydro.numerics.jit`). Without help, every new installation would compile
 for about a
-minute before its first result (issue 15). The package therefore ships that cache:
+minute before its first result. The package therefore ships that cache:
 the project's kernel-archive builder runs the common workloads (the paper scenario by both
 integrators, both vehicle cases, a batch rollout) in a fresh cache and packs what numba wrote into
 ``<python tag>.zip`` in the folder a package declares (:data:`ARCHIVES_GROUP`), one archive per
@@ -285,8 +285,8 @@ def seed_folder(archive: Archive, folder: str, cache_path: Path) -> int:
     there is current (the cache folder is keyed by the sources' hash,
     :func:`aiauv_hydro.numerics.jit.cache_key`)
     and may hold the user's own compilations. It is not opened to check: its signatures name classes
-    of modules still being imported when seeding runs, and an index that failed to load was once
-    taken as stale and replaced, so that every run compiled again what it had saved (issue 28).
+    of modules still being imported when seeding runs, and an index that failed to load must not be
+    taken as stale and replaced, or every run would compile again what it had saved.
     Each index is written after its data files, each file to a temporary name first, so that an
     interrupted copy leaves no index naming a missing file.
 

@@ -87,7 +87,7 @@ DEFAULT_FLUID_DENSITY = 1025.0
 #: Plausible range of a cylinder's length and radius [m] (the table of
 #: :data:`aiauv_pin.description.plausible_ranges.PLAUSIBLE_RANGES`): checked here before anything
 #: is computed from
-#: them (a length of 1e308 overflowed computing the cylinder's inertia, issue 29).
+#: them (a length of 1e308 would overflow computing the cylinder's inertia).
 LENGTH_RANGE = (1e-4, 1e3)
 #: Largest dimensionless slender-cylinder coefficient (drag coefficients of cylinders are 0.1
 #: to 2 and added-mass coefficients about 1; Hoerner 1965, Fossen 2021 Sec. 6.4).
