@@ -321,8 +321,20 @@ class FastModel:
         means "not taken": the arguments were of another kind or the compiled check refused them,
         and the caller's own checks then name the problem.
         """
-        # the hottest entry point (benchmarks/entry_checks.py): one helper call, no tuples
-        if not _float64_vectors(q, v, tau):
+        # the hottest entry point (benchmarks/entry_checks.py, issue 34): no helper call, no
+        # tuple; the dtype and number of dimensions checked here (numba's unboxing needs them
+        # right), everything else in the compiled call
+        try:
+            if not (
+                q.dtype is _FLOAT64
+                and v.dtype is _FLOAT64
+                and tau.dtype is _FLOAT64
+                and q.ndim == 1
+                and v.ndim == 1
+                and tau.ndim == 1
+            ):
+                return None
+        except AttributeError:  # not an array
             return None
         if type(t) is not float:
             if type(t) is not int or not -MAX_EXACT_INT <= t <= MAX_EXACT_INT:
@@ -338,10 +350,11 @@ class FastModel:
             self._checked_acceleration_entry = self._entries[checked_acceleration_of]
             return out if verdict == STATE_OK else None
         try:
-            verdict = entry(handle, t, q, v, tau, out)
+            if entry(handle, t, q, v, tau, out) == STATE_OK:
+                return out
         except TypeError:  # an object that only looks like an array
-            return None
-        return out if verdict == STATE_OK else None
+            pass
+        return None
 
     def restoring_forces(self, q) -> np.ndarray:
         """``g(q)`` (nv,) on the left-hand side, as :meth:`aiauv_pin.Vehicle.restoring_forces`."""
