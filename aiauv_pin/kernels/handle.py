@@ -95,7 +95,7 @@ def _on_records(typingctx, kernel, handle, own_types, layout):
     def codegen(context, builder, signature, args):
         records = structref._Utils(context, builder, handle).get_data_struct(args[0])
         values = []
-        for item, wanted in zip(layout, callee.args):
+        for item, wanted in zip(layout, callee.args, strict=True):
             if isinstance(item, str):
                 value, given = getattr(records, item), fields[item]
             elif isinstance(item, int):

@@ -675,11 +675,7 @@ def _native_lines(results: dict) -> list[str]:
         load = native.get("load_average")
         lines.append(
             f"interleaved, {native['rounds']} rounds, {native['links']} links (median [min-max] us)"
-            + (
-                f", load {load['before'][0]:.2f} -> {load['after'][0]:.2f}:"
-                if load
-                else ":"
-            )
+            + (f", load {load['before'][0]:.2f} -> {load['after'][0]:.2f}:" if load else ":")
         )
         for name, label in (
             ("ours_forward_native", "evaluation, compiled loop"),
@@ -689,13 +685,13 @@ def _native_lines(results: dict) -> list[str]:
             ("ours_forward_python", "evaluation, vehicle.fast.acceleration from Python"),
             ("ours_forward_vehicle_python", "evaluation, Vehicle.acceleration from Python"),
             ("mujoco_forward_python", "MuJoCo mj_forward from Python"),
-            ("mujoco_forward_native_hand", "MuJoCo mj_forward, hand-written MJCF, compiled loop"),
-            ("mujoco_forward_python_hand", "MuJoCo mj_forward, hand-written MJCF, from Python"),
+            ("mujoco_forward_native_hand", "MuJoCo mj_forward, hand MJCF, compiled loop"),
+            ("mujoco_forward_python_hand", "MuJoCo mj_forward, hand MJCF, from Python"),
         ):
             if name not in t:
                 continue
             lines.append(
-                f"  {label:<50} {t[name]['median_us']:8.2f} "
+                f"  {label:<52} {t[name]['median_us']:8.2f} "
                 f"[{t[name]['min_us']:.2f}-{t[name]['max_us']:.2f}]"
             )
         for name, label in (
@@ -703,14 +699,14 @@ def _native_lines(results: dict) -> list[str]:
             ("rk4_step_native", "ratio RK4 step / mj_step RK4, both native"),
             ("forward_python_fast", "ratio from Python: vehicle.fast / mj_forward"),
             ("forward_python_vehicle", "ratio from Python: Vehicle.acceleration / mj_forward"),
-            ("forward_native_hand", "ratio evaluation / mj_forward (hand MJCF), both native"),
+            ("forward_native_hand", "ratio evaluation / mj_forward (hand), both native"),
             ("forward_python_fast_hand", "ratio from Python: vehicle.fast / mj_forward (hand)"),
-            ("forward_python_vehicle_hand", "ratio from Python: Vehicle.acceleration / (hand)"),
+            ("forward_python_vehicle_hand", "ratio from Python: Vehicle.accel. / mj_fwd (hand)"),
         ):
             if name not in r:
                 continue
             x = r[name]
-            lines.append(f"  {label:<50} {x['median']:8.3f} [{x['min']:.3f}-{x['max']:.3f}]")
+            lines.append(f"  {label:<52} {x['median']:8.3f} [{x['min']:.3f}-{x['max']:.3f}]")
     rows = (results.get("scaling") or {}).get("rows", [])
     if rows:
         lines.append(
@@ -861,7 +857,8 @@ def add_bench_parser(subparsers) -> None:
         metavar="PART",
         help="measure only these parts and update them in the JSON file (kernels: the dynamics, "
         "MuJoCo and scaling figures, no scenario runs; native: only the paper vehicle against "
-        "MuJoCo (exported and hand-written MJCF), natively and from Python, part of kernels; throughput: runs per minute of sweeps and "
+        "MuJoCo (exported and hand-written MJCF), natively and from Python, part of kernels; "
+        "throughput: runs per minute of sweeps and "
         "rollout; end-to-end: fresh 'aiauv simulate' processes; memory: peak memory of fresh "
         "processes simulating 9- to 127-link chains; first-run: a new installation's first run, "
         "shipped kernels against compiling everything; accuracy-per-cost: error against a "
