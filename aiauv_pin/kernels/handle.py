@@ -10,6 +10,14 @@ holds (no copy).
 
 Handles are made by :func:`new_handle`, compiled and cached like every kernel (numba's own
 constructor of a structure reference would be compiled again in every process).
+
+The entry points pass the records on to the kernels *borrowed* (:func:`_on_records`): reading
+``handle.model`` in compiled code increments the reference count of every array in the record
+(some 100 arrays for the model and the workspace, atomically) and decrements it again after the
+call, and numba's pruning of such pairs does not see across a call that may raise. That cost 1.4
+of the 4.0 us of one checked evaluation of the paper vehicle from Python (issue 34). The handle
+holds a reference to each record for as long as it lives, and the caller holds the handle for the
+whole call, so the kernel may use the records without counting.
 """
 
 from __future__ import annotations
@@ -18,6 +26,7 @@ import math
 
 from numba import types
 from numba.experimental import structref
+from numba.extending import intrinsic
 
 from aiauv_hydro.numerics.jit import compiled
 from aiauv_hydro.numerics.spatial import (
@@ -53,6 +62,149 @@ structref.define_proxy(Handle, HandleType, ["model", "workspace", "still_water",
 def new_handle(model, workspace, still_water, no_servo):
     """A :class:`Handle` of these records (compiled and cached)."""
     return Handle(model, workspace, still_water, no_servo)
+
+
+def _on_records(typingctx, kernel, handle, own_types, layout):
+    """``(signature, codegen)`` of an intrinsic that calls the compiled ``kernel`` with records of
+    ``handle`` borrowed (no reference counting, see the module docstring) among its arguments.
+
+    Args:
+        typingctx: numba's typing context (the intrinsic's first argument).
+        kernel: A compiled kernel (numba dispatcher) returning nothing or a scalar.
+        handle: The :class:`HandleType` of the intrinsic's first argument.
+        own_types: Types of the intrinsic's other arguments.
+        layout: One entry per argument of ``kernel``: a field name of the handle (``"model"``,
+            ``"workspace"``, ``"still_water"``, ``"no_servo"``), the index of one of the
+            intrinsic's other arguments, or a float (a ``float64`` constant).
+    """
+    fields = handle.field_dict
+
+    def type_of(item):
+        if isinstance(item, str):
+            return fields[item]
+        if isinstance(item, int):
+            return own_types[item]
+        return types.float64
+
+    function_type = typingctx.resolve_value_type(kernel)
+    callee = typingctx.resolve_function_type(
+        function_type, tuple(type_of(item) for item in layout), {}
+    )
+    signature = callee.return_type(handle, *own_types)
+
+    def codegen(context, builder, signature, args):
+        records = structref._Utils(context, builder, handle).get_data_struct(args[0])
+        values = []
+        for item, wanted in zip(layout, callee.args, strict=True):
+            if isinstance(item, str):
+                value, given = getattr(records, item), fields[item]
+            elif isinstance(item, int):
+                value, given = args[1 + item], own_types[item]
+            else:
+                value, given = context.get_constant(types.float64, item), types.float64
+            values.append(context.cast(builder, value, given, wanted))
+        return context.get_function(function_type, callee)(builder, values)
+
+    return signature, codegen
+
+
+def _records_or(argument, field: str):
+    """``field`` when ``argument`` (a type) is ``None``: the handle's own record instead."""
+    return field if isinstance(argument, (types.NoneType, types.Omitted)) else None
+
+
+@intrinsic
+def acceleration_into_records(typingctx, handle, env, servo, t, q, v, tau, out):
+    """:func:`aiauv_pin.kernels.articulated_body.acceleration_into` on the model and workspace of
+    ``handle`` (borrowed, :func:`_on_records`); ``env`` / ``servo`` ``None``: the handle's
+    still-water and empty-servo records."""
+    layout = (
+        "model",
+        _records_or(env, "still_water") or 0,
+        _records_or(servo, "no_servo") or 1,
+        2,
+        3,
+        4,
+        5,
+        "workspace",
+        6,
+        0.0,
+    )
+    return _on_records(
+        typingctx, kernels.acceleration_into, handle, (env, servo, t, q, v, tau, out), layout
+    )
+
+
+@intrinsic
+def step_into_records(typingctx, handle, env, servo, t, q, v, tau, dt, method, q_out, v_out):
+    """:func:`aiauv_pin.kernels.articulated_body.step_into` on the model and workspace of
+    ``handle`` (borrowed, :func:`_on_records`); ``env`` / ``servo`` ``None``: the handle's
+    still-water and empty-servo records."""
+    layout = (
+        "model",
+        _records_or(env, "still_water") or 0,
+        _records_or(servo, "no_servo") or 1,
+        2,
+        3,
+        4,
+        5,
+        6,
+        7,
+        "workspace",
+        8,
+        9,
+    )
+    own = (env, servo, t, q, v, tau, dt, method, q_out, v_out)
+    return _on_records(typingctx, kernels.step_into, handle, own, layout)
+
+
+@intrinsic
+def thrust_matrix_records(typingctx, handle, q, out):
+    """:func:`aiauv_pin.kernels.articulated_body.thrust_matrix` on the model and workspace of
+    ``handle`` (borrowed, :func:`_on_records`)."""
+    return _on_records(
+        typingctx, kernels.thrust_matrix, handle, (q, out), ("model", 0, "workspace", 1)
+    )
+
+
+@intrinsic
+def stage_sizes(typingctx, handle):
+    """``(nq, nv)`` of ``handle``'s workspace (the sizes of ``q_stage`` and ``v_stage``), read
+    without counting references."""
+    fields = handle.field_dict
+    workspace = fields["workspace"]
+    q_index = workspace.fields.index("q_stage")
+    v_index = workspace.fields.index("v_stage")
+
+    def codegen(context, builder, signature, args):
+        records = structref._Utils(context, builder, handle).get_data_struct(args[0])
+        W = records.workspace
+        sizes = []
+        for index in (q_index, v_index):
+            array_type = workspace.types[index]
+            array = context.make_array(array_type)(
+                context, builder, builder.extract_value(W, index)
+            )
+            sizes.append(builder.extract_value(array.shape, 0))
+        return context.make_tuple(builder, signature.return_type, sizes)
+
+    return types.UniTuple(types.intp, 2)(handle), codegen
+
+
+@intrinsic
+def q_stage_of(typingctx, handle):
+    """``handle.workspace.q_stage`` (one reference counted, not the whole workspace's)."""
+    workspace = handle.field_dict["workspace"]
+    index = workspace.fields.index("q_stage")
+    array_type = workspace.types[index]
+
+    def codegen(context, builder, signature, args):
+        records = structref._Utils(context, builder, handle).get_data_struct(args[0])
+        array = builder.extract_value(records.workspace, index)
+        context.nrt.incref(builder, array_type, array)
+        return array
+
+    return array_type(handle), codegen
 
 
 #: :func:`checked_acceleration_of`'s verdicts: the state is usable, or which argument is not.
@@ -124,19 +276,18 @@ def checked_acceleration_of(handle, t, q, v, tau, out):
     :func:`state_verdict`; returns its verdict (``out`` is written only when it is ``STATE_OK``).
 
     One compiled call with the arguments checked inside it: the checked ``Vehicle.acceleration``
-    from Python costs about what the unchecked one does (issue 15).
+    from Python costs about what the unchecked one does (issue 15); the records are passed on
+    borrowed (:func:`acceleration_into_records`, issue 34).
     """
-    W = handle.workspace
-    nq, nv = W.q_stage.shape[0], W.v_stage.shape[0]
+    nq, nv = stage_sizes(handle)
     if out.shape[0] != nv:
         return STATE_WRONG_SIZE
-    verdict, normalised = state_verdict(t, q, v, tau, nq, nv, W.q_stage)
+    q_stage = q_stage_of(handle)
+    verdict, normalised = state_verdict(t, q, v, tau, nq, nv, q_stage)
     if verdict != STATE_OK:
         return verdict
-    state = W.q_stage if normalised else q
-    kernels.acceleration_into(
-        handle.model, handle.still_water, handle.no_servo, t, state, v, tau, W, out, 0.0
-    )
+    state = q_stage if normalised else q
+    acceleration_into_records(handle, None, None, t, state, v, tau, out)
     return STATE_OK
 
 
@@ -146,29 +297,15 @@ def checked_step_of(handle, t, q, v, tau, dt, method, q_unit, q_out, v_out):
     :func:`state_verdict` (``q_unit`` (nq,): scratch for the normalised ``q``); returns its
     verdict (``q_out, v_out`` hold the step only when it is ``STATE_OK``;
     ``STATE_RESULT_NOT_FINITE`` when the step gave a non-finite state). ``dt`` and ``method`` are
-    checked by the caller."""
-    W = handle.workspace
-    nq, nv = W.q_stage.shape[0], W.v_stage.shape[0]
+    checked by the caller; the records are passed on borrowed (:func:`step_into_records`)."""
+    nq, nv = stage_sizes(handle)
     if q_unit.shape[0] != nq or q_out.shape[0] != nq or v_out.shape[0] != nv:
         return STATE_WRONG_SIZE
     verdict, normalised = state_verdict(t, q, v, tau, nq, nv, q_unit)
     if verdict != STATE_OK:
         return verdict
     state = q_unit if normalised else q
-    kernels.step_into(
-        handle.model,
-        handle.still_water,
-        handle.no_servo,
-        t,
-        state,
-        v,
-        tau,
-        dt,
-        method,
-        W,
-        q_out,
-        v_out,
-    )
+    step_into_records(handle, None, None, t, state, v, tau, dt, method, q_out, v_out)
     if not kernels.is_finite_state(q_out, v_out):
         return STATE_RESULT_NOT_FINITE
     return STATE_OK
@@ -176,16 +313,16 @@ def checked_step_of(handle, t, q, v, tau, dt, method, q_unit, q_out, v_out):
 
 @compiled(fastmath=True)
 def acceleration_of(handle, env, servo, t, q, v, tau, out):
-    """:func:`aiauv_pin.kernels.articulated_body.acceleration_into` on the records of ``handle``."""
-    kernels.acceleration_into(handle.model, env, servo, t, q, v, tau, handle.workspace, out, 0.0)
+    """:func:`aiauv_pin.kernels.articulated_body.acceleration_into` on the records of ``handle``
+    (borrowed, :func:`acceleration_into_records`)."""
+    acceleration_into_records(handle, env, servo, t, q, v, tau, out)
 
 
 @compiled(fastmath=True)
 def step_of(handle, env, servo, t, q, v, tau, dt, method, q_out, v_out):
-    """:func:`aiauv_pin.kernels.articulated_body.step_into` on the records of ``handle``."""
-    kernels.step_into(
-        handle.model, env, servo, t, q, v, tau, dt, method, handle.workspace, q_out, v_out
-    )
+    """:func:`aiauv_pin.kernels.articulated_body.step_into` on the records of ``handle``
+    (borrowed, :func:`step_into_records`)."""
+    step_into_records(handle, env, servo, t, q, v, tau, dt, method, q_out, v_out)
 
 
 @compiled(fastmath=True)
@@ -240,5 +377,6 @@ def run_rows_of(
 
 @compiled(fastmath=True)
 def thrust_matrix_of(handle, q, out):
-    """:func:`aiauv_pin.kernels.articulated_body.thrust_matrix` on the records of ``handle``."""
-    kernels.thrust_matrix(handle.model, q, handle.workspace, out)
+    """:func:`aiauv_pin.kernels.articulated_body.thrust_matrix` on the records of ``handle``
+    (borrowed, :func:`thrust_matrix_records`)."""
+    thrust_matrix_records(handle, q, out)

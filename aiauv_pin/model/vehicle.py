@@ -490,7 +490,7 @@ class Vehicle:
         Returns:
             ``dv`` (nv,), the time derivative of ``v``'s coordinates (Fossen's ``nu_dot`` for the base).
         """
-        if self.n_fins:
+        if self.hydro.fins:  # (not the n_fins property: the hottest entry point, issue 34)
             return self._finned_acceleration(q, v, tau, current, t, self._fin_angles(fin_angles))
         if fin_angles is not None:
             self._fin_angles(fin_angles)  # names the problem: this vehicle has no fins

@@ -558,7 +558,7 @@ def run_bench(
         "dynamics": dynamics_timings(vehicle, quick),
         "mujoco": mujoco_timings(case, quick),
         "head_to_head": head_to_head(vehicle, case, quick),
-        "native": bench_native.native_head_to_head(vehicle, urdf, rounds=5 if quick else 21),
+        "native": native_part(vehicle, urdf, case, quick),
         "scaling": bench_native.scaling(
             (3, 9) if quick else bench_native.SCALING_LINKS, rounds=3 if quick else 9
         ),
@@ -592,6 +592,21 @@ def run_bench(
         results["ratio_numba_in_kernel_to_mj_forward"] = h2h["ratio_numba_in_kernel_to_mj_forward"]
         results["ratio_numba_rk4_step_to_mj_step_rk4"] = h2h["ratio_numba_rk4_step_to_mj_step_rk4"]
     return results
+
+
+def native_part(vehicle, urdf, case: str, quick: bool) -> dict:
+    """:func:`aiauv_pin.tools.native_benchmarks.native_head_to_head` of the paper vehicle, with
+    MuJoCo also on the hand-written MJCF of the uniform case when the checkout has it
+    (``aiauv bench --only native``, and part of ``kernels``)."""
+    from aiauv_pin.tools import native_benchmarks as bench_native
+
+    hand = bench_native.HAND_MJCF
+    return bench_native.native_head_to_head(
+        vehicle,
+        urdf,
+        rounds=5 if quick else 21,
+        hand_mjcf=hand if case == "uniform" and hand.is_file() else None,
+    )
 
 
 #: Whole-run measurements of :mod:`aiauv_pin.tools.run_benchmarks` (``aiauv bench --only PART ...``).
@@ -657,8 +672,10 @@ def _native_lines(results: dict) -> list[str]:
     native = results.get("native") or {}
     if native:
         t, r = native["times"], native["ratios"]
+        load = native.get("load_average")
         lines.append(
-            f"interleaved, {native['rounds']} rounds, {native['links']} links (median [min-max] us):"
+            f"interleaved, {native['rounds']} rounds, {native['links']} links (median [min-max] us)"
+            + (f", load {load['before'][0]:.2f} -> {load['after'][0]:.2f}:" if load else ":")
         )
         for name, label in (
             ("ours_forward_native", "evaluation, compiled loop"),
@@ -668,9 +685,13 @@ def _native_lines(results: dict) -> list[str]:
             ("ours_forward_python", "evaluation, vehicle.fast.acceleration from Python"),
             ("ours_forward_vehicle_python", "evaluation, Vehicle.acceleration from Python"),
             ("mujoco_forward_python", "MuJoCo mj_forward from Python"),
+            ("mujoco_forward_native_hand", "MuJoCo mj_forward, hand MJCF, compiled loop"),
+            ("mujoco_forward_python_hand", "MuJoCo mj_forward, hand MJCF, from Python"),
         ):
+            if name not in t:
+                continue
             lines.append(
-                f"  {label:<50} {t[name]['median_us']:8.2f} "
+                f"  {label:<52} {t[name]['median_us']:8.2f} "
                 f"[{t[name]['min_us']:.2f}-{t[name]['max_us']:.2f}]"
             )
         for name, label in (
@@ -678,9 +699,14 @@ def _native_lines(results: dict) -> list[str]:
             ("rk4_step_native", "ratio RK4 step / mj_step RK4, both native"),
             ("forward_python_fast", "ratio from Python: vehicle.fast / mj_forward"),
             ("forward_python_vehicle", "ratio from Python: Vehicle.acceleration / mj_forward"),
+            ("forward_native_hand", "ratio evaluation / mj_forward (hand), both native"),
+            ("forward_python_fast_hand", "ratio from Python: vehicle.fast / mj_forward (hand)"),
+            ("forward_python_vehicle_hand", "ratio from Python: Vehicle.accel. / mj_fwd (hand)"),
         ):
+            if name not in r:
+                continue
             x = r[name]
-            lines.append(f"  {label:<50} {x['median']:8.3f} [{x['min']:.3f}-{x['max']:.3f}]")
+            lines.append(f"  {label:<52} {x['median']:8.3f} [{x['min']:.3f}-{x['max']:.3f}]")
     rows = (results.get("scaling") or {}).get("rows", [])
     if rows:
         lines.append(
@@ -827,10 +853,12 @@ def add_bench_parser(subparsers) -> None:
     parser.add_argument(
         "--only",
         nargs="+",
-        choices=("kernels", *WHOLE_RUN_PARTS),
+        choices=("kernels", "native", *WHOLE_RUN_PARTS),
         metavar="PART",
         help="measure only these parts and update them in the JSON file (kernels: the dynamics, "
-        "MuJoCo and scaling figures, no scenario runs; throughput: runs per minute of sweeps and "
+        "MuJoCo and scaling figures, no scenario runs; native: only the paper vehicle against "
+        "MuJoCo (exported and hand-written MJCF), natively and from Python, part of kernels; "
+        "throughput: runs per minute of sweeps and "
         "rollout; end-to-end: fresh 'aiauv simulate' processes; memory: peak memory of fresh "
         "processes simulating 9- to 127-link chains; first-run: a new installation's first run, "
         "shipped kernels against compiling everything; accuracy-per-cost: error against a "
@@ -856,7 +884,17 @@ def _run_bench_command(args) -> int:
             )
             results.update(kernels)
             lines.append(format_table(kernels))
-        parts = [part for part in args.only if part != "kernels"]
+        if "native" in args.only and "kernels" not in args.only:
+            from aiauv_pin.model import loading
+
+            urdf = loading.bundled_urdf(args.case)
+            native = {
+                "machine": machine(),
+                "native": native_part(loading.load_vehicle(urdf), urdf, args.case, args.quick),
+            }
+            results["native"] = native["native"]
+            lines.extend(_native_lines(native))
+        parts = [part for part in args.only if part not in ("kernels", "native")]
         if parts:
             from aiauv_pin.tools.run_benchmarks import format_parts
 

@@ -15,12 +15,15 @@ per-round ratio, with the medians of the times themselves.
 The MuJoCo model of a vehicle is the MJCF that ``aiauv export`` writes (same bodies, masses and
 inertias; MuJoCo's ellipsoid fluid model on the collision cylinders; buoyancy as gravity
 compensation; joint limits and idle thruster actuators). Its fluid model is not ours, so only the
-cost is comparable.
+cost is comparable. For the paper vehicle, MuJoCo is also timed on an MJCF of the same vehicle
+written by hand, independently of the exporter (:data:`HAND_MJCF`, ``benchmarks/`` of a source
+checkout; its header says how it was derived): the ``*_hand`` rows and ratios.
 """
 
 from __future__ import annotations
 
 import ctypes
+import os
 import tempfile
 import time
 from pathlib import Path
@@ -32,6 +35,10 @@ import numpy as np
 SCALING_LINKS = (3, 5, 9, 17, 33, 65, 127)
 
 _clock = time.process_time
+
+#: The paper vehicle (uniform case) written by hand as a MuJoCo user would write it, not by
+#: ``aiauv export`` (source checkout only: ``benchmarks/`` is not installed).
+HAND_MJCF = Path(__file__).resolve().parents[2] / "benchmarks" / "paper_vehicle_hand.xml"
 
 
 # ---------------------------------------------------------------------- MuJoCo, natively
@@ -144,9 +151,15 @@ def _state(vehicle, mj_model, mj_data, seed: int = 5):
     return q, v, tau
 
 
-def native_head_to_head(vehicle, urdf: Path, *, rounds: int = 15, calls: int = 2000) -> dict:
+def native_head_to_head(
+    vehicle, urdf: Path, *, rounds: int = 15, calls: int = 2000, hand_mjcf: Path | None = None
+) -> dict:
     """One evaluation and one RK4 step of ``vehicle`` (compiled) against MuJoCo's ``mj_forward`` and
     RK4 ``mj_step`` on the exported model, both natively and both from Python, interleaved.
+
+    With ``hand_mjcf`` (an MJCF of the same vehicle written by hand, :data:`HAND_MJCF`), MuJoCo's
+    ``mj_forward`` on it is timed in the same rounds, natively and from Python (rows and ratios
+    ``*_hand``). The load average (``os.getloadavg``) before and after is part of the result.
 
     Returns ``{}`` without mujoco or the compiled backend.
     """
@@ -174,6 +187,25 @@ def native_head_to_head(vehicle, urdf: Path, *, rounds: int = 15, calls: int = 2
     python_calls = max(calls // 4, 1)
     fm, fd = forward_model._address, forward_data._address
     rm, rd = rk4_model._address, rk4_data._address
+    contenders: dict = {}
+    if hand_mjcf is not None:
+        hand_model = mujoco.MjModel.from_xml_path(str(hand_mjcf))
+        hand_data = mujoco.MjData(hand_model)
+        _state(vehicle, hand_model, hand_data)
+        mujoco.mj_forward(hand_model, hand_data)
+        hm, hd = hand_model._address, hand_data._address
+
+        def mujoco_forward_hand():
+            forward_loop(hm, hd, calls)
+
+        def mujoco_python_hand():
+            for _ in range(python_calls):
+                mujoco.mj_forward(hand_model, hand_data)
+
+        contenders = {
+            "mujoco_forward_native_hand": (mujoco_forward_hand, calls),
+            "mujoco_forward_python_hand": (mujoco_python_hand, python_calls),
+        }
 
     def ours_forward():
         kernels.time_accelerations(model, env, servo, q, v, tau, calls, W, out)
@@ -202,6 +234,7 @@ def native_head_to_head(vehicle, urdf: Path, *, rounds: int = 15, calls: int = 2
         for _ in range(python_calls):
             mujoco.mj_forward(forward_model, forward_data)
 
+    load_before = os.getloadavg()
     times = interleaved_rounds(
         {
             "ours_forward_native": (ours_forward, calls),
@@ -211,14 +244,30 @@ def native_head_to_head(vehicle, urdf: Path, *, rounds: int = 15, calls: int = 2
             "ours_forward_python": (ours_python, python_calls),
             "ours_forward_vehicle_python": (vehicle_python, python_calls),
             "mujoco_forward_python": (mujoco_python, python_calls),
+            **contenders,
         },
         rounds,
     )
+    ratios = {}
+    if contenders:
+        ratios = {
+            "forward_native_hand": ratio_summary(
+                times["ours_forward_native"], times["mujoco_forward_native_hand"]
+            ),
+            "forward_python_fast_hand": ratio_summary(
+                times["ours_forward_python"], times["mujoco_forward_python_hand"]
+            ),
+            "forward_python_vehicle_hand": ratio_summary(
+                times["ours_forward_vehicle_python"], times["mujoco_forward_python_hand"]
+            ),
+        }
     return {
         "links": int(vehicle.model.njoints - 1),
         "nv": int(vehicle.nv),
         "mujoco_nv": int(forward_model.nv),
         "rounds": rounds,
+        "load_average": {"before": list(load_before), "after": list(os.getloadavg())},
+        **({"hand_mjcf": Path(hand_mjcf).name} if contenders else {}),
         "times": {name: _stats(values) for name, values in times.items()},
         "ratios": {
             "forward_native": ratio_summary(
@@ -233,6 +282,7 @@ def native_head_to_head(vehicle, urdf: Path, *, rounds: int = 15, calls: int = 2
             "forward_python_vehicle": ratio_summary(
                 times["ours_forward_vehicle_python"], times["mujoco_forward_python"]
             ),
+            **ratios,
         },
     }
 
