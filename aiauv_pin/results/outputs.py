@@ -424,10 +424,10 @@ class _TimeseriesBlocks:
     :func:`write_timeseries`' (:func:`_format_rows`).
 
     Each task formats a block of consecutive rows (the formatting is about 0.2 s of the paper's run)
-    into an anonymous temporary file opened before the fork (no name on disk: a kill leaves
-    nothing behind), which both processes share; :meth:`finish` reads the blocks back in order and
-    writes the file atomically (:func:`~aiauv_pin._internal.atomic.write_bytes`), so the file is
-    absent or complete as before.
+    into an anonymous temporary file in the file's folder opened before the fork (no name on
+    disk: a kill leaves nothing behind), which both processes share; :meth:`finish` reads the
+    blocks back in order and writes the file atomically
+    (:func:`~aiauv_pin._internal.atomic.write_bytes`), so the file is absent or complete as before.
     """
 
     def __init__(self, result: ScenarioResult, path: Path, blocks: int) -> None:
@@ -437,7 +437,8 @@ class _TimeseriesBlocks:
         self._head = (",".join(header) + "\n").encode("utf-8")
         self._path = path
         self._tables = np.array_split(table, blocks)  # consecutive rows, in order
-        self._sinks = [tempfile.TemporaryFile(buffering=0) for _ in self._tables]
+        # beside the file (where its bytes have room), unnamed (``O_TMPFILE`` on Linux)
+        self._sinks = [tempfile.TemporaryFile(buffering=0, dir=path.parent) for _ in self._tables]
         self.tasks = [functools.partial(self._write_block, k) for k in range(len(self._tables))]
 
     def _write_block(self, k: int) -> None:
