@@ -137,9 +137,13 @@ def scenario_for_args(args):
     from aiauv_hydro.currents import Current
     from aiauv_pin.errors import AiauvError
     from aiauv_pin.scenario.definition import Scenario
-    from aiauv_pin.scenario.toml_file import load_scenario
 
-    scenario = load_scenario(args.scenario) if args.scenario is not None else Scenario()
+    if args.scenario is not None:  # the file's schemas (pydantic, ~0.05 s) only for a file
+        from aiauv_pin.scenario.toml_file import load_scenario
+
+        scenario = load_scenario(args.scenario)
+    else:
+        scenario = Scenario()
     changes = {}
     if args.case is not None:
         changes["case"] = args.case

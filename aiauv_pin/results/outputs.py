@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from aiauv_pin._internal.atomic import atomic_path, write_text
+from aiauv_pin._internal.atomic import atomic_path, write_bytes, write_text
 from aiauv_pin._internal.text import signed
 from aiauv_pin.scenario.definition import ScenarioResult, cross_track_axes, summary
 from aiauv_pin.simulation.fixed_step import Trajectory
@@ -388,23 +388,76 @@ def format_table(header: list[str], table: np.ndarray, fmt: str | Sequence[str] 
 
     ``fmt`` is a ``%`` format of one number, or one per column; ``"%r"`` writes Python's ``repr``
     (the shortest text that reads back to the same float)."""
+    return ",".join(header) + "\n" + _format_rows(table, fmt)
+
+
+def _format_rows(table: np.ndarray, fmt: str | Sequence[str]) -> str:
+    """The rows of :func:`format_table` (no header): a row's text depends on that row alone, so
+    the text of consecutive blocks of rows, joined, is the text of the whole table."""
     n_rows, n_columns = table.shape
     formats = [fmt] * n_columns if isinstance(fmt, str) else list(fmt)
     line = ",".join(formats) + "\n"
-    body = (line * n_rows) % tuple(table.ravel().tolist()) if n_rows else ""
-    return ",".join(header) + "\n" + body
+    return (line * n_rows) % tuple(table.ravel().tolist()) if n_rows else ""
 
 
 def write_timeseries(result: ScenarioResult, path: Path) -> Path:
     """Write ``timeseries.csv``: one row per ``csv_period`` (see the module docstring), a header
     of ``name [unit]`` cells (:func:`timeseries_table`), numbers that read back exactly
     (:data:`CSV_FORMAT`, :data:`TIME_FORMAT`)."""
+    header, table, formats = _timeseries_content(result)
+    return write_text(path, format_table(header, table, formats))
+
+
+def _timeseries_content(result: ScenarioResult) -> tuple[list[str], np.ndarray, list[str]]:
+    """``timeseries.csv``'s header cells, rows (a float table) and number format per column."""
     columns = timeseries_table(result)
     rows = csv_rows(result)
     table = np.column_stack([np.asarray(column.values, dtype=float)[rows] for column in columns])
     header = [column_header(column.name, column.unit) for column in columns]
     formats = [TIME_FORMAT if column.name == "t" else CSV_FORMAT for column in columns]
-    return write_text(path, format_table(header, table, formats))
+    return header, table, formats
+
+
+class _TimeseriesBlocks:
+    """``timeseries.csv`` written as ``blocks`` tasks for :func:`_run_tasks`, which the two
+    processes share, then put together here (:meth:`finish`): the text is the same bytes as
+    :func:`write_timeseries`' (:func:`_format_rows`).
+
+    Each task formats a block of consecutive rows (the formatting is about 0.2 s of the paper's run)
+    into an anonymous temporary file in the file's folder opened before the fork (no name on
+    disk: a kill leaves nothing behind), which both processes share; :meth:`finish` reads the
+    blocks back in order and writes the file atomically
+    (:func:`~aiauv_pin._internal.atomic.write_bytes`), so the file is absent or complete as before.
+    """
+
+    def __init__(self, result: ScenarioResult, path: Path, blocks: int) -> None:
+        import tempfile
+
+        header, table, self._formats = _timeseries_content(result)
+        self._head = (",".join(header) + "\n").encode("utf-8")
+        self._path = path
+        self._tables = np.array_split(table, blocks)  # consecutive rows, in order
+        # beside the file (where its bytes have room), unnamed (``O_TMPFILE`` on Linux)
+        self._sinks = [tempfile.TemporaryFile(buffering=0, dir=path.parent) for _ in self._tables]
+        self.tasks = [functools.partial(self._write_block, k) for k in range(len(self._tables))]
+
+    def _write_block(self, k: int) -> None:
+        data = memoryview(_format_rows(self._tables[k], self._formats).encode("utf-8"))
+        fd = self._sinks[k].fileno()
+        while data:  # os.write may write less than asked
+            data = data[os.write(fd, data) :]
+
+    def finish(self) -> Path:
+        """Put the blocks together into the file (every task has run)."""
+        parts = [self._head]
+        for sink in self._sinks:
+            sink.seek(0)
+            parts.append(sink.read())
+        return write_bytes(self._path, b"".join(parts))
+
+    def close(self) -> None:
+        for sink in self._sinks:
+            sink.close()
 
 
 @dataclass(frozen=True)
@@ -934,6 +987,11 @@ def _fork_context():
     return multiprocessing.get_context("fork")
 
 
+def _second_process(parallel: bool):
+    """The fork context :func:`_run_tasks` draws with, or None where the tasks run here in order."""
+    return _fork_context() if parallel and (os.cpu_count() or 1) > 1 else None
+
+
 def _die_with_parent(parent: int) -> None:
     """Initializer of the figure worker: it is killed (SIGKILL) when the process that forked it
     dies, however it dies (:func:`aiauv_pin._internal.parent_death.die_with_parent`)."""
@@ -1015,9 +1073,7 @@ def _run_tasks(tasks, parallel: bool = True, here_first=None):
         The exception of a failed task: at once (the forked process is stopped) if it failed
         here; once this process has run the tasks left, if it failed in the forked process.
     """
-    import os
-
-    context = _fork_context() if parallel and (os.cpu_count() or 1) > 1 else None
+    context = _second_process(parallel)
     if context is None or len(tasks) < 2:
         value = here_first() if here_first is not None else None
         for task in tasks:
@@ -1113,6 +1169,12 @@ def write_figures(
     return [figure_path(folder, name, figure_format) for name in figures_of(result)]
 
 
+#: Blocks of rows of ``timeseries.csv`` shared between the two processes of :func:`write_results`
+#: (at most), and the fewest rows of a block: a short run's table is one task, written at once.
+_CSV_BLOCKS = 4
+_CSV_BLOCK_ROWS = 1000
+
+
 def write_results(
     result: ScenarioResult,
     out_dir: Path,
@@ -1128,8 +1190,9 @@ def write_results(
     """Write every result file of a run into ``out_dir``; return the summary.
 
     The files are written by two processes where possible (see :func:`_run_tasks`), ``also``
-    first (the slowest, e.g. the playback page), then the figures and ``timeseries.csv``;
-    ``summary.json`` is written here meanwhile.
+    first (the slowest, e.g. the playback page), then the figures and ``timeseries.csv`` (in
+    blocks of rows that either process formats, :class:`_TimeseriesBlocks`, also without
+    figures); ``summary.json`` is written here meanwhile.
 
     Args:
         result: The run.
@@ -1155,10 +1218,26 @@ def write_results(
     tasks = [
         *also,
         *(_figure_tasks(result, out_dir / "figures", figure_format, drawing) if figures else ()),
-        functools.partial(write_timeseries, result, out_dir / "timeseries.csv"),
     ]
-    return _run_tasks(
-        tasks,
-        parallel,
-        here_first=functools.partial(write_summary, result, out_dir / "summary.json", extra),
-    )
+    csv_path = out_dir / "timeseries.csv"
+    blocks = min(_CSV_BLOCKS, len(csv_rows(result)) // _CSV_BLOCK_ROWS)
+    if _second_process(parallel) is None or blocks < 2:
+        tasks.append(functools.partial(write_timeseries, result, csv_path))
+        return _run_tasks(
+            tasks,
+            parallel,
+            here_first=functools.partial(write_summary, result, out_dir / "summary.json", extra),
+        )
+    # with two processes, the table in blocks, the last tasks (the smallest): whichever process
+    # is free takes the next, so that they finish about together, also without figures
+    csv = _TimeseriesBlocks(result, csv_path, blocks)
+    try:
+        content = _run_tasks(
+            [*tasks, *csv.tasks],
+            parallel,
+            here_first=functools.partial(write_summary, result, out_dir / "summary.json", extra),
+        )
+        csv.finish()
+    finally:
+        csv.close()
+    return content

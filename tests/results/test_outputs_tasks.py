@@ -110,3 +110,45 @@ def test_the_shared_math_parser_is_the_kind_an_agg_renderer_makes():
     renderer.mathtext_parser = shared  # as _render installs it
     width, height, descent = renderer.get_text_width_height_descent("$u_d$", prop, ismath=True)
     assert width > 0 and height > 0 and descent >= 0
+
+
+def _result_of(n: int):
+    """A passive-run result of ``n`` logged samples (every one written: no ``csv_period``)."""
+    import dataclasses
+
+    import numpy as np
+
+    from aiauv_pin.scenario.definition import Scenario, ScenarioResult
+    from aiauv_pin.simulation.fixed_step import Trajectory
+
+    rng = np.random.default_rng(3)
+    t = np.arange(n) * 0.01
+    q = rng.normal(size=(n, 9))
+    trajectory = Trajectory(
+        t=t, q=q, v=rng.normal(size=(n, 8)), tau=np.zeros((n, 8)), info={"p": q[:, :3] * 1e-7}
+    )
+    scenario = dataclasses.replace(Scenario(), controller="none", csv_period=None)
+    return ScenarioResult(scenario, trajectory, 0.0, ["j1", "j2"], [])
+
+
+@pytest.mark.parametrize("blocks", [2, 3, 4])
+def test_the_table_in_blocks_is_the_same_bytes_as_written_at_once(tmp_path, blocks):
+    result = _result_of(1003)
+    outputs.write_timeseries(result, tmp_path / "once.csv")
+    csv = outputs._TimeseriesBlocks(result, tmp_path / "blocks.csv", blocks)
+    try:
+        assert len(csv.tasks) == blocks
+        outputs._run_tasks(list(reversed(csv.tasks)), True)  # any order, either process
+        csv.finish()
+    finally:
+        csv.close()
+    assert (tmp_path / "blocks.csv").read_bytes() == (tmp_path / "once.csv").read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["blocks.csv", "once.csv"]
+
+
+@pytest.mark.parametrize("parallel", [True, False])
+def test_write_results_writes_the_same_table_with_one_or_two_processes(tmp_path, parallel):
+    result = _result_of(2 * outputs._CSV_BLOCK_ROWS + 5)  # enough rows for blocks
+    outputs.write_results(result, tmp_path, parallel=parallel, figures=False)
+    outputs.write_timeseries(result, tmp_path / "once.csv")
+    assert (tmp_path / "timeseries.csv").read_bytes() == (tmp_path / "once.csv").read_bytes()
