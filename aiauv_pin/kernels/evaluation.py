@@ -289,8 +289,8 @@ class FastModel:
             ArgumentError: A bad argument (see the module docstring), before anything runs.
         """
         if current is None and servo is None and disturbance is None:
-            # checked_acceleration's hot block inlined (one Python call less, 0.1 of 3.2 us;
-            # issue 34); the first call of a thread, an integer t or a refusal go through it
+            # checked_acceleration's hot block inlined (one Python call less); the first call
+            # of a thread, an integer t or a refusal go through it
             entry = self._checked_acceleration_entry
             if entry is not None and type(t) is float:
                 try:
@@ -341,7 +341,7 @@ class FastModel:
         means "not taken": the arguments were of another kind or the compiled check refused them,
         and the caller's own checks then name the problem.
         """
-        # the hottest entry point (benchmarks/entry_checks.py, issue 34): no helper call, no
+        # the hottest entry point (benchmarks/entry_checks.py): no helper call, no
         # tuple; the dtype and number of dimensions checked here (numba's unboxing needs them
         # right), everything else in the compiled call
         entry = self._checked_acceleration_entry

@@ -3,7 +3,7 @@
 Calling a compiled kernel from Python costs numba a type check and an unboxing of every array it
 is given; the kernels' records (:class:`~aiauv_pin.kernels.records.Model`,
 :class:`~aiauv_pin.kernels.records.Workspace`) hold some 60 arrays, which cost more than one
-evaluation itself (issue 15). A :class:`Handle` is a numba structure reference holding both
+evaluation itself. A :class:`Handle` is a numba structure reference holding both
 records: it crosses the boundary as one pointer, and the entry points below unpack it in compiled
 code. The records inside share their arrays with the ones :class:`~aiauv_pin.kernels.evaluation.FastModel`
 holds (no copy).
@@ -14,8 +14,8 @@ constructor of a structure reference would be compiled again in every process).
 The entry points pass the records on to the kernels *borrowed* (:func:`_on_records`): reading
 ``handle.model`` in compiled code increments the reference count of every array in the record
 (some 100 arrays for the model and the workspace, atomically) and decrements it again after the
-call, and numba's pruning of such pairs does not see across a call that may raise. That cost 1.4
-of the 4.0 us of one checked evaluation of the paper vehicle from Python (issue 34). The handle
+call, and numba's pruning of such pairs does not see across a call that may raise: a large share
+of one checked evaluation from Python (the figures are on the docs' performance page). The handle
 holds a reference to each record for as long as it lives, and the caller holds the handle for the
 whole call, so the kernel may use the records without counting.
 """
@@ -276,8 +276,8 @@ def checked_acceleration_of(handle, t, q, v, tau, out):
     :func:`state_verdict`; returns its verdict (``out`` is written only when it is ``STATE_OK``).
 
     One compiled call with the arguments checked inside it: the checked ``Vehicle.acceleration``
-    from Python costs about what the unchecked one does (issue 15); the records are passed on
-    borrowed (:func:`acceleration_into_records`, issue 34).
+    from Python costs about what the unchecked one does; the records are passed on borrowed
+    (:func:`acceleration_into_records`).
     """
     nq, nv = stage_sizes(handle)
     if out.shape[0] != nv:

@@ -18,8 +18,8 @@ once per process; :func:`compiled_sources`), so an edit to any file with compile
 everything that may inline it, and no manual cache flush is ever needed. Compiled functions of the
 project must therefore live in those files (a test checks this).
 
-The cache is never written inside the installation or the checkout (issue 28: numba's in-tree
-``__pycache__`` folders, left behind in ``site-packages`` by an uninstall, shadowed a later
+The cache is never written inside the installation or the checkout (numba's in-tree
+``__pycache__`` folders, left behind in ``site-packages`` by an uninstall, would shadow a later
 editable install as namespace packages). :class:`ProjectCacheLocator` is the only locator of the
 project's functions; it keeps them in :func:`cache_folder`, a per-user folder
 (``platformdirs.user_cache_dir("aiauv-pin")``, or ``$NUMBA_CACHE_DIR/aiauv-pin`` when that is set)
@@ -294,12 +294,12 @@ def compiled(
             none and returns none (scalars and tuples of scalars only). It is then compiled
             without numba's reference counting (``_nrt=False``): every field read from a record
             (a named tuple of arrays) otherwise increments and decrements the count of each array
-            in it atomically, a large share of one evaluation (issue 15). numba refuses to compile
+            in it atomically, a large share of one evaluation. numba refuses to compile
             such a function if it allocates.
         inline: Inline the function into its compiled callers (numba's ``inline="always"``, at
             numba's IR level, so the caller's ``fastmath`` applies to the inlined body). For the
             small per-link helpers called tens of times per evaluation, where separate compiled
-            calls cost a noticeable share of one evaluation (issue 34). Called from Python, the
+            calls cost a noticeable share of one evaluation. Called from Python, the
             function is compiled on its own as usual.
     """
 
