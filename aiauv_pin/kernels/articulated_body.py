@@ -108,29 +108,67 @@ def _xT_add(xl, f, dst):
 
 
 @compiled(fastmath=True, borrows_only=True)
-def _solve_spd6(a, b, out, low, y):
-    """Solve ``a x = b`` for a symmetric positive-definite 6x6 ``a`` (Cholesky)."""
-    for j in range(6):
-        s = a[j, j]
-        for k in range(j):
-            s -= low[j, k] * low[j, k]
-        d = math.sqrt(s) if s > 0.0 else math.nan
-        low[j, j] = d
-        for i in range(j + 1, 6):
-            s = a[j, i]  # the upper triangle (a is symmetric)
-            for k in range(j):
-                s -= low[i, k] * low[j, k]
-            low[i, j] = s / d
-    for i in range(6):
-        s = b[i]
-        for k in range(i):
-            s -= low[i, k] * y[k]
-        y[i] = s / low[i, i]
-    for i in range(5, -1, -1):
-        s = y[i]
-        for k in range(i + 1, 6):
-            s -= low[k, i] * out[k]
-        out[i] = s / low[i, i]
+def _solve_spd6(a, b, out):
+    """Solve ``a x = b`` for a symmetric positive-definite 6x6 ``a`` (Cholesky ``a = L L^T``),
+    reading ``a``'s upper triangle only; written out in scalars (no work arrays), so that the
+    factor stays in registers."""
+    a00, a01, a02, a03, a04, a05 = a[0, 0], a[0, 1], a[0, 2], a[0, 3], a[0, 4], a[0, 5]
+    a11, a12, a13, a14, a15 = a[1, 1], a[1, 2], a[1, 3], a[1, 4], a[1, 5]
+    a22, a23, a24, a25 = a[2, 2], a[2, 3], a[2, 4], a[2, 5]
+    a33, a34, a35 = a[3, 3], a[3, 4], a[3, 5]
+    a44, a45 = a[4, 4], a[4, 5]
+    a55 = a[5, 5]
+    s = a00
+    l00 = math.sqrt(s) if s > 0.0 else math.nan
+    i0 = 1.0 / l00
+    l10 = a01 * i0
+    l20 = a02 * i0
+    l30 = a03 * i0
+    l40 = a04 * i0
+    l50 = a05 * i0
+    s = a11 - l10 * l10
+    l11 = math.sqrt(s) if s > 0.0 else math.nan
+    i1 = 1.0 / l11
+    l21 = (a12 - l20 * l10) * i1
+    l31 = (a13 - l30 * l10) * i1
+    l41 = (a14 - l40 * l10) * i1
+    l51 = (a15 - l50 * l10) * i1
+    s = a22 - l20 * l20 - l21 * l21
+    l22 = math.sqrt(s) if s > 0.0 else math.nan
+    i2 = 1.0 / l22
+    l32 = (a23 - l30 * l20 - l31 * l21) * i2
+    l42 = (a24 - l40 * l20 - l41 * l21) * i2
+    l52 = (a25 - l50 * l20 - l51 * l21) * i2
+    s = a33 - l30 * l30 - l31 * l31 - l32 * l32
+    l33 = math.sqrt(s) if s > 0.0 else math.nan
+    i3 = 1.0 / l33
+    l43 = (a34 - l40 * l30 - l41 * l31 - l42 * l32) * i3
+    l53 = (a35 - l50 * l30 - l51 * l31 - l52 * l32) * i3
+    s = a44 - l40 * l40 - l41 * l41 - l42 * l42 - l43 * l43
+    l44 = math.sqrt(s) if s > 0.0 else math.nan
+    i4 = 1.0 / l44
+    l54 = (a45 - l50 * l40 - l51 * l41 - l52 * l42 - l53 * l43) * i4
+    s = a55 - l50 * l50 - l51 * l51 - l52 * l52 - l53 * l53 - l54 * l54
+    l55 = math.sqrt(s) if s > 0.0 else math.nan
+    i5 = 1.0 / l55
+    y0 = b[0] * i0
+    y1 = (b[1] - l10 * y0) * i1
+    y2 = (b[2] - l20 * y0 - l21 * y1) * i2
+    y3 = (b[3] - l30 * y0 - l31 * y1 - l32 * y2) * i3
+    y4 = (b[4] - l40 * y0 - l41 * y1 - l42 * y2 - l43 * y3) * i4
+    y5 = (b[5] - l50 * y0 - l51 * y1 - l52 * y2 - l53 * y3 - l54 * y4) * i5
+    x5 = y5 * i5
+    x4 = (y4 - l54 * x5) * i4
+    x3 = (y3 - l43 * x4 - l53 * x5) * i3
+    x2 = (y2 - l32 * x3 - l42 * x4 - l52 * x5) * i2
+    x1 = (y1 - l21 * x2 - l31 * x3 - l41 * x4 - l51 * x5) * i1
+    x0 = (y0 - l10 * x1 - l20 * x2 - l30 * x3 - l40 * x4 - l50 * x5) * i0
+    out[0] = x0
+    out[1] = x1
+    out[2] = x2
+    out[3] = x3
+    out[4] = x4
+    out[5] = x5
 
 
 # ---------------------------------------------------------------------- kinematics
@@ -781,7 +819,7 @@ def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
         tmp = W.v6[1]
         for i in range(6):
             tmp[i] = tau[iv0 + i] - pa[0, i]
-        _solve_spd6(art[0], tmp, acc[0], W.m66[2], W.v6[2])
+        _solve_spd6(art[0], tmp, acc[0])
         for i in range(6):
             out[iv0 + i] = acc[0, i]
     for b in range(1, nb):
