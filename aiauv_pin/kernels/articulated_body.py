@@ -204,7 +204,15 @@ def kinematics_into(
 
     Written body by body with scalar locals (no helper writes into array views), so the compiler
     keeps a body's rotation, position and twist in registers; each body's results are stored once.
+    The joints' sines and cosines are taken first, in a loop of their own (parked in the rows
+    ``xform[b, 3]`` that the body's translation overwrites later): a call to the math library
+    inside the main loop would spill every live float of the body at hand.
     """
+    for b in range(parents.shape[0]):
+        if kinds[b] == REVOLUTE:
+            qj = q[q_index[b]]
+            xform[b, 3, 0] = math.sin(qj)
+            xform[b, 3, 1] = 1.0 - math.cos(qj)
     for b in range(parents.shape[0]):
         parent, kind, iq, iv = parents[b], kinds[b], q_index[b], v_index[b]
         if kind == FREE_FLYER or kind == LOCKED_ROOT:
@@ -235,8 +243,8 @@ def kinematics_into(
         l0, l1, l2 = place[b, 3, 0], place[b, 3, 1], place[b, 3, 2]
         if kind == REVOLUTE:
             # R_l = R_placement exp(q [a]) (Rodrigues about the unit axis a = (s3, s4, s5))
-            sn = math.sin(qj)
-            c1 = 1.0 - math.cos(qj)
+            sn = xform[b, 3, 0]  # sin q
+            c1 = xform[b, 3, 1]  # 1 - cos q
             j00 = 1.0 - c1 * (s4 * s4 + s5 * s5)
             j11 = 1.0 - c1 * (s3 * s3 + s5 * s5)
             j22 = 1.0 - c1 * (s3 * s3 + s4 * s4)
