@@ -254,15 +254,39 @@ def kinematics_into(
             j20 = -sn * s4 + c1 * s3 * s5
             j12 = -sn * s3 + c1 * s4 * s5
             j21 = sn * s3 + c1 * s4 * s5
-            r00 = p00 * j00 + p01 * j10 + p02 * j20
-            r01 = p00 * j01 + p01 * j11 + p02 * j21
-            r02 = p00 * j02 + p01 * j12 + p02 * j22
-            r10 = p10 * j00 + p11 * j10 + p12 * j20
-            r11 = p10 * j01 + p11 * j11 + p12 * j21
-            r12 = p10 * j02 + p11 * j12 + p12 * j22
-            r20 = p20 * j00 + p21 * j10 + p22 * j20
-            r21 = p20 * j01 + p21 * j11 + p22 * j21
-            r22 = p20 * j02 + p21 * j12 + p22 * j22
+            if (
+                p00 == 1.0
+                and p11 == 1.0
+                and p22 == 1.0
+                and p01 == 0.0
+                and p02 == 0.0
+                and p10 == 0.0
+                and p12 == 0.0
+                and p20 == 0.0
+                and p21 == 0.0
+            ):
+                # a joint frame aligned with its parent's (the usual case): R_l = exp(q [a])
+                r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
+                    j00,
+                    j01,
+                    j02,
+                    j10,
+                    j11,
+                    j12,
+                    j20,
+                    j21,
+                    j22,
+                )
+            else:
+                r00 = p00 * j00 + p01 * j10 + p02 * j20
+                r01 = p00 * j01 + p01 * j11 + p02 * j21
+                r02 = p00 * j02 + p01 * j12 + p02 * j22
+                r10 = p10 * j00 + p11 * j10 + p12 * j20
+                r11 = p10 * j01 + p11 * j11 + p12 * j21
+                r12 = p10 * j02 + p11 * j12 + p12 * j22
+                r20 = p20 * j00 + p21 * j10 + p22 * j20
+                r21 = p20 * j01 + p21 * j11 + p22 * j21
+                r22 = p20 * j02 + p21 * j12 + p22 * j22
         else:
             r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
                 p00,
