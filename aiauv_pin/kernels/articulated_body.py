@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 
 from aiauv_control.laws.paper_laws import joint_pd_implicit_terms, joint_pd_torque
-from aiauv_hydro.currents import current_acceleration, current_velocity
+from aiauv_hydro.currents import CONSTANT, current_acceleration, current_velocity
 from aiauv_hydro.laws.actuators import actuator_response
 from aiauv_hydro.laws.fluid_terms import (
     add_body_fluid_bias,
@@ -377,7 +377,15 @@ def point_in_world(rotation, position, b, x, y, z):
 
 @compiled(fastmath=True, borrows_only=True, inline=True)
 def sample_current(model, env, t, W):
-    """Water velocity at every body's probe point at time ``t`` into ``W.current`` (after kinematics)."""
+    """Water velocity at every body's probe point at time ``t`` into ``W.current`` (after kinematics).
+
+    A built-in constant current is the same everywhere: copied to every probe, without the
+    probes' positions."""
+    if env.current_function is None and env.current_kind == CONSTANT:
+        water, velocity = W.current, env.current_parameters
+        for b in range(water.shape[0]):
+            water[b, 0], water[b, 1], water[b, 2] = velocity[0], velocity[1], velocity[2]
+        return
     current_at_probes(
         env.current_function,
         env.current_kind,
@@ -429,9 +437,13 @@ def add_disturbance(function, kind, t, q, v, parameters, tau):
     apply_disturbance(function, kind, t, q, v, parameters, tau)
 
 
-@compiled(fastmath=True, borrows_only=True, inline=True)
+@compiled(fastmath=True, borrows_only=True)
 def body_bias(model, W):
     """Velocity- and state-dependent part of each body's equation ``f = I a + p`` (left-hand side).
+
+    Not inlined into :func:`acceleration_into`: it does not depend on the current's function, so
+    it is compiled once and loaded alike in every process (inlined, a run with a user's current
+    got other last bits in a second process: tests/simulation/test_user_cache.py).
 
     ``p = nu x* (I_RB nu)`` (rigid Coriolis, Featherstone 2008, eq. (2.67)) plus every fluid term of
     :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`, and the fins' lift and drag at the
