@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 
 from aiauv_control.laws.paper_laws import joint_pd_implicit_terms, joint_pd_torque
-from aiauv_hydro.currents import current_acceleration, current_velocity
+from aiauv_hydro.currents import CONSTANT, current_acceleration, current_velocity
 from aiauv_hydro.laws.actuators import actuator_response
 from aiauv_hydro.laws.fluid_terms import (
     add_body_fluid_bias,
@@ -108,48 +108,111 @@ def _xT_add(xl, f, dst):
 
 
 @compiled(fastmath=True, borrows_only=True)
-def _solve_spd6(a, b, out, low, y):
-    """Solve ``a x = b`` for a symmetric positive-definite 6x6 ``a`` (Cholesky)."""
-    for j in range(6):
-        s = a[j, j]
-        for k in range(j):
-            s -= low[j, k] * low[j, k]
-        d = math.sqrt(s) if s > 0.0 else math.nan
-        low[j, j] = d
-        for i in range(j + 1, 6):
-            s = a[i, j]
-            for k in range(j):
-                s -= low[i, k] * low[j, k]
-            low[i, j] = s / d
-    for i in range(6):
-        s = b[i]
-        for k in range(i):
-            s -= low[i, k] * y[k]
-        y[i] = s / low[i, i]
-    for i in range(5, -1, -1):
-        s = y[i]
-        for k in range(i + 1, 6):
-            s -= low[k, i] * out[k]
-        out[i] = s / low[i, i]
+def _solve_spd6(a, b, out):
+    """Solve ``a x = b`` for a symmetric positive-definite 6x6 ``a`` (Cholesky ``a = L L^T``),
+    reading ``a``'s upper triangle only; written out in scalars (no work arrays), so that the
+    factor stays in registers."""
+    a00, a01, a02, a03, a04, a05 = a[0, 0], a[0, 1], a[0, 2], a[0, 3], a[0, 4], a[0, 5]
+    a11, a12, a13, a14, a15 = a[1, 1], a[1, 2], a[1, 3], a[1, 4], a[1, 5]
+    a22, a23, a24, a25 = a[2, 2], a[2, 3], a[2, 4], a[2, 5]
+    a33, a34, a35 = a[3, 3], a[3, 4], a[3, 5]
+    a44, a45 = a[4, 4], a[4, 5]
+    a55 = a[5, 5]
+    s = a00
+    l00 = math.sqrt(s) if s > 0.0 else math.nan
+    i0 = 1.0 / l00
+    l10 = a01 * i0
+    l20 = a02 * i0
+    l30 = a03 * i0
+    l40 = a04 * i0
+    l50 = a05 * i0
+    s = a11 - l10 * l10
+    l11 = math.sqrt(s) if s > 0.0 else math.nan
+    i1 = 1.0 / l11
+    l21 = (a12 - l20 * l10) * i1
+    l31 = (a13 - l30 * l10) * i1
+    l41 = (a14 - l40 * l10) * i1
+    l51 = (a15 - l50 * l10) * i1
+    s = a22 - l20 * l20 - l21 * l21
+    l22 = math.sqrt(s) if s > 0.0 else math.nan
+    i2 = 1.0 / l22
+    l32 = (a23 - l30 * l20 - l31 * l21) * i2
+    l42 = (a24 - l40 * l20 - l41 * l21) * i2
+    l52 = (a25 - l50 * l20 - l51 * l21) * i2
+    s = a33 - l30 * l30 - l31 * l31 - l32 * l32
+    l33 = math.sqrt(s) if s > 0.0 else math.nan
+    i3 = 1.0 / l33
+    l43 = (a34 - l40 * l30 - l41 * l31 - l42 * l32) * i3
+    l53 = (a35 - l50 * l30 - l51 * l31 - l52 * l32) * i3
+    s = a44 - l40 * l40 - l41 * l41 - l42 * l42 - l43 * l43
+    l44 = math.sqrt(s) if s > 0.0 else math.nan
+    i4 = 1.0 / l44
+    l54 = (a45 - l50 * l40 - l51 * l41 - l52 * l42 - l53 * l43) * i4
+    s = a55 - l50 * l50 - l51 * l51 - l52 * l52 - l53 * l53 - l54 * l54
+    l55 = math.sqrt(s) if s > 0.0 else math.nan
+    i5 = 1.0 / l55
+    y0 = b[0] * i0
+    y1 = (b[1] - l10 * y0) * i1
+    y2 = (b[2] - l20 * y0 - l21 * y1) * i2
+    y3 = (b[3] - l30 * y0 - l31 * y1 - l32 * y2) * i3
+    y4 = (b[4] - l40 * y0 - l41 * y1 - l42 * y2 - l43 * y3) * i4
+    y5 = (b[5] - l50 * y0 - l51 * y1 - l52 * y2 - l53 * y3 - l54 * y4) * i5
+    x5 = y5 * i5
+    x4 = (y4 - l54 * x5) * i4
+    x3 = (y3 - l43 * x4 - l53 * x5) * i3
+    x2 = (y2 - l32 * x3 - l42 * x4 - l52 * x5) * i2
+    x1 = (y1 - l21 * x2 - l31 * x3 - l41 * x4 - l51 * x5) * i1
+    x0 = (y0 - l10 * x1 - l20 * x2 - l30 * x3 - l40 * x4 - l50 * x5) * i0
+    out[0] = x0
+    out[1] = x1
+    out[2] = x2
+    out[3] = x3
+    out[4] = x4
+    out[5] = x5
 
 
 # ---------------------------------------------------------------------- kinematics
-@compiled(fastmath=True, borrows_only=True)
+@compiled(fastmath=True, borrows_only=True, inline=True)
 def kinematics(bodies, q, v, W):
-    """Body poses in the world, placements in the parent, twists and ``v x S qd`` into ``W``.
-
-    Written body by body with scalar locals (no helper writes into array views), so the compiler
-    keeps a body's rotation, position and twist in registers; each body's results are stored once.
-    """
-    rot_w, pos_w, xform, twist, bias_acc = (
+    """Body poses in the world, placements in the parent, twists and ``v x S qd`` into ``W``
+    (:func:`kinematics_into` on the arrays of ``bodies`` and ``W`` it uses: inlined, so that a
+    compiled caller passes those few arrays rather than every array of both records)."""
+    kinematics_into(
+        bodies.parent,
+        bodies.kind,
+        bodies.q_index,
+        bodies.v_index,
+        bodies.placement,
+        bodies.axis,
+        q,
+        v,
         W.rotation,
         W.position,
         W.placement,
         W.twist,
         W.bias_acceleration,
     )
-    place, axis = bodies.placement, bodies.axis
-    parents, kinds, q_index, v_index = bodies.parent, bodies.kind, bodies.q_index, bodies.v_index
+
+
+@compiled(fastmath=True, borrows_only=True)
+def kinematics_into(
+    parents, kinds, q_index, v_index, place, axis, q, v, rot_w, pos_w, xform, twist, bias_acc
+):
+    """:func:`kinematics` on arrays: body poses ``rot_w``, ``pos_w``, placements in the parent
+    ``xform``, twists ``twist`` and ``v x S qd`` ``bias_acc`` of the tree ``parents, kinds,
+    q_index, v_index, place, axis`` (the fields of :class:`aiauv_pin.kernels.records.RigidBodies`).
+
+    Written body by body with scalar locals (no helper writes into array views), so the compiler
+    keeps a body's rotation, position and twist in registers; each body's results are stored once.
+    The joints' sines and cosines are taken first, in a loop of their own (parked in the rows
+    ``xform[b, 3]`` that the body's translation overwrites later): a call to the math library
+    inside the main loop would spill every live float of the body at hand.
+    """
+    for b in range(parents.shape[0]):
+        if kinds[b] == REVOLUTE:
+            qj = q[q_index[b]]
+            xform[b, 3, 0] = math.sin(qj)
+            xform[b, 3, 1] = 1.0 - math.cos(qj)
     for b in range(parents.shape[0]):
         parent, kind, iq, iv = parents[b], kinds[b], q_index[b], v_index[b]
         if kind == FREE_FLYER or kind == LOCKED_ROOT:
@@ -180,8 +243,8 @@ def kinematics(bodies, q, v, W):
         l0, l1, l2 = place[b, 3, 0], place[b, 3, 1], place[b, 3, 2]
         if kind == REVOLUTE:
             # R_l = R_placement exp(q [a]) (Rodrigues about the unit axis a = (s3, s4, s5))
-            sn = math.sin(qj)
-            c1 = 1.0 - math.cos(qj)
+            sn = xform[b, 3, 0]  # sin q
+            c1 = xform[b, 3, 1]  # 1 - cos q
             j00 = 1.0 - c1 * (s4 * s4 + s5 * s5)
             j11 = 1.0 - c1 * (s3 * s3 + s5 * s5)
             j22 = 1.0 - c1 * (s3 * s3 + s4 * s4)
@@ -191,15 +254,39 @@ def kinematics(bodies, q, v, W):
             j20 = -sn * s4 + c1 * s3 * s5
             j12 = -sn * s3 + c1 * s4 * s5
             j21 = sn * s3 + c1 * s4 * s5
-            r00 = p00 * j00 + p01 * j10 + p02 * j20
-            r01 = p00 * j01 + p01 * j11 + p02 * j21
-            r02 = p00 * j02 + p01 * j12 + p02 * j22
-            r10 = p10 * j00 + p11 * j10 + p12 * j20
-            r11 = p10 * j01 + p11 * j11 + p12 * j21
-            r12 = p10 * j02 + p11 * j12 + p12 * j22
-            r20 = p20 * j00 + p21 * j10 + p22 * j20
-            r21 = p20 * j01 + p21 * j11 + p22 * j21
-            r22 = p20 * j02 + p21 * j12 + p22 * j22
+            if (
+                p00 == 1.0
+                and p11 == 1.0
+                and p22 == 1.0
+                and p01 == 0.0
+                and p02 == 0.0
+                and p10 == 0.0
+                and p12 == 0.0
+                and p20 == 0.0
+                and p21 == 0.0
+            ):
+                # a joint frame aligned with its parent's (the usual case): R_l = exp(q [a])
+                r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
+                    j00,
+                    j01,
+                    j02,
+                    j10,
+                    j11,
+                    j12,
+                    j20,
+                    j21,
+                    j22,
+                )
+            else:
+                r00 = p00 * j00 + p01 * j10 + p02 * j20
+                r01 = p00 * j01 + p01 * j11 + p02 * j21
+                r02 = p00 * j02 + p01 * j12 + p02 * j22
+                r10 = p10 * j00 + p11 * j10 + p12 * j20
+                r11 = p10 * j01 + p11 * j11 + p12 * j21
+                r12 = p10 * j02 + p11 * j12 + p12 * j22
+                r20 = p20 * j00 + p21 * j10 + p22 * j20
+                r21 = p20 * j01 + p21 * j11 + p22 * j21
+                r22 = p20 * j02 + p21 * j12 + p22 * j22
         else:
             r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
                 p00,
@@ -288,9 +375,17 @@ def point_in_world(rotation, position, b, x, y, z):
     )
 
 
-@compiled(fastmath=True, borrows_only=True)
+@compiled(fastmath=True, borrows_only=True, inline=True)
 def sample_current(model, env, t, W):
-    """Water velocity at every body's probe point at time ``t`` into ``W.current`` (after kinematics)."""
+    """Water velocity at every body's probe point at time ``t`` into ``W.current`` (after kinematics).
+
+    A built-in constant current is the same everywhere: copied to every probe, without the
+    probes' positions."""
+    if env.current_function is None and env.current_kind == CONSTANT:
+        water, velocity = W.current, env.current_parameters
+        for b in range(water.shape[0]):
+            water[b, 0], water[b, 1], water[b, 2] = velocity[0], velocity[1], velocity[2]
+        return
     current_at_probes(
         env.current_function,
         env.current_kind,
@@ -346,6 +441,10 @@ def add_disturbance(function, kind, t, q, v, parameters, tau):
 def body_bias(model, W):
     """Velocity- and state-dependent part of each body's equation ``f = I a + p`` (left-hand side).
 
+    Not inlined into :func:`acceleration_into`: it does not depend on the current's function, so
+    it is compiled once and loaded alike in every process (inlined, a run with a user's current
+    got other last bits in a second process: tests/simulation/test_user_cache.py).
+
     ``p = nu x* (I_RB nu)`` (rigid Coriolis, Featherstone 2008, eq. (2.67)) plus every fluid term of
     :func:`aiauv_hydro.laws.fluid_terms.add_body_fluid_bias`, and the fins' lift and drag at the
     angles ``W.fin_angle`` (:func:`aiauv_hydro.laws.lift.add_fin_wrenches`); after
@@ -378,7 +477,7 @@ def body_bias(model, W):
     add_fin_wrenches(model.fins, W.fin_angle, W.rotation, W.twist, W.current, W.bias)
 
 
-@compiled(fastmath=True, borrows_only=True)
+@compiled(fastmath=True, borrows_only=True, inline=True)
 def flow_acceleration_bias(model, env, t, W):
     """The water's acceleration ``DV/Dt`` at every body's probe point at time ``t`` into
     ``W.flow_acceleration`` and its wrench in each body's bias
@@ -452,71 +551,54 @@ def _rotate_full(
 
 
 @compiled(fastmath=True, borrows_only=True, inline=True)
-def _add_child_inertia(xform, art, child, parent):
-    """``art[parent] += X^T I^a X`` for the symmetric ``I^a = art[child] = [[A, B], [B^T, C]]``.
+def _add_child_inertia(
+    xform,
+    child,
+    art,
+    parent,
+    a00,
+    a01,
+    a02,
+    a11,
+    a12,
+    a22,
+    b00,
+    b01,
+    b02,
+    b10,
+    b11,
+    b12,
+    b20,
+    b21,
+    b22,
+    c00,
+    c01,
+    c02,
+    c11,
+    c12,
+    c22,
+):
+    """``art[parent] += X^T I^a X`` (upper triangle) for the child's symmetric ``I^a = [[A, B],
+    [B^T, C]]`` given in scalars (the upper triangles of ``A`` and ``C``, all of ``B``).
 
     With ``A' = R A R^T``, ``B' = R B R^T``, ``C' = R C R^T`` and ``P = [p]`` (``xform[child]``: rows 0-2
     ``R``, row 3 ``p``): ``X^T I X = [[A', B' - A' P], [sym., C' + P B' + (P B')^T - P A' P]]``, the inertia
     transform of Featherstone 2008, eq. (2.66), written for ``X`` of the kinematics; the two
-    symmetric blocks are computed on their upper triangles only (``P A' P`` is symmetric).
+    symmetric blocks are computed on their upper triangles only (``P A' P`` is symmetric), and
+    only the parent's upper triangle is updated (:func:`articulated_into` keeps no other).
     """
     r00, r01, r02 = xform[child, 0, 0], xform[child, 0, 1], xform[child, 0, 2]
     r10, r11, r12 = xform[child, 1, 0], xform[child, 1, 1], xform[child, 1, 2]
     r20, r21, r22 = xform[child, 2, 0], xform[child, 2, 1], xform[child, 2, 2]
     p0, p1, p2 = xform[child, 3, 0], xform[child, 3, 1], xform[child, 3, 2]
     a00, a01, a02, a11, a12, a22 = _rotate_symmetric(
-        r00,
-        r01,
-        r02,
-        r10,
-        r11,
-        r12,
-        r20,
-        r21,
-        r22,
-        art[child, 0, 0],
-        art[child, 0, 1],
-        art[child, 0, 2],
-        art[child, 1, 1],
-        art[child, 1, 2],
-        art[child, 2, 2],
+        r00, r01, r02, r10, r11, r12, r20, r21, r22, a00, a01, a02, a11, a12, a22
     )
     c00, c01, c02, c11, c12, c22 = _rotate_symmetric(
-        r00,
-        r01,
-        r02,
-        r10,
-        r11,
-        r12,
-        r20,
-        r21,
-        r22,
-        art[child, 3, 3],
-        art[child, 3, 4],
-        art[child, 3, 5],
-        art[child, 4, 4],
-        art[child, 4, 5],
-        art[child, 5, 5],
+        r00, r01, r02, r10, r11, r12, r20, r21, r22, c00, c01, c02, c11, c12, c22
     )
     b00, b01, b02, b10, b11, b12, b20, b21, b22 = _rotate_full(
-        r00,
-        r01,
-        r02,
-        r10,
-        r11,
-        r12,
-        r20,
-        r21,
-        r22,
-        art[child, 0, 3],
-        art[child, 0, 4],
-        art[child, 0, 5],
-        art[child, 1, 3],
-        art[child, 1, 4],
-        art[child, 1, 5],
-        art[child, 2, 3],
-        art[child, 2, 4],
-        art[child, 2, 5],
+        r00, r01, r02, r10, r11, r12, r20, r21, r22, b00, b01, b02, b10, b11, b12, b20, b21, b22
     )
     # T = A' P, row i = a'_i x p
     t00 = a01 * p2 - a02 * p1
@@ -548,51 +630,27 @@ def _add_child_inertia(xform, art, child, parent):
     art[parent, 0, 0] += a00
     art[parent, 0, 1] += a01
     art[parent, 0, 2] += a02
-    art[parent, 1, 0] += a01
     art[parent, 1, 1] += a11
     art[parent, 1, 2] += a12
-    art[parent, 2, 0] += a02
-    art[parent, 2, 1] += a12
     art[parent, 2, 2] += a22
-    e00, e01, e02 = b00 - t00, b01 - t01, b02 - t02
-    e10, e11, e12 = b10 - t10, b11 - t11, b12 - t12
-    e20, e21, e22 = b20 - t20, b21 - t21, b22 - t22
-    art[parent, 0, 3] += e00
-    art[parent, 0, 4] += e01
-    art[parent, 0, 5] += e02
-    art[parent, 1, 3] += e10
-    art[parent, 1, 4] += e11
-    art[parent, 1, 5] += e12
-    art[parent, 2, 3] += e20
-    art[parent, 2, 4] += e21
-    art[parent, 2, 5] += e22
-    art[parent, 3, 0] += e00
-    art[parent, 4, 0] += e01
-    art[parent, 5, 0] += e02
-    art[parent, 3, 1] += e10
-    art[parent, 4, 1] += e11
-    art[parent, 5, 1] += e12
-    art[parent, 3, 2] += e20
-    art[parent, 4, 2] += e21
-    art[parent, 5, 2] += e22
-    d00 = c00 + 2.0 * q00 - s00
-    d01 = c01 + q01 + q10 - s01
-    d02 = c02 + q02 + q20 - s02
-    d11 = c11 + 2.0 * q11 - s11
-    d12 = c12 + q12 + q21 - s12
-    d22 = c22 + 2.0 * q22 - s22
-    art[parent, 3, 3] += d00
-    art[parent, 3, 4] += d01
-    art[parent, 3, 5] += d02
-    art[parent, 4, 3] += d01
-    art[parent, 4, 4] += d11
-    art[parent, 4, 5] += d12
-    art[parent, 5, 3] += d02
-    art[parent, 5, 4] += d12
-    art[parent, 5, 5] += d22
+    art[parent, 0, 3] += b00 - t00
+    art[parent, 0, 4] += b01 - t01
+    art[parent, 0, 5] += b02 - t02
+    art[parent, 1, 3] += b10 - t10
+    art[parent, 1, 4] += b11 - t11
+    art[parent, 1, 5] += b12 - t12
+    art[parent, 2, 3] += b20 - t20
+    art[parent, 2, 4] += b21 - t21
+    art[parent, 2, 5] += b22 - t22
+    art[parent, 3, 3] += c00 + 2.0 * q00 - s00
+    art[parent, 3, 4] += c01 + q01 + q10 - s01
+    art[parent, 3, 5] += c02 + q02 + q20 - s02
+    art[parent, 4, 4] += c11 + 2.0 * q11 - s11
+    art[parent, 4, 5] += c12 + q12 + q21 - s12
+    art[parent, 5, 5] += c22 + 2.0 * q22 - s22
 
 
-@compiled(fastmath=True, borrows_only=True)
+@compiled(fastmath=True, borrows_only=True, inline=True)
 def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
     """ABA passes 2 and 3 (Featherstone 2008, Table 7.1) with general 6x6 body inertias.
 
@@ -606,6 +664,10 @@ def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
     (:func:`aiauv_control.laws.paper_laws.joint_pd_implicit_terms`): the armature ``A`` enters each
     servoed joint's
     ``D = S^T I^A S`` (the joint-space diagonal the ABA inverts).
+
+    The articulated inertias are symmetric: only their upper triangles are formed and kept
+    (``W.articulated_inertia[b, i, j]`` for ``i <= j``), and a body's own ``I^a`` stays in scalars
+    from its ``I^A`` to its parent's.
     """
     bodies = model.bodies
     nb = bodies.parent.shape[0]
@@ -634,7 +696,7 @@ def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
     for b in range(nb):
         for i in range(6):
             pa[b, i] = bias[b, i]
-            for j in range(6):
+            for j in range(i, 6):
                 art[b, i, j] = inertia[b, i, j]
         if carry_restoring:
             w = hydrostatic_wrench(
@@ -646,38 +708,50 @@ def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
         parent = parents[b]
         iv = v_index[b]
         k = axis_index[b]
+        # I^A (upper triangle) in scalars
+        a00, a01, a02, a03, a04, a05 = (
+            art[b, 0, 0],
+            art[b, 0, 1],
+            art[b, 0, 2],
+            art[b, 0, 3],
+            art[b, 0, 4],
+            art[b, 0, 5],
+        )
+        a11, a12, a13, a14, a15 = (
+            art[b, 1, 1],
+            art[b, 1, 2],
+            art[b, 1, 3],
+            art[b, 1, 4],
+            art[b, 1, 5],
+        )
+        a22, a23, a24, a25 = art[b, 2, 2], art[b, 2, 3], art[b, 2, 4], art[b, 2, 5]
+        a33, a34, a35 = art[b, 3, 3], art[b, 3, 4], art[b, 3, 5]
+        a44, a45, a55 = art[b, 4, 4], art[b, 4, 5], art[b, 5, 5]
         if k >= 0:
-            u0, u1, u2, u3, u4, u5 = (
-                art[b, 0, k],
-                art[b, 1, k],
-                art[b, 2, k],
-                art[b, 3, k],
-                art[b, 4, k],
-                art[b, 5, k],
-            )
+            # U = I^A e_k: column k, read from the upper triangle
+            u0 = art[b, 0, k]
+            u1 = art[b, min(1, k), max(1, k)]
+            u2 = art[b, min(2, k), max(2, k)]
+            u3 = art[b, min(3, k), max(3, k)]
+            u4 = art[b, min(4, k), max(4, k)]
+            u5 = art[b, k, 5]
             d = art[b, k, k]
             sp = pa[b, k]
             g = restoring[b, k] if carry_restoring else 0.0
         else:
-            s = axis
-            u0 = _dot6(art, b, 0, s, b)
-            u1 = _dot6(art, b, 1, s, b)
-            u2 = _dot6(art, b, 2, s, b)
-            u3 = _dot6(art, b, 3, s, b)
-            u4 = _dot6(art, b, 4, s, b)
-            u5 = _dot6(art, b, 5, s, b)
-            d = (
-                u0 * s[b, 0]
-                + u1 * s[b, 1]
-                + u2 * s[b, 2]
-                + u3 * s[b, 3]
-                + u4 * s[b, 4]
-                + u5 * s[b, 5]
-            )
-            sp = _dot_rows(pa, b, s, b)
+            s0, s1, s2 = axis[b, 0], axis[b, 1], axis[b, 2]
+            s3, s4, s5 = axis[b, 3], axis[b, 4], axis[b, 5]
+            u0 = a00 * s0 + a01 * s1 + a02 * s2 + a03 * s3 + a04 * s4 + a05 * s5
+            u1 = a01 * s0 + a11 * s1 + a12 * s2 + a13 * s3 + a14 * s4 + a15 * s5
+            u2 = a02 * s0 + a12 * s1 + a22 * s2 + a23 * s3 + a24 * s4 + a25 * s5
+            u3 = a03 * s0 + a13 * s1 + a23 * s2 + a33 * s3 + a34 * s4 + a35 * s5
+            u4 = a04 * s0 + a14 * s1 + a24 * s2 + a34 * s3 + a44 * s4 + a45 * s5
+            u5 = a05 * s0 + a15 * s1 + a25 * s2 + a35 * s3 + a45 * s4 + a55 * s5
+            d = u0 * s0 + u1 * s1 + u2 * s2 + u3 * s3 + u4 * s4 + u5 * s5
+            sp = _dot_rows(pa, b, axis, b)
             g = 0.0
             if carry_restoring:
-                g = _dot_rows(restoring, b, s, b)
+                g = _dot_rows(restoring, b, axis, b)
         tau_b = tau[iv]
         joint = iv - 6
         if use_servo and 0 <= joint < n_joint:
@@ -704,21 +778,67 @@ def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
         u_sc[b] = us
         if parent < 0:
             continue
-        # I^a = I^A - U U^T / D (in place: the body's own I^A is not needed again)
-        for i in range(6):
-            ui = u_vec[b, i] * di
-            for j in range(6):
-                art[b, i, j] -= ui * u_vec[b, j]
+        # I^a = I^A - U U^T / D (upper triangle)
+        w0, w1, w2, w3, w4, w5 = u0 * di, u1 * di, u2 * di, u3 * di, u4 * di, u5 * di
+        a00 -= w0 * u0
+        a01 -= w0 * u1
+        a02 -= w0 * u2
+        a03 -= w0 * u3
+        a04 -= w0 * u4
+        a05 -= w0 * u5
+        a11 -= w1 * u1
+        a12 -= w1 * u2
+        a13 -= w1 * u3
+        a14 -= w1 * u4
+        a15 -= w1 * u5
+        a22 -= w2 * u2
+        a23 -= w2 * u3
+        a24 -= w2 * u4
+        a25 -= w2 * u5
+        a33 -= w3 * u3
+        a34 -= w3 * u4
+        a35 -= w3 * u5
+        a44 -= w4 * u4
+        a45 -= w4 * u5
+        a55 -= w5 * u5
         # p^a = p^A + I^a c + U u / D, then the parent's X^T p^a
+        c0, c1, c2 = bias_acc[b, 0], bias_acc[b, 1], bias_acc[b, 2]
+        c3, c4, c5 = bias_acc[b, 3], bias_acc[b, 4], bias_acc[b, 5]
         f = us * di
-        x0 = pa[b, 0] + _dot6(art, b, 0, bias_acc, b) + u0 * f
-        x1 = pa[b, 1] + _dot6(art, b, 1, bias_acc, b) + u1 * f
-        x2 = pa[b, 2] + _dot6(art, b, 2, bias_acc, b) + u2 * f
-        x3 = pa[b, 3] + _dot6(art, b, 3, bias_acc, b) + u3 * f
-        x4 = pa[b, 4] + _dot6(art, b, 4, bias_acc, b) + u4 * f
-        x5 = pa[b, 5] + _dot6(art, b, 5, bias_acc, b) + u5 * f
-        _add_child_inertia(xform, art, b, parent)
+        x0 = pa[b, 0] + a00 * c0 + a01 * c1 + a02 * c2 + a03 * c3 + a04 * c4 + a05 * c5 + u0 * f
+        x1 = pa[b, 1] + a01 * c0 + a11 * c1 + a12 * c2 + a13 * c3 + a14 * c4 + a15 * c5 + u1 * f
+        x2 = pa[b, 2] + a02 * c0 + a12 * c1 + a22 * c2 + a23 * c3 + a24 * c4 + a25 * c5 + u2 * f
+        x3 = pa[b, 3] + a03 * c0 + a13 * c1 + a23 * c2 + a33 * c3 + a34 * c4 + a35 * c5 + u3 * f
+        x4 = pa[b, 4] + a04 * c0 + a14 * c1 + a24 * c2 + a34 * c3 + a44 * c4 + a45 * c5 + u4 * f
+        x5 = pa[b, 5] + a05 * c0 + a15 * c1 + a25 * c2 + a35 * c3 + a45 * c4 + a55 * c5 + u5 * f
         _add_child_force(xform, b, x0, x1, x2, x3, x4, x5, pa, parent)
+        _add_child_inertia(
+            xform,
+            b,
+            art,
+            parent,
+            a00,
+            a01,
+            a02,
+            a11,
+            a12,
+            a22,
+            a03,
+            a04,
+            a05,
+            a13,
+            a14,
+            a15,
+            a23,
+            a24,
+            a25,
+            a33,
+            a34,
+            a35,
+            a44,
+            a45,
+            a55,
+        )
         if carry_restoring:
             _add_child_force(
                 xform,
@@ -743,7 +863,7 @@ def articulated_into(model, servo, q, v, tau, W, out, implicit_step):
         tmp = W.v6[1]
         for i in range(6):
             tmp[i] = tau[iv0 + i] - pa[0, i]
-        _solve_spd6(art[0], tmp, acc[0], W.m66[2], W.v6[2])
+        _solve_spd6(art[0], tmp, acc[0])
         for i in range(6):
             out[iv0 + i] = acc[0, i]
     for b in range(1, nb):

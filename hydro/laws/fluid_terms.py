@@ -898,7 +898,7 @@ def add_link_damping(fluid, rotation, twist, current, bias, d_twist, d_current, 
                     d_current[b, i, j] += link_jac[i, j]
 
 
-@compiled(fastmath=True, borrows_only=True)
+@compiled(fastmath=True, borrows_only=True, inline=True)
 def _move_twist(transforms, k, is_identity, twist, out):
     """``out = X_k twist`` with ``X_k = transforms[k]`` (a copy where ``is_identity``) (6,)."""
     if is_identity:
