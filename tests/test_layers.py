@@ -302,14 +302,13 @@ WALK = [
 ]
 
 #: What those files call during the step and that calls nothing of the project back: the
-#: numerics (cross products), the rotation of a quaternion, the current, the disturbance, the
-#: path and the fins' sum (none on this vehicle).
+#: numerics (cross products), the rotation of a quaternion, the disturbance, the path and the
+#: fins' sum (none on this vehicle); the still water is copied to the probes without a call.
 LEAVES = [
     "aiauv_pin/kernels/disturbances.py",
     "aiauv_pin/kernels/rotations.py",
     "control/paths/__init__.py",
     "control/paths/line.py",
-    "hydro/currents.py",
     "hydro/laws/lift.py",
     "hydro/numerics/spatial.py",
 ]

@@ -1053,7 +1053,7 @@ def workspace(nb: int, nq: int, nv: int, nf: int = 0, m: int = 0) -> Workspace:
     (allocate once, reuse in every step); the actuators start at rest (zero).
 
     Built in Python: it is only called from Python, and compiling its 34 array allocations would
-    lengthen every first run (issue 15).
+    lengthen every first run.
     """
     return Workspace(
         np.empty((nb, 3, 3)),
@@ -1392,7 +1392,7 @@ class MidpointMethod(NamedTuple):
 def integrator_step(method, model, env, servo, t, q, v, tau, dt, W, q_out, v_out):
     """One step of ``method`` into ``q_out, v_out``: an :class:`EulerMethod`, :class:`RK4Method` or
     :class:`MidpointMethod` (compiled, the integrator is chosen by its type when the caller is
-    compiled, so a loop compiled for one method does not compile the others' code, issue 15), or
+    compiled, so a loop compiled for one method does not compile the others' code), or
     a code (:data:`RK4`, :data:`EULER`, :data:`MIDPOINT`) chosen at run time by
     :func:`step_into`."""
     code = method if isinstance(method, int) else method.code
