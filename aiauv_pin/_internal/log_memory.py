@@ -5,9 +5,10 @@ NumPy asks Linux for transparent huge pages on every array of 4 MiB or more
 ``/sys/kernel/mm/transparent_hugepage/defrag = madvise``, a page fault in such an array may
 compact memory synchronously to find a free 2 MiB page: the first write to a rollout's fresh
 log then costs several times the system time of ordinary pages (the figures are on the docs'
-performance page), and the huge pages buy nothing for a log written once, row by row. :func:`empty_log` gives the same C-ordered float64 array in an anonymous memory
-map (Python's :mod:`mmap`), which numpy does not advise: the values written, and so the results,
-are unchanged.
+performance page), and the huge pages buy nothing for a log written once, row by row.
+:func:`empty_log` gives the same C-ordered float64 array in an anonymous memory map (Python's
+:mod:`mmap`), which numpy does not advise: the values written, and so the results, are
+unchanged.
 """
 
 from __future__ import annotations

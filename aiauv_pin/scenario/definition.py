@@ -12,7 +12,8 @@ leaves open, documented here and in the README:
   logged at the controller's rate) and the joint PD (eq. 24) runs as a continuous servo evaluated at
   every integrator stage (see :class:`aiauv_pin.controllers.paper_controller.VehiclePathFollowing`);
 * semi-implicit Euler with ``dt = 0.004`` s (:mod:`aiauv_pin.scenario.defaults`), chosen by
-  the rule of accuracy per cost with one condition of ours: the cheapest setting whose end-effector path stays within 2 mm
+  the rule of accuracy per cost with one condition of ours: the cheapest setting whose
+  end-effector path stays within 2 mm
   of a converged reference (Richardson's extrapolation of RK4 at 0.5 and 1 ms) over the whole
   300 s run, and whose sampled attitude loop still converges with the paper's ``k_p, k_d`` doubled
   (a gain margin of 2, :data:`aiauv_pin.tools.run_benchmarks.MARGIN_TARGET`). It is 1.996 mm off on the

@@ -55,5 +55,5 @@ def test_offsets_for_another_vehicle_are_refused(paper_vehicle):
     law = plan.arguments[-1]
     wrong = law.parameters._replace(info=law.parameters.info._replace(path_s=10**6))
     bad = dataclasses.replace(law, parameters=wrong)
-    with pytest.raises(RecordSizeError, match="parameters.info must be the offsets"):
+    with pytest.raises(RecordSizeError, match=r"parameters\.info must be the offsets"):
         aiauv_pin.simulate(*plan.arguments[:-1], bad, **plan.options)
