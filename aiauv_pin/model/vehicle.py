@@ -77,8 +77,8 @@ def single_threaded_blas(nv: int):
     the threaded products and solve cost several times more at 127 links (measured on the
     performance page of the docs). threadpoolctl limits the BLAS that numpy actually loaded,
     only for the duration of the call, so a user's own numpy work keeps its threads; an
-    environment variable such as ``OPENBLAS_NUM_THREADS`` would act only if set before numpy is imported, and on the whole
-    process. Below :data:`SINGLE_THREAD_BLAS_FROM_NV` it does nothing.
+    environment variable such as ``OPENBLAS_NUM_THREADS`` would act only if set before numpy is
+    imported, and on the whole process. Below :data:`SINGLE_THREAD_BLAS_FROM_NV` it does nothing.
     """
     global _BLAS_CONTROLLER
     if nv < SINGLE_THREAD_BLAS_FROM_NV:
