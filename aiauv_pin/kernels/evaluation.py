@@ -294,20 +294,13 @@ class FastModel:
             entry = self._checked_acceleration_entry
             if entry is not None and type(t) is float:
                 try:
-                    if (
-                        q.dtype is _FLOAT64
-                        and v.dtype is _FLOAT64
-                        and tau.dtype is _FLOAT64
-                        and q.ndim == 1
-                        and v.ndim == 1
-                        and tau.ndim == 1
-                    ):
+                    if _float64_vectors(q, v, tau):
                         handle = self._local.handle
                         if handle is not None:
                             out = np.empty(self.nv)
                             if entry(handle, t, q, v, tau, out) == STATE_OK:
                                 return out
-                except (AttributeError, TypeError):  # not an array, or only looks like one
+                except TypeError:  # only looks like an array
                     pass
             out = self.checked_acceleration(q, v, tau, t)
             if out is not None:
@@ -341,26 +334,19 @@ class FastModel:
         means "not taken": the arguments were of another kind or the compiled check refused them,
         and the caller's own checks then name the problem.
         """
-        # the hottest entry point (benchmarks/entry_checks.py): no helper call, no
-        # tuple; the dtype and number of dimensions checked here (numba's unboxing needs them
-        # right), everything else in the compiled call
+        # the hottest entry point (benchmarks/entry_checks.py): the dtype and number of
+        # dimensions checked here (numba's unboxing needs them right), everything else in the
+        # compiled call
         entry = self._checked_acceleration_entry
         if entry is not None and type(t) is float:
+            if not _float64_vectors(q, v, tau):
+                return None
             try:
-                if not (
-                    q.dtype is _FLOAT64
-                    and v.dtype is _FLOAT64
-                    and tau.dtype is _FLOAT64
-                    and q.ndim == 1
-                    and v.ndim == 1
-                    and tau.ndim == 1
-                ):
-                    return None
                 handle = self._local.handle
                 if handle is not None:
                     out = np.empty(self.nv)
                     return out if entry(handle, t, q, v, tau, out) == STATE_OK else None
-            except (AttributeError, TypeError):  # not an array, or only looks like one
+            except TypeError:  # only looks like an array
                 return None
         return self._first_checked_acceleration(q, v, tau, t)
 
