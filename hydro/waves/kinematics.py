@@ -82,22 +82,31 @@ def wave_elevation(t, x, y, parameters):
     return eta
 
 
+@compiled(inline=True)
+def component_at(t, x, y, zeta, parameters, i):
+    """What the velocity and the acceleration of component ``i`` share at ``(t, x, y)`` and
+    ``zeta = z - z_surface`` [m]: ``a omega`` [m/s], ``omega`` [rad/s], the direction's cosine and
+    sine, the phase ``theta = k (x cos b + y sin b) - omega t + phi`` [rad] and the depth factors
+    of :func:`depth_factors`."""
+    j = HEADER + STRIDE * i
+    a, omega, k = parameters[j], parameters[j + 1], parameters[j + 2]
+    cb, sb = parameters[j + 3], parameters[j + 4]
+    theta = k * (x * cb + y * sb) - omega * t + parameters[j + 5]
+    fc, fs = depth_factors(k, zeta, parameters[DEPTH])
+    return a * omega, omega, cb, sb, theta, fc, fs
+
+
 @compiled
 def wave_velocity(t, x, y, z, parameters):
     """Water velocity ``(V_x, V_y, V_z)`` [m/s], world axes: the waves' plus the uniform current."""
     vx, vy, vz = parameters[CURRENT_X], parameters[CURRENT_Y], parameters[CURRENT_Z]
     zeta = z - parameters[SURFACE_Z]
-    depth = parameters[DEPTH]
     for i in range(int(parameters[COUNT])):
-        j = HEADER + STRIDE * i
-        a, omega, k = parameters[j], parameters[j + 1], parameters[j + 2]
-        cb, sb = parameters[j + 3], parameters[j + 4]
-        theta = k * (x * cb + y * sb) - omega * t + parameters[j + 5]
-        fc, fs = depth_factors(k, zeta, depth)
-        horizontal = a * omega * fc * math.cos(theta)
+        a_omega, _, cb, sb, theta, fc, fs = component_at(t, x, y, zeta, parameters, i)
+        horizontal = a_omega * fc * math.cos(theta)
         vx += horizontal * cb
         vy += horizontal * sb
-        vz += a * omega * fs * math.sin(theta)
+        vz += a_omega * fs * math.sin(theta)
     return vx, vy, vz
 
 
@@ -106,17 +115,12 @@ def wave_acceleration(t, x, y, z, parameters):
     """Local acceleration of the water ``dV/dt`` [m/s^2], world axes (the current adds none)."""
     ax, ay, az = 0.0, 0.0, 0.0
     zeta = z - parameters[SURFACE_Z]
-    depth = parameters[DEPTH]
     for i in range(int(parameters[COUNT])):
-        j = HEADER + STRIDE * i
-        a, omega, k = parameters[j], parameters[j + 1], parameters[j + 2]
-        cb, sb = parameters[j + 3], parameters[j + 4]
-        theta = k * (x * cb + y * sb) - omega * t + parameters[j + 5]
-        fc, fs = depth_factors(k, zeta, depth)
-        horizontal = a * omega * omega * fc * math.sin(theta)
+        a_omega, omega, cb, sb, theta, fc, fs = component_at(t, x, y, zeta, parameters, i)
+        horizontal = a_omega * omega * fc * math.sin(theta)
         ax += horizontal * cb
         ay += horizontal * sb
-        az -= a * omega * omega * fs * math.cos(theta)
+        az -= a_omega * omega * fs * math.cos(theta)
     return ax, ay, az
 
 
