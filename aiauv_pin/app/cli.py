@@ -186,6 +186,7 @@ def _run_simulate(args) -> int:
         preload_plotting,
         write_results,
     )
+    from aiauv_pin.results.streamed_table import TableStream
     from aiauv_pin.scenario.definition import (
         ScenarioResult,
         finish_run,
@@ -246,6 +247,9 @@ def _run_simulate(args) -> int:
         from aiauv_pin.results.viewer import live_view
 
         on_log = live_view(vehicle, path_points=live_path_points(scenario))
+    # timeseries.csv's rows formatted by a second thread while the loop runs (it releases the GIL)
+    stream = TableStream.for_plan(plan)
+    streamed = None
     start = time.perf_counter()
     try:
         with compilation:
@@ -257,11 +261,14 @@ def _run_simulate(args) -> int:
                 after_first_chunk=None
                 if args.no_figures or not plan.compiled
                 else preload_plotting,
+                on_chunk=None if stream is None else stream.on_chunk,
             )
+        wall_time = time.perf_counter() - start
     except SimulationDiverged as exc:
         timing["compiled_now"] = compilation.compiled_now
         cause = " ".join(explain_divergence(vehicle, scenario.dt, str(exc)).split())
         partial = exc.trajectory
+        streamed = None if stream is None else stream.close()
         if partial is None or len(partial.t) == 0:
             raise AiauvError(f"simulation diverged: {cause}; nothing to write") from None
         from aiauv_pin.scenario.definition import add_path_errors
@@ -283,12 +290,16 @@ def _run_simulate(args) -> int:
                 figure_format=args.figure_format,
                 vehicle_name=title,
                 figures=not args.no_figures,
+                streamed=streamed,
             )
         raise AiauvError(
             f"simulation diverged: {cause}; partial results up to t = {partial.t[-1]:.6g} s "
             f"({len(partial.t)} samples) written to {out}"
         ) from None
-    result = finish_run(plan, trajectory, time.perf_counter() - start)
+    finally:
+        if stream is not None and streamed is None:
+            streamed = stream.close()  # the thread stops with the run, whatever ended it
+    result = finish_run(plan, trajectory, wall_time)
     timing["compiled_now"] = compilation.compiled_now
     with staged_folder(out) as staging:  # in place only once every file is written
         also = []
@@ -314,6 +325,7 @@ def _run_simulate(args) -> int:
             also=also,
             vehicle_name=title,
             figures=not args.no_figures,
+            streamed=streamed,
         )
     print(
         f"{name}: {content['simulated_time']:.1f} s simulated (set-up {timing['setup_time']:.1f} s, "

@@ -369,6 +369,14 @@ def parse_header(cell: str) -> tuple[str, str]:
 PLOT_BUCKETS = 2000
 
 
+def csv_stride(period: float | None, logged_step: float) -> int:
+    """Logged samples per row of ``timeseries.csv``: ``csv_period`` over the time between two
+    logged samples [s], rounded, at least 1 (1 when ``period`` is ``None``: every sample)."""
+    if period is None:
+        return 1
+    return max(1, round(period / logged_step))
+
+
 def csv_rows(result: ScenarioResult) -> np.ndarray:
     """Indices of the logged samples written to ``timeseries.csv`` (every ``csv_period``)."""
     t = result.trajectory.t
@@ -376,8 +384,7 @@ def csv_rows(result: ScenarioResult) -> np.ndarray:
     period = getattr(result.scenario, "csv_period", None)
     if period is None or n < 2:
         return np.arange(n)
-    stride = max(1, round(period / float(t[1] - t[0])))
-    rows = np.arange(0, n, stride)
+    rows = np.arange(0, n, csv_stride(period, float(t[1] - t[0])))
     if rows[-1] != n - 1:
         rows = np.append(rows, n - 1)
     return rows
@@ -388,10 +395,10 @@ def format_table(header: list[str], table: np.ndarray, fmt: str | Sequence[str] 
 
     ``fmt`` is a ``%`` format of one number, or one per column; ``"%r"`` writes Python's ``repr``
     (the shortest text that reads back to the same float)."""
-    return ",".join(header) + "\n" + _format_rows(table, fmt)
+    return ",".join(header) + "\n" + format_rows(table, fmt)
 
 
-def _format_rows(table: np.ndarray, fmt: str | Sequence[str]) -> str:
+def format_rows(table: np.ndarray, fmt: str | Sequence[str]) -> str:
     """The rows of :func:`format_table` (no header): a row's text depends on that row alone, so
     the text of consecutive blocks of rows, joined, is the text of the whole table."""
     n_rows, n_columns = table.shape
@@ -400,15 +407,32 @@ def _format_rows(table: np.ndarray, fmt: str | Sequence[str]) -> str:
     return (line * n_rows) % tuple(table.ravel().tolist()) if n_rows else ""
 
 
-def write_timeseries(result: ScenarioResult, path: Path) -> Path:
+def write_timeseries(result: ScenarioResult, path: Path, streamed=None) -> Path:
     """Write ``timeseries.csv``: one row per ``csv_period`` (see the module docstring), a header
     of ``name [unit]`` cells (:func:`timeseries_table`), numbers that read back exactly
-    (:data:`CSV_FORMAT`, :data:`TIME_FORMAT`)."""
-    header, table, formats = _timeseries_content(result)
-    return write_text(path, format_table(header, table, formats))
+    (:data:`CSV_FORMAT`, :data:`TIME_FORMAT`).
+
+    ``streamed``: rows formatted while the run was computed
+    (:class:`aiauv_pin.results.streamed_table.StreamedTable`); their text is used where their
+    numbers are the table's, bit for bit (the file is the same bytes)."""
+    return _write_table(path, *_table_parts(result, streamed))
 
 
-def _timeseries_content(result: ScenarioResult) -> tuple[list[str], np.ndarray, list[str]]:
+def _write_table(path: Path, head: str, rest: np.ndarray, formats: list[str]) -> Path:
+    """Write ``head`` and the rows ``rest`` formatted (:func:`_table_parts`) to ``path``."""
+    return write_text(path, head + format_rows(rest, formats))
+
+
+def _table_parts(result: ScenarioResult, streamed=None) -> tuple[str, np.ndarray, list[str]]:
+    """``timeseries.csv`` as its text so far (the header line and the rows ``streamed``
+    formatted, :meth:`~aiauv_pin.results.streamed_table.StreamedTable.text_for`), the rows left to
+    format and the columns' number formats."""
+    header, table, formats = timeseries_content(result)
+    done, text = (0, "") if streamed is None else streamed.text_for(table, formats)
+    return ",".join(header) + "\n" + text, table[done:], formats
+
+
+def timeseries_content(result: ScenarioResult) -> tuple[list[str], np.ndarray, list[str]]:
     """``timeseries.csv``'s header cells, rows (a float table) and number format per column."""
     columns = timeseries_table(result)
     rows = csv_rows(result)
@@ -421,20 +445,21 @@ def _timeseries_content(result: ScenarioResult) -> tuple[list[str], np.ndarray, 
 class _TimeseriesBlocks:
     """``timeseries.csv`` written as ``blocks`` tasks for :func:`_run_tasks`, which the two
     processes share, then put together here (:meth:`finish`): the text is the same bytes as
-    :func:`write_timeseries`' (:func:`_format_rows`).
+    :func:`write_timeseries`' (:func:`format_rows`).
 
     Each task formats a block of consecutive rows (the formatting is about 0.2 s of the paper's run)
     into an anonymous temporary file in the file's folder opened before the fork (no name on
     disk: a kill leaves nothing behind), which both processes share; :meth:`finish` reads the
     blocks back in order and writes the file atomically
     (:func:`~aiauv_pin._internal.atomic.write_bytes`), so the file is absent or complete as before.
+    ``head`` and ``table``: the text so far and the rows left (:func:`_table_parts`).
     """
 
-    def __init__(self, result: ScenarioResult, path: Path, blocks: int) -> None:
+    def __init__(self, path: Path, head: str, table: np.ndarray, formats, blocks: int) -> None:
         import tempfile
 
-        header, table, self._formats = _timeseries_content(result)
-        self._head = (",".join(header) + "\n").encode("utf-8")
+        self._formats = formats
+        self._head = head.encode("utf-8")
         self._path = path
         self._tables = np.array_split(table, blocks)  # consecutive rows, in order
         # beside the file (where its bytes have room), unnamed (``O_TMPFILE`` on Linux)
@@ -442,7 +467,7 @@ class _TimeseriesBlocks:
         self.tasks = [functools.partial(self._write_block, k) for k in range(len(self._tables))]
 
     def _write_block(self, k: int) -> None:
-        data = memoryview(_format_rows(self._tables[k], self._formats).encode("utf-8"))
+        data = memoryview(format_rows(self._tables[k], self._formats).encode("utf-8"))
         fd = self._sinks[k].fileno()
         while data:  # os.write may write less than asked
             data = data[os.write(fd, data) :]
@@ -1186,6 +1211,7 @@ def write_results(
     also: Sequence[Callable[[], object]] = (),
     parallel: bool = True,
     figures: bool = True,
+    streamed=None,
 ) -> dict:
     """Write every result file of a run into ``out_dir``; return the summary.
 
@@ -1207,6 +1233,8 @@ def write_results(
         parallel: See :func:`write_figures`.
         figures: Draw ``figures/`` (``False``: only the data files and ``also``; matplotlib is
             then not imported).
+        streamed: Rows of ``timeseries.csv`` formatted during the run (see
+            :func:`write_timeseries`).
     """
     if figures:
         _prepare_figures(figure_format)
@@ -1220,9 +1248,10 @@ def write_results(
         *(_figure_tasks(result, out_dir / "figures", figure_format, drawing) if figures else ()),
     ]
     csv_path = out_dir / "timeseries.csv"
-    blocks = min(_CSV_BLOCKS, len(csv_rows(result)) // _CSV_BLOCK_ROWS)
+    head, rest, formats = _table_parts(result, streamed)
+    blocks = min(_CSV_BLOCKS, len(rest) // _CSV_BLOCK_ROWS)
     if _second_process(parallel) is None or blocks < 2:
-        tasks.append(functools.partial(write_timeseries, result, csv_path))
+        tasks.append(functools.partial(_write_table, csv_path, head, rest, formats))
         return _run_tasks(
             tasks,
             parallel,
@@ -1230,7 +1259,7 @@ def write_results(
         )
     # with two processes, the table in blocks, the last tasks (the smallest): whichever process
     # is free takes the next, so that they finish about together, also without figures
-    csv = _TimeseriesBlocks(result, csv_path, blocks)
+    csv = _TimeseriesBlocks(csv_path, head, rest, formats, blocks)
     try:
         content = _run_tasks(
             [*tasks, *csv.tasks],

@@ -621,10 +621,7 @@ def finish_run(plan: RunPlan, trajectory: Trajectory, wall_time: float) -> Scena
     """
     vehicle, scenario = plan.vehicle, plan.scenario
     passive, use_compiled = plan.passive, plan.compiled
-    if scenario.controller == "transit_intervene":  # the path errors of both phases, from p
-        for key in ("cross_track", "path_s"):
-            trajectory.info.pop(key, None)
-    add_path_errors(vehicle, scenario, trajectory)
+    complete_diagnostics(vehicle, scenario, trajectory)
     if not passive and scenario.controller != "constant":  # rows logged once per sample
         warn_if_oscillating(
             np.asarray(trajectory.v)[:, 6:],
@@ -698,6 +695,15 @@ def run_scenario(
         after_first_chunk=after_first_chunk if plan.compiled else None,
     )
     return finish_run(plan, trajectory, time.perf_counter() - start)
+
+
+def complete_diagnostics(vehicle: Vehicle, scenario: Scenario, trajectory: Trajectory) -> None:
+    """The diagnostics :func:`finish_run` adds to a run's log: the path errors of
+    :func:`add_path_errors`, for a transit and intervention run from ``p`` over both phases."""
+    if scenario.controller == "transit_intervene":
+        for key in ("cross_track", "path_s"):
+            trajectory.info.pop(key, None)
+    add_path_errors(vehicle, scenario, trajectory)
 
 
 def add_path_errors(vehicle: Vehicle, scenario: Scenario, trajectory: Trajectory) -> None:

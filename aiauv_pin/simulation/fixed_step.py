@@ -24,7 +24,7 @@ from aiauv_pin._internal.array_checks import (
     optional_current,
     positive_seconds,
 )
-from aiauv_pin._internal.log_memory import empty_log
+from aiauv_pin._internal.log_memory import empty_arrays, empty_log
 from aiauv_pin.controllers.compiled_controller import CompiledController, check_compiled_controller
 from aiauv_pin.dynamics.joint_servo import JointServo
 from aiauv_pin.dynamics.lagged_added_mass import LaggedAddedMass, check_filter, check_scheme
@@ -170,6 +170,7 @@ def simulate(
     control_period: float | None = None,
     chunk_seconds: float | None = None,
     after_first_chunk: Callable[[], None] | None = None,
+    on_chunk: Callable[[np.ndarray], None] | None = None,
     added_mass: str = "exact",
     lagged_filter: float = UUV_SIMULATOR_FILTER,
     compile_only: bool = False,
@@ -222,6 +223,12 @@ def simulate(
         after_first_chunk: Compiled controller only: called once after the first chunk (the code
             is then compiled; later chunks release the GIL, so a background thread started here
             overlaps them).
+        on_chunk: Compiled controller only: called after each chunk with the rows logged so far
+            (a view of the log, rows ``(t, q, v, tau, info)`` as :func:`trajectory_of_log` reads
+            them; it stays valid after the call, and later rows are written into the same
+            memory). Where the rest of the run would be one call, it is split into chunks that
+            shrink towards its end (:func:`shrinking_chunks`), so that a background thread can
+            process the rows while the loop computes the next ones (it releases the GIL).
         added_mass: ``"exact"`` (added mass in the mass matrix) or ``"lagged"``, the scheme of
             UUV Simulator and gz-sim (:mod:`aiauv_pin.dynamics.lagged_added_mass`: rigid mass in
             the dynamics, the
@@ -293,6 +300,7 @@ def simulate(
             on_log=on_log,
             chunk_seconds=chunk_seconds,
             after_first_chunk=after_first_chunk,
+            on_chunk=on_chunk,
             compile_only=compile_only,
         )
     # a controller that carries the thrusters' state itself (station keeping, velocity control)
@@ -509,6 +517,7 @@ def _simulate_compiled(
     on_log,
     chunk_seconds: float | None,
     after_first_chunk,
+    on_chunk=None,
     compile_only: bool = False,
 ) -> Trajectory | None:
     """:func:`simulate` with a compiled controller: the whole loop in compiled code (only loaded
@@ -588,6 +597,8 @@ def _simulate_compiled(
     # with only ``after_first_chunk`` (a background thread), the rest is one call: each return from
     # a chunk waits for the GIL that thread holds (about one switch interval, 5 ms, per chunk)
     rest_in_one_call = chunk_seconds is None and not progress and on_log is None
+    # ... or, with ``on_chunk``, a few chunks that shrink, so the last rows wait little for it
+    shrinking = rest_in_one_call and on_chunk is not None
     if chunk_seconds is None:
         chunk_seconds = 1.0 if on_log is not None else (10.0 if interactive else math.inf)
     chunk = max(1, n_steps) if math.isinf(chunk_seconds) else max(1, round(chunk_seconds / dt))
@@ -601,9 +612,14 @@ def _simulate_compiled(
     diverged_at = None
     try:
         while True:
-            stop = min(k + chunk, n_steps)
+            if shrinking and (k > 0 or after_first_chunk is None):
+                stop = shrinking_chunks(k, n_steps)
+            else:
+                stop = min(k + chunk, n_steps)
             start_log = logged
             logged, done = run_chunk(k, stop, logged)
+            if on_chunk is not None:
+                on_chunk(log[:logged])
             if on_log is not None:
                 for row in log[start_log:logged]:
                     on_log(
@@ -628,17 +644,49 @@ def _simulate_compiled(
     finally:
         if bar is not None:
             bar.close()
-    rows = log[:logged]
-    trajectory = Trajectory(
-        t=rows[:, 0].copy(),
-        q=rows[:, 1 : 1 + nq].copy(),
-        v=rows[:, 1 + nq : 1 + nq + nv].copy(),
-        tau=rows[:, 1 + nq + nv : 1 + nq + 2 * nv].copy(),
-        info=controller.unpack(rows[:, 1 + nq + 2 * nv :]),
-    )
+    trajectory = trajectory_of_log(log[:logged], nq, nv, controller.unpack)
     if diverged_at is not None:
         raise diverged(trajectory, diverged_at + 1, dt)
     return trajectory
+
+
+#: Each chunk of :func:`shrinking_chunks` takes this share of the steps left, and at least
+#: :data:`LEAST_CHUNK` of the run's.
+CHUNK_SHARE_OF_REST = 0.45
+LEAST_CHUNK = 1 / 40
+
+
+def shrinking_chunks(k: int, n_steps: int) -> int:
+    """Where the chunk of a run of ``n_steps`` that starts at step ``k`` ends (``simulate``'s
+    ``on_chunk``): :data:`CHUNK_SHARE_OF_REST` of the steps left, at least :data:`LEAST_CHUNK` of
+    the run, and all of them once two such least chunks would do (about 7 chunks, the last
+    2.5-5 % of the run)."""
+    left = n_steps - k
+    least = max(1, math.ceil(n_steps * LEAST_CHUNK))
+    if left <= 2 * least:
+        return n_steps
+    return k + max(least, math.ceil(left * CHUNK_SHARE_OF_REST))
+
+
+def trajectory_of_log(rows: np.ndarray, nq: int, nv: int, unpack) -> Trajectory:
+    """The :class:`Trajectory` of the compiled loop's log rows ``(t, q, v, tau, info)``: copies,
+    together in one map (:func:`aiauv_pin._internal.log_memory.empty_arrays`), of ``nq``
+    configuration and ``nv`` velocity entries and of the named diagnostics that
+    ``unpack(info_columns, copy=False)`` finds
+    (:meth:`aiauv_pin.controllers.compiled_controller.CompiledController.unpack`)."""
+    state = [
+        rows[:, 0],
+        rows[:, 1 : 1 + nq],
+        rows[:, 1 + nq : 1 + nq + nv],
+        rows[:, 1 + nq + nv : 1 + nq + 2 * nv],
+    ]
+    info = unpack(rows[:, 1 + nq + 2 * nv :], copy=False)
+    views = [*state, *info.values()]
+    copies = empty_arrays([view.shape for view in views])
+    for copy, view in zip(copies, views, strict=True):
+        np.copyto(copy, view)
+    t, q, v, tau = copies[:4]
+    return Trajectory(t=t, q=q, v=v, tau=tau, info=dict(zip(info, copies[4:], strict=True)))
 
 
 def has_thruster_dynamics(vehicle) -> bool:

@@ -135,7 +135,7 @@ def _result_of(n: int):
 def test_the_table_in_blocks_is_the_same_bytes_as_written_at_once(tmp_path, blocks):
     result = _result_of(1003)
     outputs.write_timeseries(result, tmp_path / "once.csv")
-    csv = outputs._TimeseriesBlocks(result, tmp_path / "blocks.csv", blocks)
+    csv = outputs._TimeseriesBlocks(tmp_path / "blocks.csv", *outputs._table_parts(result), blocks)
     try:
         assert len(csv.tasks) == blocks
         outputs._run_tasks(list(reversed(csv.tasks)), True)  # any order, either process
