@@ -39,20 +39,21 @@ def _anonymous_map(nbytes: int) -> mmap.mmap:
     return mmap.mmap(-1, nbytes)
 
 
-def empty_log(shape: tuple[int, ...]) -> np.ndarray:
-    """An uninitialised C-ordered float64 array of ``shape``, in an anonymous memory map when it
-    is at least :data:`MAPPED_FROM` bytes (the map is freed with the last view of the array)."""
-    return empty_arrays([shape])[0]
+def empty_log(shape: tuple[int, ...], *, zeroed: bool = False) -> np.ndarray:
+    """An uninitialised (or, with ``zeroed``, zero) C-ordered float64 array of ``shape``, in an
+    anonymous memory map when it is at least :data:`MAPPED_FROM` bytes (the map is freed with the
+    last view of the array)."""
+    return empty_arrays([shape], zeroed=zeroed)[0]
 
 
-def empty_arrays(shapes: list[tuple[int, ...]]) -> list[np.ndarray]:
-    """Uninitialised C-ordered float64 arrays of ``shapes``: ordinary ``np.empty`` arrays when
-    they hold less than :data:`MAPPED_FROM` bytes together, else consecutive parts of one
-    anonymous memory map (at offsets that are multiples of :data:`ALIGNMENT`; the map is freed
-    with the last view of any of them)."""
+def empty_arrays(shapes: list[tuple[int, ...]], *, zeroed: bool = False) -> list[np.ndarray]:
+    """Uninitialised C-ordered float64 arrays of ``shapes`` (zero with ``zeroed``): ordinary
+    NumPy arrays when they hold less than :data:`MAPPED_FROM` bytes together, else consecutive
+    parts of one anonymous memory map (zero, at offsets that are multiples of
+    :data:`ALIGNMENT`; the map is freed with the last view of any of them)."""
     sizes = [8 * math.prod(shape) for shape in shapes]
     if sum(sizes) < MAPPED_FROM:
-        return [np.empty(shape) for shape in shapes]
+        return [np.zeros(shape) if zeroed else np.empty(shape) for shape in shapes]
     offsets, end = [], 0
     for size in sizes:
         offsets.append(end)

@@ -247,8 +247,10 @@ def _run_simulate(args) -> int:
         from aiauv_pin.results.viewer import live_view
 
         on_log = live_view(vehicle, path_points=live_path_points(scenario))
-    # timeseries.csv's rows formatted by a second thread while the loop runs (it releases the GIL)
-    stream = TableStream.for_plan(plan)
+    # while the loop runs (it releases the GIL), a second thread imports matplotlib for the
+    # figures (preload_plotting) or, without figures, formats timeseries.csv's rows: one of them,
+    # as the two would share one core (the table then goes to the figure processes)
+    stream = TableStream.for_plan(plan) if args.no_figures else None
     streamed = None
     start = time.perf_counter()
     try:
@@ -261,7 +263,7 @@ def _run_simulate(args) -> int:
                 after_first_chunk=None
                 if args.no_figures or not plan.compiled
                 else preload_plotting,
-                on_chunk=None if stream is None else stream.on_chunk,
+                log_reader=None if stream is None else stream.read,
             )
         wall_time = time.perf_counter() - start
     except SimulationDiverged as exc:

@@ -2,9 +2,9 @@
 
 Formatting the table's numbers exactly (:data:`aiauv_pin.results.outputs.CSV_FORMAT`) is about
 0.2 s of the paper's 300 s run, as long as half the loop. The compiled loop releases the GIL, so
-a second core is free while it runs: :class:`TableStream` takes the log's rows after each chunk
-of the loop (``simulate(on_chunk=...)``) and a background thread formats the table's rows among
-them with the same function as :func:`aiauv_pin.results.outputs.write_timeseries`
+a second core is free while it runs: :class:`TableStream` is handed the log before the loop starts
+(``simulate(log_reader=...)``) and a background thread formats the table's rows among the rows
+written so far with the same function as :func:`aiauv_pin.results.outputs.write_timeseries`
 (:func:`~aiauv_pin.results.outputs.format_rows`), in blocks of :data:`BLOCK_ROWS` rows, each kept
 with the numbers it formatted.
 
@@ -35,11 +35,13 @@ from aiauv_pin.scenario.definition import (
     complete_diagnostics,
     joint_position_units,
 )
-from aiauv_pin.simulation.fixed_step import trajectory_of_log
+from aiauv_pin.simulation.fixed_step import complete_rows, trajectory_of_log
 
-#: Rows of the table formatted per block: one block holds the GIL for about 1 ms, the longest
-#: the loop's return from a chunk can wait for it.
+#: Rows of the table formatted per block (one block holds the GIL for about 1 ms).
 BLOCK_ROWS = 40
+
+#: How long the thread waits before it looks for more complete rows [s].
+POLL = 0.002
 
 
 @dataclass(frozen=True)
@@ -125,19 +127,21 @@ def log_columns_of_table(plan: RunPlan) -> tuple[np.ndarray, list[str]] | None:
 class TableStream:
     """A background thread that formats the rows of ``timeseries.csv`` as the loop logs them.
 
-    Pass :meth:`on_chunk` as ``simulate``'s ``on_chunk``; :meth:`close` after the run stops the
-    thread and returns the blocks formatted so far (the rest is formatted when the file is
-    written).
+    Pass :meth:`read` as ``simulate``'s ``log_reader``: the thread looks for complete rows
+    (:func:`aiauv_pin.simulation.fixed_step.complete_rows`) every :data:`POLL` seconds while the
+    loop runs; :meth:`close` after the run stops it and returns the blocks formatted so far (the
+    rest is formatted when the file is written).
     """
 
     def __init__(self, columns: np.ndarray, formats: list[str], period: float | None) -> None:
         self._columns = columns
         self._formats = list(formats)
         self._period = period
-        self._rows: np.ndarray | None = None  # the log rows handed over so far
+        self._log: np.ndarray | None = None
         self._blocks: list[FormattedRows] = []
-        self._closed = False
-        self._changed = threading.Condition()
+        self._closed = threading.Event()
+        self._drain = False
+        self._given = threading.Event()
         self._thread = threading.Thread(target=self._format, name="aiauv-table", daemon=True)
         self._thread.start()
 
@@ -153,38 +157,33 @@ class TableStream:
         columns, formats = found
         return cls(columns, formats, plan.scenario.csv_period)
 
-    def on_chunk(self, rows: np.ndarray) -> None:
-        """The rows logged so far (``simulate``'s ``on_chunk``): formatted in the background."""
-        with self._changed:
-            self._rows = rows
-            self._changed.notify()
+    def read(self, log: np.ndarray) -> None:
+        """The log of the run (``simulate``'s ``log_reader``), formatted as its rows are written."""
+        self._log = log
+        self._given.set()
 
-    def close(self) -> StreamedTable:
-        """Stop the thread (after the block it is formatting) and return what it formatted."""
-        with self._changed:
-            self._closed = True
-            self._changed.notify()
+    def close(self, *, drain: bool = False) -> StreamedTable:
+        """Stop the thread (after the block it is formatting; with ``drain``, once it has
+        formatted every complete row) and return what it formatted."""
+        self._drain = drain
+        self._closed.set()
+        self._given.set()
         self._thread.join()
         return StreamedTable(tuple(self._blocks), tuple(self._formats))
 
     def _format(self) -> None:
-        stride = None
-        row = 0  # the log row of the table's next row
-        while True:
-            with self._changed:
-                while not self._closed and (self._rows is None or row >= len(self._rows)):
-                    self._changed.wait()
-                if self._closed:
-                    return
-                rows = self._rows
-            if stride is None:
-                if len(rows) < 2:
-                    continue
-                stride = outputs.csv_stride(self._period, float(rows[1, 0] - rows[0, 0]))
-            while row < len(rows) and not self._closed:
-                picked = rows[row : row + BLOCK_ROWS * stride : stride]
-                values = picked[:, self._columns]
-                self._blocks.append(
-                    FormattedRows(values, outputs.format_rows(values, self._formats))
-                )
-                row += len(picked) * stride
+        self._given.wait()
+        log, stride, row = self._log, None, 0  # row: the log row of the table's next row
+        while log is not None and (not self._closed.is_set() or self._drain):
+            complete = complete_rows(log)
+            if stride is None and complete >= 2:
+                stride = outputs.csv_stride(self._period, float(log[1, 0] - log[0, 0]))
+            if stride is None or row >= complete:
+                if self._closed.is_set():
+                    return  # (drained)
+                self._closed.wait(POLL)
+                continue
+            picked = log[row : min(complete, row + BLOCK_ROWS * stride) : stride]
+            values = picked[:, self._columns]
+            self._blocks.append(FormattedRows(values, outputs.format_rows(values, self._formats)))
+            row += len(picked) * stride

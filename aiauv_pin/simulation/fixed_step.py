@@ -170,7 +170,7 @@ def simulate(
     control_period: float | None = None,
     chunk_seconds: float | None = None,
     after_first_chunk: Callable[[], None] | None = None,
-    on_chunk: Callable[[np.ndarray], None] | None = None,
+    log_reader: Callable[[np.ndarray], None] | None = None,
     added_mass: str = "exact",
     lagged_filter: float = UUV_SIMULATOR_FILTER,
     compile_only: bool = False,
@@ -223,12 +223,12 @@ def simulate(
         after_first_chunk: Compiled controller only: called once after the first chunk (the code
             is then compiled; later chunks release the GIL, so a background thread started here
             overlaps them).
-        on_chunk: Compiled controller only: called after each chunk with the rows logged so far
-            (a view of the log, rows ``(t, q, v, tau, info)`` as :func:`trajectory_of_log` reads
-            them; it stays valid after the call, and later rows are written into the same
-            memory). Where the rest of the run would be one call, it is split into chunks that
-            shrink towards its end (:func:`shrinking_chunks`), so that a background thread can
-            process the rows while the loop computes the next ones (it releases the GIL).
+        log_reader: Compiled controller only: called once, before the first step, with the
+            whole log (rows ``(t, q, v, tau, info)``, as :func:`trajectory_of_log` reads them),
+            for a thread that reads it while the loop runs (it releases the GIL). The rows are
+            written in order, each row's time first, and the log is zero where nothing was
+            written yet: a row is complete once the next row's time is not zero
+            (:func:`complete_rows`).
         added_mass: ``"exact"`` (added mass in the mass matrix) or ``"lagged"``, the scheme of
             UUV Simulator and gz-sim (:mod:`aiauv_pin.dynamics.lagged_added_mass`: rigid mass in
             the dynamics, the
@@ -300,7 +300,7 @@ def simulate(
             on_log=on_log,
             chunk_seconds=chunk_seconds,
             after_first_chunk=after_first_chunk,
-            on_chunk=on_chunk,
+            log_reader=log_reader,
             compile_only=compile_only,
         )
     # a controller that carries the thrusters' state itself (station keeping, velocity control)
@@ -517,7 +517,7 @@ def _simulate_compiled(
     on_log,
     chunk_seconds: float | None,
     after_first_chunk,
-    on_chunk=None,
+    log_reader=None,
     compile_only: bool = False,
 ) -> Trajectory | None:
     """:func:`simulate` with a compiled controller: the whole loop in compiled code (only loaded
@@ -554,7 +554,8 @@ def _simulate_compiled(
     log_every = int(log_every)
     n_logs = 1 if compile_only else n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
     width = controller.info_width
-    log = empty_log((n_logs, 1 + nq + 2 * nv + width))  # (no huge-page faults)
+    # (no huge-page faults; zero for a reader, which finds the rows written by their times)
+    log = empty_log((n_logs, 1 + nq + 2 * nv + width), zeroed=log_reader is not None)
     tau = np.zeros(nv)
     info = np.full(width, np.nan)
     workspace = fast.workspace
@@ -597,11 +598,11 @@ def _simulate_compiled(
     # with only ``after_first_chunk`` (a background thread), the rest is one call: each return from
     # a chunk waits for the GIL that thread holds (about one switch interval, 5 ms, per chunk)
     rest_in_one_call = chunk_seconds is None and not progress and on_log is None
-    # ... or, with ``on_chunk``, a few chunks that shrink, so the last rows wait little for it
-    shrinking = rest_in_one_call and on_chunk is not None
     if chunk_seconds is None:
         chunk_seconds = 1.0 if on_log is not None else (10.0 if interactive else math.inf)
     chunk = max(1, n_steps) if math.isinf(chunk_seconds) else max(1, round(chunk_seconds / dt))
+    if log_reader is not None:
+        log_reader(log)
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -612,14 +613,9 @@ def _simulate_compiled(
     diverged_at = None
     try:
         while True:
-            if shrinking and (k > 0 or after_first_chunk is None):
-                stop = shrinking_chunks(k, n_steps)
-            else:
-                stop = min(k + chunk, n_steps)
+            stop = min(k + chunk, n_steps)
             start_log = logged
             logged, done = run_chunk(k, stop, logged)
-            if on_chunk is not None:
-                on_chunk(log[:logged])
             if on_log is not None:
                 for row in log[start_log:logged]:
                     on_log(
@@ -650,22 +646,18 @@ def _simulate_compiled(
     return trajectory
 
 
-#: Each chunk of :func:`shrinking_chunks` takes this share of the steps left, and at least
-#: :data:`LEAST_CHUNK` of the run's.
-CHUNK_SHARE_OF_REST = 0.45
-LEAST_CHUNK = 1 / 40
-
-
-def shrinking_chunks(k: int, n_steps: int) -> int:
-    """Where the chunk of a run of ``n_steps`` that starts at step ``k`` ends (``simulate``'s
-    ``on_chunk``): :data:`CHUNK_SHARE_OF_REST` of the steps left, at least :data:`LEAST_CHUNK` of
-    the run, and all of them once two such least chunks would do (about 7 chunks, the last
-    2.5-5 % of the run)."""
-    left = n_steps - k
-    least = max(1, math.ceil(n_steps * LEAST_CHUNK))
-    if left <= 2 * least:
-        return n_steps
-    return k + max(least, math.ceil(left * CHUNK_SHARE_OF_REST))
+def complete_rows(log: np.ndarray) -> int:
+    """How many leading rows of a log that ``simulate`` is writing are complete (its
+    ``log_reader``): those before the last row whose time is not zero (that one may be in
+    writing; times grow from 0, and the log is zero where nothing was written yet)."""
+    low, high = 0, log.shape[0] - 1  # the last row written is in [low, high]
+    while low < high:
+        middle = (low + high + 1) // 2
+        if log[middle, 0] > 0.0:
+            low = middle
+        else:
+            high = middle - 1
+    return low
 
 
 def trajectory_of_log(rows: np.ndarray, nq: int, nv: int, unpack) -> Trajectory:

@@ -1,5 +1,5 @@
 """``timeseries.csv`` formatted while the compiled loop runs: the same bytes, whatever the thread
-read, and the chunks that hand it the rows."""
+read, and how it finds the rows written."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from aiauv_pin.results.streamed_table import (
     log_columns_of_table,
 )
 from aiauv_pin.scenario.definition import Scenario, finish_run, plan_run
-from aiauv_pin.simulation.fixed_step import shrinking_chunks, simulate
+from aiauv_pin.simulation.fixed_step import complete_rows, simulate
 
 
 @pytest.fixture(scope="module")
@@ -24,44 +24,42 @@ def vehicle():
 
 
 def _streamed_run(vehicle, scenario):
-    """The run of ``scenario`` with a :class:`TableStream`: its result, what the stream formatted
-    and the row counts ``on_chunk`` saw."""
+    """The run of ``scenario`` with a :class:`TableStream`: its result and what the stream
+    formatted."""
     plan = plan_run(vehicle, scenario)
     stream = TableStream.for_plan(plan)
     assert stream is not None
-    seen = []
-
-    def on_chunk(rows):
-        seen.append(len(rows))
-        stream.on_chunk(rows)
-
     try:
-        trajectory = simulate(*plan.arguments, **plan.options, on_chunk=on_chunk)
+        trajectory = simulate(*plan.arguments, **plan.options, log_reader=stream.read)
     finally:
         streamed = stream.close()
-    return finish_run(plan, trajectory, 1.0), streamed, seen
+    return finish_run(plan, trajectory, 1.0), streamed
 
 
-@pytest.mark.parametrize("n_steps", [1, 2, 5, 79, 80, 81, 1000, 75_000])
-def test_shrinking_chunks_cover_the_run_in_a_few_chunks_that_shrink(n_steps):
-    stops, k = [], 0
-    while k < n_steps:
-        k = shrinking_chunks(k, n_steps)
-        stops.append(k)
-    assert stops[-1] == n_steps and stops == sorted(set(stops))
-    sizes = np.diff([0, *stops])
-    assert len(sizes) <= 8
-    assert np.all(np.diff(sizes[:-1]) <= 0)  # never growing, but for the last
-    assert sizes[-1] <= 2 * max(1, -(-n_steps // 40))  # the rest waits for at most 5 %
+@pytest.mark.parametrize("rows", [1, 2, 3, 10, 1000])
+def test_complete_rows_are_those_before_the_last_row_written(rows):
+    log = np.zeros((rows, 5))
+    assert complete_rows(log) == 0
+    for written in range(1, rows + 1):
+        log[written - 1, 0] = 0.01 * (written - 1)  # the time of row 0 is 0
+        assert complete_rows(log) == max(0, written - 1)
+
+
+def test_the_loop_hands_the_reader_a_zero_log_it_then_fills(vehicle):
+    plan = plan_run(vehicle, Scenario(duration=0.2))  # a small log, not a mapped one
+    seen = []
+
+    def reader(log):
+        seen.append((log, np.count_nonzero(log)))
+
+    trajectory = simulate(*plan.arguments, **plan.options, log_reader=reader)
+    [(log, nonzero)] = seen
+    assert nonzero == 0 and complete_rows(log) == len(trajectory.t) - 1
+    np.testing.assert_array_equal(log[:, 0], trajectory.t)
 
 
 def test_the_streamed_table_is_the_file_without_streaming(vehicle, tmp_path):
-    result, streamed, seen = _streamed_run(vehicle, Scenario(duration=20.0))
-    assert seen == sorted(seen) and seen[-1] == len(result.trajectory.t) and len(seen) >= 5
-    rows = len(outputs.csv_rows(result))
-    _, table, formats = outputs.timeseries_content(result)
-    done, _ = streamed.text_for(table, formats)
-    assert done > rows // 2  # most of it formatted during the run (all, on an idle machine)
+    result, streamed = _streamed_run(vehicle, Scenario(duration=20.0))  # whatever it formatted
     outputs.write_timeseries(result, tmp_path / "plain.csv")
     outputs.write_timeseries(result, tmp_path / "streamed.csv", streamed)
     assert (tmp_path / "streamed.csv").read_bytes() == (tmp_path / "plain.csv").read_bytes()
@@ -74,7 +72,7 @@ def test_the_streamed_table_is_the_file_without_streaming(vehicle, tmp_path):
 
 
 def test_rows_whose_numbers_differ_by_one_bit_are_formatted_again(vehicle, tmp_path):
-    result, streamed, _ = _streamed_run(vehicle, Scenario(duration=4.0))
+    result, streamed = _streamed_run(vehicle, Scenario(duration=4.0))
     _, table, formats = outputs.timeseries_content(result)
     blocks = list(streamed.blocks)
     assert len(blocks) >= 3
@@ -109,3 +107,17 @@ def test_a_run_whose_table_is_computed_after_it_is_not_streamed(vehicle):
     # a passive run's end-effector position is computed from its configurations after the run
     plan = plan_run(vehicle, Scenario(duration=1.0, controller="none"))
     assert log_columns_of_table(plan) is None and TableStream.for_plan(plan) is None
+
+
+def test_the_stream_formats_every_row_before_the_last_one_written(vehicle, tmp_path):
+    plan = plan_run(vehicle, Scenario(duration=20.0))
+    logs = []
+    trajectory = simulate(*plan.arguments, **plan.options, log_reader=logs.append)
+    result = finish_run(plan, trajectory, 1.0)
+    stream = TableStream.for_plan(plan)
+    stream.read(logs[0])  # a log written to its end: every row but the last is complete
+    streamed = stream.close(drain=True)
+    _, table, formats = outputs.timeseries_content(result)
+    done, text = streamed.text_for(table, formats)
+    assert done == len(table) - 1 and len(streamed.blocks) >= 3  # all but the last row, in blocks
+    assert text == outputs.format_rows(table[:done], formats)
