@@ -9,16 +9,35 @@ The main entry points::
     model = aiauv_pin.linearize(vehicle)          # linear model about straight-line motion
 """
 
+import gc as _gc
 from typing import TYPE_CHECKING
 
-# first: installs its import finder before numba loads its registries (no scipy.linalg)
-from aiauv_pin._internal import numba_blas as _numba_blas  # noqa: F401
-from aiauv_pin.errors import AiauvError, SimulationDiverged, VehicleLoadError
-from aiauv_pin.model.loading import BUNDLED_CASES, bundled_urdf, load_vehicle
-from aiauv_pin.model.vehicle import Vehicle
-from aiauv_pin.reference.integrators import midpoint_step, rk4_step, semi_implicit_euler_step
-from aiauv_pin.simulation.fixed_step import Trajectory, simulate
-from aiauv_pin.simulation.rollout import Rollout, rollout
+# The imports below (numba, Pinocchio and ours) create several hundred thousand long-lived
+# objects, and the cyclic garbage collector, triggered by their allocations, would scan them
+# again and again while they are made (about 170 collections, 0.05-0.1 s of every start): it is
+# paused for the imports, they are then moved to its oldest generation without a scan
+# (gc.freeze then gc.unfreeze; a full collection still looks at them), and it is restored as it
+# was.
+_collecting = _gc.isenabled()
+_gc.disable()
+try:
+    # first: installs its import finder before numba loads its registries (no scipy.linalg)
+    from aiauv_pin._internal import numba_blas as _numba_blas  # noqa: F401
+    from aiauv_pin.errors import AiauvError, SimulationDiverged, VehicleLoadError
+    from aiauv_pin.model.loading import BUNDLED_CASES, bundled_urdf, load_vehicle
+    from aiauv_pin.model.vehicle import Vehicle
+    from aiauv_pin.reference.integrators import (
+        midpoint_step,
+        rk4_step,
+        semi_implicit_euler_step,
+    )
+    from aiauv_pin.simulation.fixed_step import Trajectory, simulate
+    from aiauv_pin.simulation.rollout import Rollout, rollout
+finally:
+    _gc.freeze()
+    _gc.unfreeze()
+    if _collecting:
+        _gc.enable()
 
 if TYPE_CHECKING:
     from aiauv_pin.dynamics.linear_model import linearize, straight_line_trim

@@ -112,7 +112,7 @@ def new_frame_measurement() -> FrameMeasurement:
     )
 
 
-@compiled(borrows_only=True)
+@compiled(borrows_only=True, inline=True)
 def measure_end_effector(t, q, v, model, W, body, rotation, translation, out):
     """What the path-following controllers measure at a sample into ``out`` (a
     :class:`FrameMeasurement`), and ``g(q)`` into ``W.restoring``.
@@ -134,7 +134,7 @@ def measure_end_effector(t, q, v, model, W, body, rotation, translation, out):
     restoring_into(model, W, W.restoring)
 
 
-@compiled(borrows_only=True)
+@compiled(borrows_only=True, inline=True)
 def thruster_power_into(model, W, thrusts, info, offset):
     """Mechanical power of each thruster [W] into ``info[offset:offset + m]`` (after kinematics).
 
@@ -150,7 +150,7 @@ def thruster_power_into(model, W, thrusts, info, offset):
         info[offset + k] = thruster_power(speed, thrusts[k])
 
 
-@compiled(borrows_only=True)
+@compiled(borrows_only=True, inline=True)
 def thrusts_and_power_into(model, W, thrusts, info, thrust_at, power_at):
     """The info row's ``thrust`` [N] and ``thruster_power`` [W] fields, ``m`` floats each, from
     ``info[thrust_at]`` and ``info[power_at]`` (after kinematics). Every built-in controller logs
@@ -226,7 +226,7 @@ def paper_info_shapes(n_joints: int, n_thrusters: int) -> dict[str, tuple[int, .
     }
 
 
-@compiled(borrows_only=True)
+@compiled(borrows_only=True, inline=True)
 def paper_path_following(t, q, v, model, workspace, parameters, state, tau, info):
     """The paper's controller on the vehicle: measure,
     :func:`aiauv_control.laws.paper_laws.path_following_command`, act.

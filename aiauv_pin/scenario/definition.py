@@ -63,7 +63,7 @@ from aiauv_pin.dynamics.lagged_added_mass import check_filter, check_scheme
 from aiauv_pin.errors import ArgumentError
 from aiauv_pin.model.vehicle import Vehicle
 from aiauv_pin.scenario.defaults import DEFAULT_CSV_PERIOD, DEFAULT_DT, DEFAULT_METHOD
-from aiauv_pin.simulation.energy import energy_summary, exact_sum
+from aiauv_pin.simulation.energy import energy_summary, exact_column_sums
 from aiauv_pin.simulation.fixed_step import Trajectory, simulate
 from aiauv_pin.simulation.step_stability import warn_if_oscillating
 from aiauv_pin.wholebody.intervention_transit import InterventionSettings, TransitThenIntervene
@@ -911,15 +911,12 @@ def summary(result: ScenarioResult) -> dict:
     if "thruster_power" in info and "joint_torque" in info:
         thruster_power = np.abs(info["thruster_power"][:-1])
         joint_power = np.abs(info["joint_torque"][:-1] * tr.v[:-1, 6:])
-        content["thruster_work"] = {
-            name: exact_sum(thruster_power[:, k] * dt_log)
-            for k, name in enumerate(result.thruster_names)
-        }
-        content["joint_work"] = {
-            name: exact_sum(joint_power[:, k] * dt_log) for k, name in enumerate(result.joint_names)
-        }
-        content["total_thruster_work"] = exact_sum(thruster_power * dt_log[:, None])
-        content["total_joint_work"] = exact_sum(joint_power * dt_log[:, None])
+        thruster_work, total_thruster_work = exact_column_sums(thruster_power * dt_log[:, None])
+        joint_work, total_joint_work = exact_column_sums(joint_power * dt_log[:, None])
+        content["thruster_work"] = dict(zip(result.thruster_names, thruster_work, strict=True))
+        content["joint_work"] = dict(zip(result.joint_names, joint_work, strict=True))
+        content["total_thruster_work"] = total_thruster_work
+        content["total_joint_work"] = total_joint_work
     if "pose_error" in info:  # intervention mode: errors to the reference, its rows only
         error = np.asarray(info["pose_error"]).reshape(len(t), 6)
         error = error[np.all(np.isfinite(error), axis=1)]

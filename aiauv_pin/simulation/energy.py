@@ -31,6 +31,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from aiauv_pin.errors import ArgumentError
+
 
 @dataclass(frozen=True)
 class EnergyParameters:
@@ -122,6 +124,34 @@ def exact_sum(values) -> float:
     return math.fsum(flat.tolist())
 
 
+def exact_column_sums(values) -> tuple[list[float], float]:
+    """The correctly rounded sum of each column of a 2-D array and of all its elements, as
+    :func:`exact_sum` gives them, in one pass over the array.
+
+    The total is ``math.fsum`` of the columns' partial sums
+    (:func:`aiauv_pin.kernels.summation.exact_partials`), whose exact sum is the exact sum of the
+    array: correctly rounded, it is the same float as :func:`exact_sum` of the whole array.
+    """
+    table = np.asarray(values, dtype=float)
+    if table.ndim != 2:
+        raise ArgumentError(f"exact_column_sums: a 2-D array, got shape {table.shape}")
+    from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE
+
+    if not NUMBA_AVAILABLE or table.shape[0] <= 64:
+        return [exact_sum(table[:, k]) for k in range(table.shape[1])], exact_sum(table)
+    from aiauv_pin.kernels.summation import PARTIALS, exact_partials
+
+    columns, partials = [], []
+    buffer = np.empty(PARTIALS)
+    for k in range(table.shape[1]):
+        n = exact_partials(np.ascontiguousarray(table[:, k]), buffer)
+        if n < 0:  # a value not finite, or too many partials: math.fsum decides, as exact_sum
+            return [exact_sum(table[:, j]) for j in range(table.shape[1])], exact_sum(table)
+        columns.append(math.fsum(buffer[:n].tolist()))
+        partials.extend(buffer[:n].tolist())
+    return columns, math.fsum(partials)
+
+
 class Energy(NamedTuple):
     """Electrical energy of a run."""
 
@@ -150,17 +180,26 @@ def run_energy(
         path_s: Path parameter of the end-effector (k,) [m].
         parameters: The energy model.
     """
+    _, energy = _run_energy(t, thrust, joint_torque, joint_rate, path_s, parameters)
+    return energy
+
+
+def _run_energy(
+    t, thrust, joint_torque, joint_rate, path_s, parameters: EnergyParameters
+) -> tuple[list[float], Energy]:
+    """:func:`run_energy`, and the energy of each thruster [J] (the columns of the same sum)."""
     t = np.asarray(t, dtype=float)
     step = np.diff(t)
     thrust = np.asarray(thrust, dtype=float).reshape(len(t), -1)[:-1]
     torque = np.asarray(joint_torque, dtype=float).reshape(len(t), -1)[:-1]
     rate = np.asarray(joint_rate, dtype=float).reshape(len(t), -1)[:-1]
-    thrusters = exact_sum(thruster_power(thrust, parameters) * step[:, None])
+    each, thrusters = exact_column_sums(thruster_power(thrust, parameters) * step[:, None])
     joints = exact_sum(joint_power(torque, rate, parameters) * step[:, None])
     total = thrusters + joints
     path_s = np.asarray(path_s, dtype=float)
     distance = float(path_s[-1] - path_s[0])
-    return Energy(thrusters, joints, total, distance, total / distance if distance > 0 else None)
+    per_metre = total / distance if distance > 0 else None
+    return each, Energy(thrusters, joints, total, distance, per_metre)
 
 
 def energy_summary(result, parameters: EnergyParameters = EnergyParameters()) -> dict | None:
@@ -172,16 +211,12 @@ def energy_summary(result, parameters: EnergyParameters = EnergyParameters()) ->
     info = tr.info
     if "thrust" not in info or "joint_torque" not in info or "path_s" not in info:
         return None
-    energy = run_energy(
+    each, energy = _run_energy(
         tr.t, info["thrust"], info["joint_torque"], tr.v[:, 6:], info["path_s"], parameters
     )
-    step = np.diff(tr.t)
-    each = thruster_power(np.asarray(info["thrust"])[:-1], parameters)
     return {
         "thrusters": energy.thrusters,
-        "thruster_each": {
-            name: exact_sum(each[:, k] * step) for k, name in enumerate(result.thruster_names)
-        },
+        "thruster_each": dict(zip(result.thruster_names, each, strict=True)),
         "joints": energy.joints,
         "total": energy.total,
         "distance_along_path": energy.distance,

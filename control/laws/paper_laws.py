@@ -722,7 +722,7 @@ def new_command_buffers(n_joints: int, n_thrusters: int) -> CommandBuffers:
 _IDENTITY = np.eye(3)
 
 
-@compiled(borrows_only=True)
+@compiled(borrows_only=True, inline=True)
 def path_following_command(
     gains,
     path_function,

@@ -42,7 +42,7 @@ import os
 import sys
 import warnings
 from collections.abc import Callable
-from functools import lru_cache
+from functools import cache, lru_cache
 from pathlib import Path, PurePosixPath
 from typing import TypeVar
 
@@ -114,6 +114,12 @@ def package_roots() -> dict[str, Path]:
 def project_path(py_file: str | os.PathLike) -> PurePosixPath | None:
     """``py_file``'s path from the roots of :func:`compiled_sources` (e.g.
     ``pkg/sub/module.py``), or ``None`` if it is not in the project."""
+    return _project_path(os.fspath(py_file))
+
+
+@cache
+def _project_path(py_file: str) -> PurePosixPath | None:
+    """:func:`project_path`, once per file (every compiled function of a module asks for it)."""
     path = Path(py_file).resolve()
     for name, root in package_roots().items():
         if path.is_relative_to(root):
@@ -266,9 +272,22 @@ if _caching is not None:
                 return None  # not the project's: numba's own locators
             folder = path.parent
             locator = cls(py_func, folder)
-            locator.ensure_cache_path()  # an error here is an error: never numba's in-tree cache
-            prebuilt.seed(locator.get_cache_path(), folder.as_posix(), source_hash())
+            _prepare_folder(
+                locator, folder
+            )  # an error here is an error: never numba's in-tree cache
             return locator
+
+    _prepared: set[str] = set()
+
+    def _prepare_folder(locator: ProjectCacheLocator, folder: PurePosixPath) -> None:
+        """The locator's folder created and checked writable (numba's ``ensure_cache_path``), and
+        the shipped kernels of its sources unpacked into it: once per folder and process (every
+        compiled function of a module has the same folder)."""
+        path = locator.get_cache_path()
+        if path not in _prepared:
+            locator.ensure_cache_path()
+            prebuilt.seed(path, folder.as_posix(), source_hash())
+            _prepared.add(path)
 
     _locators = _numba_name("CacheImpl")._locator_classes
     if ProjectCacheLocator not in _locators:

@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from aiauv_pin.errors import ArgumentError
 from aiauv_pin.kernels.summation import PARTIALS, exact_partials, exact_sum_compiled
-from aiauv_pin.simulation.energy import exact_sum
+from aiauv_pin.simulation.energy import exact_column_sums, exact_sum
 
 
 def cases():
@@ -55,3 +56,31 @@ def test_non_finite_values_give_what_fsum_gives(values, expected):
     assert (math.isnan(got) and math.isnan(expected)) or got == expected
     with pytest.raises(ValueError):  # inf - inf: math.fsum's own error
         exact_sum_compiled(np.array([math.inf, -math.inf] * 100))
+
+
+@pytest.mark.parametrize("index", range(6))
+@pytest.mark.parametrize("columns", [1, 3, 8])
+def test_column_sums_are_the_exact_sums_of_the_columns_and_of_the_whole(index, columns):
+    values = list(cases())[index]
+    rows = values.size // columns
+    table = values[: rows * columns].reshape(rows, columns)
+    try:
+        expected_total = math.fsum(table.ravel().tolist())
+    except OverflowError:
+        with pytest.raises(OverflowError):
+            exact_column_sums(table)
+        return
+    each, total = exact_column_sums(table)
+    assert total == expected_total and math.copysign(1.0, total) == math.copysign(
+        1.0, expected_total
+    )
+    assert each == [math.fsum(table[:, k].tolist()) for k in range(columns)]
+
+
+def test_column_sums_of_a_table_with_a_non_finite_value_follow_math_fsum():
+    table = np.ones((100, 3))
+    table[50, 1] = np.inf
+    each, total = exact_column_sums(table)
+    assert each == [100.0, math.inf, 100.0] and total == math.inf
+    with pytest.raises(ArgumentError, match="2-D"):
+        exact_column_sums(np.ones(5))
