@@ -70,14 +70,14 @@ class EnergyParameters:
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"energy.{name}: must be > 0, got {value!r}")
+                raise ArgumentError(f"energy.{name}: must be > 0, got {value!r}")
         if not self.thruster_efficiency <= 1.0:
-            raise ValueError(
+            raise ArgumentError(
                 f"energy.thruster_efficiency: must be <= 1, got {self.thruster_efficiency!r}"
             )
         r = self.joint_winding_resistance
         if not (math.isfinite(r) and r >= 0):
-            raise ValueError(f"energy.joint_winding_resistance: must be >= 0, got {r!r}")
+            raise ArgumentError(f"energy.joint_winding_resistance: must be >= 0, got {r!r}")
 
     @property
     def disk_area(self) -> float:

@@ -62,6 +62,8 @@ import warnings
 
 import numpy as np
 
+from aiauv_pin.errors import ArgumentError
+
 #: :func:`warn_if_step_near_limit` warns when the step is beyond this fraction of the largest
 #: stable step.
 STEP_MARGIN = 0.75
@@ -122,7 +124,7 @@ def amplification(
             term = term @ (h * a) / k
             total += term
         return total
-    raise ValueError(f"unknown method {method!r} (expected 'euler', 'rk4' or 'midpoint')")
+    raise ArgumentError(f"unknown method {method!r} (expected 'euler', 'rk4' or 'midpoint')")
 
 
 def _state_matrix(joint_inverse_mass, stiffness, damping) -> np.ndarray:

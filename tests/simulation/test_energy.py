@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from aiauv_pin.errors import ArgumentError
 from aiauv_pin.simulation.energy import EnergyParameters, joint_power, run_energy, thruster_power
 
 
@@ -64,7 +65,9 @@ def test_zero_input_zero_energy_and_no_progress():
 
 @pytest.mark.parametrize("name", ["fluid_density", "propeller_diameter", "thruster_efficiency"])
 def test_non_physical_parameters(name):
-    with pytest.raises(ValueError, match=name):
+    with pytest.raises(ArgumentError, match=name):  # (a ValueError too)
         EnergyParameters(**{name: 0.0})
-    with pytest.raises(ValueError, match="thruster_efficiency"):
+    with pytest.raises(ArgumentError, match="thruster_efficiency"):
         EnergyParameters(thruster_efficiency=1.5)
+    with pytest.raises(ArgumentError, match="joint_winding_resistance"):
+        EnergyParameters(joint_winding_resistance=-1.0)

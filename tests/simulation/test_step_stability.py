@@ -229,3 +229,11 @@ def test_paper_scenario_warns_where_the_sampled_loop_oscillates(paper):
         warnings.simplefilter("error", EveryStepOscillation)
         result = run_scenario(vehicle, Scenario(duration=60.0, dt=0.02, method="midpoint"))
     assert every_sample_oscillation(result.trajectory.v[:, 6:]) < 1e-5
+
+
+def test_an_unknown_method_is_refused_with_the_project_error():
+    from aiauv_pin.errors import ArgumentError
+
+    one = np.ones(1)
+    with pytest.raises(ArgumentError, match="unknown method 'heun'"):
+        amplification(np.eye(1), one, one, "heun", 0.01)
