@@ -148,10 +148,14 @@ class TableStream:
     @classmethod
     def for_plan(cls, plan: RunPlan) -> TableStream | None:
         """A stream for ``plan``'s run, or ``None`` when its table is not the log's alone
-        (:func:`log_columns_of_table`) or the loop is not compiled."""
+        (:func:`log_columns_of_table`; also when that probe fails), or the loop is not
+        compiled."""
         if not plan.compiled:
             return None
-        found = log_columns_of_table(plan)
+        try:
+            found = log_columns_of_table(plan)
+        except Exception:  # a probe that fails must not fail the run: the table is written after it
+            return None
         if found is None:
             return None
         columns, formats = found

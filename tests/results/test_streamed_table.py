@@ -36,6 +36,17 @@ def _streamed_run(vehicle, scenario):
     return finish_run(plan, trajectory, 1.0), streamed
 
 
+def _drained_run(vehicle, scenario):
+    """The run of ``scenario``, and what a :class:`TableStream` formats of its finished log
+    (every row but the last, whatever the machine's load)."""
+    plan = plan_run(vehicle, scenario)
+    logs = []
+    trajectory = simulate(*plan.arguments, **plan.options, log_reader=logs.append)
+    stream = TableStream.for_plan(plan)
+    stream.read(logs[0])  # a log written to its end: every row but the last is complete
+    return finish_run(plan, trajectory, 1.0), stream.close(drain=True)
+
+
 @pytest.mark.parametrize("rows", [1, 2, 3, 10, 1000])
 def test_complete_rows_are_those_before_the_last_row_written(rows):
     log = np.zeros((rows, 5))
@@ -72,7 +83,7 @@ def test_the_streamed_table_is_the_file_without_streaming(vehicle, tmp_path):
 
 
 def test_rows_whose_numbers_differ_by_one_bit_are_formatted_again(vehicle, tmp_path):
-    result, streamed = _streamed_run(vehicle, Scenario(duration=4.0))
+    result, streamed = _drained_run(vehicle, Scenario(duration=4.0))
     _, table, formats = outputs.timeseries_content(result)
     blocks = list(streamed.blocks)
     assert len(blocks) >= 3
@@ -109,15 +120,19 @@ def test_a_run_whose_table_is_computed_after_it_is_not_streamed(vehicle):
     assert log_columns_of_table(plan) is None and TableStream.for_plan(plan) is None
 
 
-def test_the_stream_formats_every_row_before_the_last_one_written(vehicle, tmp_path):
-    plan = plan_run(vehicle, Scenario(duration=20.0))
-    logs = []
-    trajectory = simulate(*plan.arguments, **plan.options, log_reader=logs.append)
-    result = finish_run(plan, trajectory, 1.0)
-    stream = TableStream.for_plan(plan)
-    stream.read(logs[0])  # a log written to its end: every row but the last is complete
-    streamed = stream.close(drain=True)
+def test_the_stream_formats_every_row_before_the_last_one_written(vehicle):
+    result, streamed = _drained_run(vehicle, Scenario(duration=20.0))
     _, table, formats = outputs.timeseries_content(result)
     done, text = streamed.text_for(table, formats)
     assert done == len(table) - 1 and len(streamed.blocks) >= 3  # all but the last row, in blocks
     assert text == outputs.format_rows(table[:done], formats)
+
+
+def test_a_probe_that_fails_leaves_the_run_unstreamed(vehicle, monkeypatch):
+    from aiauv_pin.results import streamed_table
+
+    def failing(plan):
+        raise ArithmeticError("probe")
+
+    monkeypatch.setattr(streamed_table, "log_columns_of_table", failing)
+    assert TableStream.for_plan(plan_run(vehicle, Scenario(duration=1.0))) is None
