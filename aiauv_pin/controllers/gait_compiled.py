@@ -150,7 +150,7 @@ def mean_elevation(W, link_mass):
     return math.atan2(x2, h), rate
 
 
-@compiled(borrows_only=True)
+@compiled(borrows_only=True, inline=True)
 def serpentine_gait(t, q, v, model, workspace, parameters, state, tau, info):
     """The steered serpentine gait on the vehicle: measure, :func:`gait_command`, act.
 

@@ -83,7 +83,7 @@ def torpedo_info_shapes(n_thrusters: int, n_fins: int) -> dict[str, tuple[int, .
     }
 
 
-@compiled(borrows_only=True)
+@compiled(borrows_only=True, inline=True)
 def torpedo_path_following(t, q, v, model, workspace, parameters, state, tau, info):
     """The torpedo's path following on the vehicle: measure, :func:`torpedo_command`, act."""
     W = workspace

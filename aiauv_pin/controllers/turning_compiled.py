@@ -94,7 +94,7 @@ def turning_info_shapes(n_joints: int, n_thrusters: int) -> dict[str, tuple[int,
     }
 
 
-@compiled(borrows_only=True)
+@compiled(borrows_only=True, inline=True)
 def thruster_turning(t, q, v, model, workspace, parameters, state, tau, info):
     """The thruster-turning baseline on the vehicle: measure, law, ``tau = B(q) thrusts``.
 

@@ -232,6 +232,20 @@ def _slender_cylinder_link(
     )
 
 
+def _attached_link(element: Element, links: Mapping[str, UrdfLink], what: str) -> str:
+    """The robot link a ``<thruster>`` or ``<fin>`` element is attached to (its ``link``
+    attribute); the element must have no child elements."""
+    for child in element:
+        if isinstance(child.tag, str):
+            raise HydroError(f"{what}: unexpected child element <{child.tag}>")
+    link = element.get("link")
+    if not link:
+        raise HydroError(f"{what}: missing link attribute")
+    if link not in links:
+        raise HydroError(f"{what}: link '{link}' is not a <link> of the robot")
+    return link
+
+
 def _thruster(element: Element, links: dict[str, UrdfLink]) -> Thruster:
     name = element.get("name")
     if not name:
@@ -242,14 +256,7 @@ def _thruster(element: Element, links: dict[str, UrdfLink]) -> Thruster:
         ("name", "link", "xyz", "direction", "max_thrust", "time_constant", "max_rate"),
         what,
     )
-    for child in element:
-        if isinstance(child.tag, str):
-            raise HydroError(f"{what}: unexpected child element <{child.tag}>")
-    link = element.get("link")
-    if not link:
-        raise HydroError(f"{what}: missing link attribute")
-    if link not in links:
-        raise HydroError(f"{what}: link '{link}' is not a <link> of the robot")
+    link = _attached_link(element, links, what)
     if "direction" not in element.attrib:
         raise HydroError(f"{what}: missing direction attribute")
     if "max_thrust" not in element.attrib:
@@ -308,14 +315,7 @@ def _fin(element: Element, links: Mapping[str, UrdfLink]) -> Fin:
         raise HydroError("<hydrodynamics> <fin> without a name")
     what = f"fin '{name}'"
     _check_attributes(element, ("name", "link", "xyz", "axis", "chord", *FIN_RANGES), what)
-    for child in element:
-        if isinstance(child.tag, str):
-            raise HydroError(f"{what}: unexpected child element <{child.tag}>")
-    link = element.get("link")
-    if not link:
-        raise HydroError(f"{what}: missing link attribute")
-    if link not in links:
-        raise HydroError(f"{what}: link '{link}' is not a <link> of the robot")
+    link = _attached_link(element, links, what)
     for required in ("axis", "chord", "area", "lift_slope", "max_angle"):
         if required not in element.attrib:
             raise HydroError(f"{what}: missing {required} attribute")
