@@ -187,12 +187,7 @@ def _run_simulate(args) -> int:
         write_results,
     )
     from aiauv_pin.results.streamed_table import TableStream
-    from aiauv_pin.scenario.definition import (
-        ScenarioResult,
-        finish_run,
-        joint_position_units,
-        plan_run,
-    )
+    from aiauv_pin.scenario.definition import finish_run, plan_run, result_of
     from aiauv_pin.simulation.fixed_step import simulate
 
     scenario = scenario_for_args(args)
@@ -276,14 +271,7 @@ def _run_simulate(args) -> int:
         from aiauv_pin.scenario.definition import add_path_errors
 
         add_path_errors(vehicle, scenario, partial)
-        result = ScenarioResult(
-            scenario,
-            partial,
-            time.perf_counter() - start,
-            vehicle.joint_names,
-            vehicle.thruster_names,
-            joint_units=joint_position_units(vehicle),
-        )
+        result = result_of(plan, partial, time.perf_counter() - start)
         with staged_folder(out) as staging:  # nothing of an earlier run survives
             write_results(
                 result,

@@ -29,12 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from aiauv_pin.results import outputs
-from aiauv_pin.scenario.definition import (
-    RunPlan,
-    ScenarioResult,
-    complete_diagnostics,
-    joint_position_units,
-)
+from aiauv_pin.scenario.definition import RunPlan, complete_diagnostics, result_of
 from aiauv_pin.simulation.fixed_step import complete_rows, trajectory_of_log
 
 #: Rows of the table formatted per block (one block holds the GIL for about 1 ms).
@@ -104,15 +99,7 @@ def log_columns_of_table(plan: RunPlan) -> tuple[np.ndarray, list[str]] | None:
         return None
     # it leaves the log's diagnostics as they are: the table of a log of positions
     probe = np.arange(2.0 * width).reshape(2, width)
-    trajectory = trajectory_of_log(probe, nq, nv, controller.unpack)
-    result = ScenarioResult(
-        scenario=plan.scenario,
-        trajectory=trajectory,
-        wall_time=0.0,
-        joint_names=vehicle.joint_names,
-        thruster_names=vehicle.thruster_names,
-        joint_units=joint_position_units(vehicle),
-    )
+    result = result_of(plan, trajectory_of_log(probe, nq, nv, controller.unpack), 0.0)
     _, table, formats = outputs.timeseries_content(result)
     if table.shape[0] != 2:
         return None

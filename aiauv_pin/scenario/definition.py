@@ -620,22 +620,29 @@ def finish_run(plan: RunPlan, trajectory: Trajectory, wall_time: float) -> Scena
         wall_time: The simulation's wall time [s].
     """
     vehicle, scenario = plan.vehicle, plan.scenario
-    passive, use_compiled = plan.passive, plan.compiled
     complete_diagnostics(vehicle, scenario, trajectory)
-    if not passive and scenario.controller != "constant":  # rows logged once per sample
+    if not plan.passive and scenario.controller != "constant":  # rows logged once per sample
         warn_if_oscillating(
             np.asarray(trajectory.v)[:, 6:],
             scenario.method,
             scenario.dt,
             scenario.dt * scenario.steps_per_control,
         )
+    return result_of(plan, trajectory, wall_time)
+
+
+def result_of(plan: RunPlan, trajectory: Trajectory, wall_time: float) -> ScenarioResult:
+    """The :class:`ScenarioResult` of ``plan``'s run holding ``trajectory`` as it is (no
+    diagnostics added, no check): the vehicle's joint and thruster names and units, and its
+    backend. ``wall_time``: the simulation's wall time [s]."""
+    vehicle = plan.vehicle
     return ScenarioResult(
-        scenario=scenario,
+        scenario=plan.scenario,
         trajectory=trajectory,
         wall_time=wall_time,
         joint_names=vehicle.joint_names,
         thruster_names=vehicle.thruster_names,
-        extra={"backend": vehicle.active_backend, "compiled_controller": use_compiled},
+        extra={"backend": vehicle.active_backend, "compiled_controller": plan.compiled},
         joint_units=joint_position_units(vehicle),
     )
 
