@@ -29,7 +29,7 @@ import contextlib
 import os
 import stat
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from aiauv_pin.errors import AiauvError
@@ -178,6 +178,21 @@ def write_text(
     """Write a text file atomically (UTF-8); see :func:`atomic_path`."""
     with atomic_path(path, root=root) as temporary:
         temporary.write_text(text, encoding="utf-8")
+    return Path(path)
+
+
+def write_parts(
+    path: str | os.PathLike,
+    parts: Iterable[str | bytes],
+    *,
+    root: str | os.PathLike | None = None,
+) -> Path:
+    """Write the concatenation of ``parts`` (text, as UTF-8, or bytes) atomically, one part after
+    the other: a large file made of many parts is never joined into one string first (each join of
+    a 9 MB table is a copy into memory the kernel must first map); see :func:`atomic_path`."""
+    with atomic_path(path, root=root) as temporary, open(temporary, "wb") as handle:
+        for part in parts:
+            handle.write(part.encode("utf-8") if isinstance(part, str) else part)
     return Path(path)
 
 

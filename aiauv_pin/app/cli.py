@@ -233,6 +233,11 @@ def _run_simulate(args) -> int:
     # before the timed run, without a step: summary.json's real-time factor is the simulation's
     # alone; the set-up time is recorded beside it
     plan = plan_run(vehicle, scenario)
+    if plan.compiled and not args.no_figures:
+        # matplotlib for the figures, imported by a second thread from here on: loading the
+        # compiled loop (numba parses its bitcode, the GIL released) and the loop itself leave
+        # it the GIL (started with the loop, it ended 0.06-0.08 s after it, which the run waited)
+        preload_plotting()
     if vehicle.active_backend == "numba":
         with compilation:
             simulate(*plan.arguments, **plan.options, compile_only=True)
@@ -243,8 +248,8 @@ def _run_simulate(args) -> int:
 
         on_log = live_view(vehicle, path_points=live_path_points(scenario))
     # while the loop runs (it releases the GIL), a second thread imports matplotlib for the
-    # figures (preload_plotting) or, without figures, formats timeseries.csv's rows: one of them,
-    # as the two would share one core (the table then goes to the figure processes)
+    # figures (preload_plotting, above) or, without figures, formats timeseries.csv's rows: one of
+    # them, as the two would share one core (the table then goes to the figure processes)
     stream = TableStream.for_plan(plan) if args.no_figures else None
     streamed = None
     start = time.perf_counter()
@@ -255,9 +260,6 @@ def _run_simulate(args) -> int:
                 **plan.options,
                 progress=not args.quiet,
                 on_log=on_log,
-                after_first_chunk=None
-                if args.no_figures or not plan.compiled
-                else preload_plotting,
                 log_reader=None if stream is None else stream.read,
             )
         wall_time = time.perf_counter() - start

@@ -13,16 +13,18 @@ the last sample is always included; ``None`` writes every sample). The figures d
 the minimum and maximum of each of at most :data:`PLOT_BUCKETS` consecutive runs of samples (in
 time order), which at their size is indistinguishable from drawing every sample.
 
-Speed: pass :func:`preload_plotting` as ``after_first_chunk`` to
-:func:`aiauv_pin.scenario.definition.run_paper_scenario` and matplotlib (about 0.3 s of imports) is
-imported in a
-background thread while the compiled scenario loop runs (its kernels release the GIL); no backend
-is selected until figures are written (Agg). The figures are drawn by two processes on Linux.
+Speed: call :func:`preload_plotting` before a compiled run (``aiauv simulate`` calls it once the
+vehicle is loaded, before the compiled loop is), or pass it as ``after_first_chunk`` to
+:func:`aiauv_pin.scenario.definition.run_paper_scenario`, and matplotlib (about 0.3 s of imports)
+is imported in a background thread while the compiled loop is loaded and runs (its kernels release
+the GIL); no backend is selected until figures are written (Agg). The figures are drawn by two
+processes on Linux.
 """
 
 from __future__ import annotations
 
 import functools
+import itertools
 import json
 import os
 import sys
@@ -33,9 +35,10 @@ from pathlib import Path
 
 import numpy as np
 
-from aiauv_pin._internal.atomic import atomic_path, write_bytes, write_text
+from aiauv_pin._internal.atomic import atomic_path, write_parts, write_text
 from aiauv_pin._internal.text import signed
 from aiauv_pin.scenario.definition import ScenarioResult, cross_track_axes, summary
+from aiauv_pin.simulation.energy import energy_summary
 from aiauv_pin.simulation.fixed_step import Trajectory
 
 _preload: threading.Thread | None = None
@@ -418,18 +421,20 @@ def write_timeseries(result: ScenarioResult, path: Path, streamed=None) -> Path:
     return _write_table(path, *_table_parts(result, streamed))
 
 
-def _write_table(path: Path, head: str, rest: np.ndarray, formats: list[str]) -> Path:
-    """Write ``head`` and the rows ``rest`` formatted (:func:`_table_parts`) to ``path``."""
-    return write_text(path, head + format_rows(rest, formats))
+def _write_table(path: Path, head: list[str], rest: np.ndarray, formats: list[str]) -> Path:
+    """Write the text ``head`` and the rows ``rest`` formatted (:func:`_table_parts`) to ``path``,
+    part after part (:func:`~aiauv_pin._internal.atomic.write_parts`)."""
+    return write_parts(path, [*head, format_rows(rest, formats)])
 
 
-def _table_parts(result: ScenarioResult, streamed=None) -> tuple[str, np.ndarray, list[str]]:
-    """``timeseries.csv`` as its text so far (the header line and the rows ``streamed``
-    formatted, :meth:`~aiauv_pin.results.streamed_table.StreamedTable.text_for`), the rows left to
-    format and the columns' number formats."""
+def _table_parts(result: ScenarioResult, streamed=None) -> tuple[list[str], np.ndarray, list[str]]:
+    """``timeseries.csv``'s text so far, in parts (the header line and the blocks of rows
+    ``streamed`` formatted,
+    :meth:`~aiauv_pin.results.streamed_table.StreamedTable.parts_for`), the rows left to format
+    and the columns' number formats."""
     header, table, formats = timeseries_content(result)
-    done, text = (0, "") if streamed is None else streamed.text_for(table, formats)
-    return ",".join(header) + "\n" + text, table[done:], formats
+    done, parts = (0, []) if streamed is None else streamed.parts_for(table, formats)
+    return [",".join(header) + "\n", *parts], table[done:], formats
 
 
 def timeseries_content(result: ScenarioResult) -> tuple[list[str], np.ndarray, list[str]]:
@@ -451,15 +456,17 @@ class _TimeseriesBlocks:
     into an anonymous temporary file in the file's folder opened before the fork (no name on
     disk: a kill leaves nothing behind), which both processes share; :meth:`finish` reads the
     blocks back in order and writes the file atomically
-    (:func:`~aiauv_pin._internal.atomic.write_bytes`), so the file is absent or complete as before.
-    ``head`` and ``table``: the text so far and the rows left (:func:`_table_parts`).
+    (:func:`~aiauv_pin._internal.atomic.write_parts`), so the file is absent or complete as before.
+    ``head`` and ``table``: the text so far, in parts, and the rows left (:func:`_table_parts`).
     """
 
-    def __init__(self, path: Path, head: str, table: np.ndarray, formats, blocks: int) -> None:
+    def __init__(
+        self, path: Path, head: list[str], table: np.ndarray, formats, blocks: int
+    ) -> None:
         import tempfile
 
         self._formats = formats
-        self._head = head.encode("utf-8")
+        self._head = head
         self._path = path
         self._tables = np.array_split(table, blocks)  # consecutive rows, in order
         # beside the file (where its bytes have room), unnamed (``O_TMPFILE`` on Linux)
@@ -474,11 +481,13 @@ class _TimeseriesBlocks:
 
     def finish(self) -> Path:
         """Put the blocks together into the file (every task has run)."""
-        parts = [self._head]
-        for sink in self._sinks:
-            sink.seek(0)
-            parts.append(sink.read())
-        return write_bytes(self._path, b"".join(parts))
+
+        def blocks():
+            for sink in self._sinks:
+                sink.seek(0)
+                yield sink.read()
+
+        return write_parts(self._path, itertools.chain(self._head, blocks()))
 
     def close(self) -> None:
         for sink in self._sinks:
@@ -606,9 +615,15 @@ def _plot(ax, t, y, *args, **kwargs):
     return ax.plot(*envelope(np.asarray(t), np.asarray(y)), *args, **kwargs)
 
 
-def write_summary(result: ScenarioResult, path: Path, extra: dict | None = None) -> dict:
-    """Write ``summary.json`` and return its content."""
-    content = summary(result)
+def write_summary(
+    result: ScenarioResult,
+    path: Path,
+    extra: dict | None = None,
+    energy: Callable[[], dict | None] | None = None,
+) -> dict:
+    """Write ``summary.json`` and return its content (``energy``: see
+    :func:`aiauv_pin.scenario.definition.summary`)."""
+    content = summary(result, energy)
     if extra:
         content.update(extra)
     write_text(path, json.dumps(content, indent=2, allow_nan=False) + "\n")
@@ -1194,6 +1209,34 @@ def write_figures(
     return [figure_path(folder, name, figure_format) for name in figures_of(result)]
 
 
+class _Background:
+    """``function(*arguments)`` run by a thread of its own from now on (a daemon: it computes,
+    it writes nothing); :meth:`result` waits for it and returns its value or raises its
+    exception."""
+
+    def __init__(self, function: Callable, *arguments) -> None:
+        self._outcome: dict = {}
+        self._thread = threading.Thread(
+            target=self._run, args=(function, arguments), name="aiauv-background", daemon=True
+        )
+        self._thread.start()
+
+    def _run(self, function: Callable, arguments: tuple) -> None:
+        try:
+            self._outcome["value"] = function(*arguments)
+        except BaseException as exc:  # raised by result(), in the caller's thread
+            self._outcome["error"] = exc
+
+    def join(self) -> None:
+        self._thread.join()
+
+    def result(self):
+        self._thread.join()
+        if "error" in self._outcome:
+            raise self._outcome["error"]
+        return self._outcome["value"]
+
+
 #: Blocks of rows of ``timeseries.csv`` shared between the two processes of :func:`write_results`
 #: (at most), and the fewest rows of a block: a short run's table is one task, written at once.
 _CSV_BLOCKS = 4
@@ -1248,15 +1291,25 @@ def write_results(
         *(_figure_tasks(result, out_dir / "figures", figure_format, drawing) if figures else ()),
     ]
     csv_path = out_dir / "timeseries.csv"
+    # the data files alone, the table mostly formatted during the run: the summary's energy
+    # (array arithmetic and compiled sums, which release the GIL) in a thread beside the table's
+    # last rows, 0.03 s of the paper run; never beside a fork (a thread's locks are not the child's)
+    energy = _Background(energy_summary, result) if not tasks and streamed is not None else None
+    given = None if energy is None else energy.result
     head, rest, formats = _table_parts(result, streamed)
     blocks = min(_CSV_BLOCKS, len(rest) // _CSV_BLOCK_ROWS)
+    summary_here = functools.partial(write_summary, result, out_dir / "summary.json", extra, given)
+    if energy is not None and (blocks < 2 or _second_process(parallel) is None):
+        try:  # the table first, while the energy is computed
+            _write_table(csv_path, head, rest, formats)
+            return summary_here()
+        finally:
+            energy.join()
     if _second_process(parallel) is None or blocks < 2:
         tasks.append(functools.partial(_write_table, csv_path, head, rest, formats))
-        return _run_tasks(
-            tasks,
-            parallel,
-            here_first=functools.partial(write_summary, result, out_dir / "summary.json", extra),
-        )
+        return _run_tasks(tasks, parallel, here_first=summary_here)
+    if energy is not None:
+        energy.join()  # finished before the fork below
     # with two processes, the table in blocks, the last tasks (the smallest): whichever process
     # is free takes the next, so that they finish about together, also without figures
     csv = _TimeseriesBlocks(csv_path, head, rest, formats, blocks)
@@ -1264,7 +1317,7 @@ def write_results(
         content = _run_tasks(
             [*tasks, *csv.tasks],
             parallel,
-            here_first=functools.partial(write_summary, result, out_dir / "summary.json", extra),
+            here_first=summary_here,
         )
         csv.finish()
     finally:

@@ -58,8 +58,13 @@ class StreamedTable:
         """How many leading rows of the final ``table`` (formatted with ``formats``) the blocks
         hold, and their text: the blocks in order while their numbers are bit for bit the
         table's rows, with the same formats."""
+        done, parts = self.parts_for(table, formats)
+        return done, "".join(parts)
+
+    def parts_for(self, table: np.ndarray, formats: Sequence[str]) -> tuple[int, list[str]]:
+        """:meth:`text_for` with the text as the blocks' texts, in order (not joined)."""
         if tuple(formats) != self.formats or table.ndim != 2:
-            return 0, ""
+            return 0, []
         done, parts = 0, []
         bits = np.ascontiguousarray(table).view(np.uint64)
         for block in self.blocks:
@@ -70,7 +75,7 @@ class StreamedTable:
                 break
             parts.append(block.text)
             done += n
-        return done, "".join(parts)
+        return done, parts
 
 
 def log_columns_of_table(plan: RunPlan) -> tuple[np.ndarray, list[str]] | None:

@@ -830,8 +830,12 @@ def cross_track_axes(scenario: Scenario, s_range: tuple[float, float]) -> tuple[
     return ("horizontal", "vertical")
 
 
-def summary(result: ScenarioResult) -> dict:
+def summary(result: ScenarioResult, energy: Callable[[], dict | None] | None = None) -> dict:
     """Figures of merit of a run (all SI units).
+
+    ``energy``: gives the ``energy`` block
+    (:func:`aiauv_pin.simulation.energy.energy_summary` of ``result``), e.g. computed in a thread
+    meanwhile (:func:`aiauv_pin.results.outputs.write_results`); by default computed here.
 
     Every run: ``final.position`` (the end-effector's world position [m]), ``final.base_position``
     [m], ``final.base_displacement`` (from the start, world frame [m]), ``final.base_distance``
@@ -934,9 +938,9 @@ def summary(result: ScenarioResult) -> dict:
             "max_position_error": float(position.max()),
             "max_attitude_error": float(attitude.max()),
         }
-    energy = energy_summary(result)
-    if energy is not None:
-        content["energy"] = energy
+    block = energy_summary(result) if energy is None else energy()
+    if block is not None:
+        content["energy"] = block
     return content
 
 

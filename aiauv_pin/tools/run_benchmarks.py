@@ -260,6 +260,75 @@ def total(x):
 total(numpy.ones(3))
 """
 
+#: The floor of a run of a vehicle: :data:`_NUMBA_FLOOR_SCRIPT`, numba started as this package
+#: starts it (without ``scipy.linalg``: :mod:`aiauv_pin._internal.numba_blas`, loaded from its file
+#: alone, ``NUMBA_BLAS`` in ``results.json``) and Pinocchio, which reads every vehicle, imported.
+_RUN_FLOOR_SCRIPT = """\
+import importlib.util
+
+spec = importlib.util.spec_from_file_location("numba_blas", {numba_blas!r})
+spec.loader.exec_module(importlib.util.module_from_spec(spec))
+
+""" + _NUMBA_FLOOR_SCRIPT.replace("import numpy\n", "import numpy\nimport pinocchio\n")
+
+
+def _run_floor_script() -> str:
+    from aiauv_pin._internal import numba_blas
+
+    return _RUN_FLOOR_SCRIPT.format(numba_blas=numba_blas.__file__)
+
+
+#: The run whose figures are drawn for the figures' layout alone [s]: a few samples of the
+#: scenario, the same figures (panels, scales, labels, legends) with almost no data.
+_LAYOUT_SECONDS = 0.02
+
+
+def _loop_and_figures(case: str, duration: float, repeats: int, folder: Path) -> dict:
+    """In this (warm) process, with nothing else running in it: the wall time of the simulation
+    loop of ``aiauv simulate`` alone (``simulate`` of the same plan, loaded and compiled
+    beforehand, as the command's ``wall_time``), and of its figures drawn as the command draws
+    them (:func:`~aiauv_pin.results.outputs.write_figures`, two processes), from the run and from a
+    :data:`_LAYOUT_SECONDS` run of the same scenario (their layout: panels, ticks, text, the PNG
+    files); each ``repeats`` times after an untimed round."""
+    import warnings
+
+    from aiauv_pin.model import loading
+    from aiauv_pin.results.outputs import write_figures
+    from aiauv_pin.scenario.definition import Scenario, finish_run, plan_run
+    from aiauv_pin.simulation.fixed_step import simulate
+
+    vehicle = loading.load_vehicle(loading.bundled_urdf(case))
+
+    def run(seconds: float):
+        plan = plan_run(vehicle, Scenario(case=case, duration=seconds))
+        simulate(*plan.arguments, **plan.options, compile_only=True)
+        start = time.perf_counter()
+        trajectory = simulate(*plan.arguments, **plan.options)
+        wall = time.perf_counter() - start
+        with warnings.catch_warnings():  # a run of a few samples may warn (settling, oscillation)
+            warnings.simplefilter("ignore")
+            return finish_run(plan, trajectory, wall), wall
+
+    loops = [run(duration)[1] for _ in range(repeats + 1)][1:]
+    result, _ = run(duration)
+    layout, _ = run(_LAYOUT_SECONDS)
+
+    def figures(of, name: str) -> float:
+        start = time.perf_counter()
+        write_figures(of, folder / name, parallel=True)
+        return time.perf_counter() - start
+
+    drawn, empty = [], []
+    for k in range(repeats + 1):  # interleaved; the first round untimed (matplotlib's start)
+        drawn.append(figures(result, f"figures-{k}"))
+        empty.append(figures(layout, f"layout-{k}"))
+    return {
+        "loop_alone_s": _spread(loops),
+        "figures_s": _spread(drawn[1:]),
+        "figure_layout_s": _spread(empty[1:]),
+        "figures": len(list((folder / "figures-0").iterdir())),
+    }
+
 
 def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5) -> dict:
     """Wall time of fresh ``aiauv simulate`` processes (warm cache), with and without playback,
@@ -286,6 +355,7 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
         "import_only": [],
         "numpy_floor": [],
         "numba_floor": [],
+        "run_floor": [],
     }
     parts: dict[str, dict[str, list[float]]] = {
         name: {"setup_s": [], "simulation_s": [], "rest_s": []}
@@ -296,6 +366,8 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
         outs = {"no_html": base / "a", "with_html": base / "b", "no_figures": base / "c"}
         floor_script = base / "numba_floor.py"
         floor_script.write_text(_NUMBA_FLOOR_SCRIPT, encoding="utf-8")
+        run_floor_script = base / "run_floor.py"
+        run_floor_script.write_text(_run_floor_script(), encoding="utf-8")
         commands = {
             "no_html": _simulate_command(case, duration, outs["no_html"], html=False),
             "no_figures": _simulate_command(
@@ -305,6 +377,7 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
             "import_only": [sys.executable, "-c", "import aiauv_pin.app.cli"],
             "numpy_floor": [sys.executable, "-c", "import numpy"],
             "numba_floor": [sys.executable, str(floor_script)],
+            "run_floor": [sys.executable, str(run_floor_script)],
         }
         # warm as an installed copy is: Python's bytecode cached too (PYTHONDONTWRITEBYTECODE, set
         # in some shells and containers, made every run of an editable checkout compile its ~115
@@ -312,7 +385,7 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
         # the floor's cache in the temporary folder (the project's cache is left as it is)
         warm_env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
         floor_env = {**warm_env, "NUMBA_CACHE_DIR": str(base / "numba-cache")}
-        envs = {name: (floor_env if name == "numba_floor" else warm_env) for name in commands}
+        envs = {name: (floor_env if "floor" in name else warm_env) for name in commands}
         for name, command in commands.items():  # one untimed run each (page cache, numba cache)
             subprocess.run(command, capture_output=True, check=True, cwd=base, env=envs[name])
         for _ in range(repeats):
@@ -326,6 +399,16 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
                     parts[name]["simulation_s"].append(summary["wall_time"])
                     rest = walls[name][-1] - summary["setup_time"] - summary["wall_time"]
                     parts[name]["rest_s"].append(rest)
+        alone = _loop_and_figures(case, duration, repeats, base / "in-process")
+    # in each round, what a run costs before and beside anything of ours: the run floor (numba
+    # started as we start it, Pinocchio imported) then the loop alone, and, with figures, then the
+    # figures' layout on two processes
+    loop, layout = alone["loop_alone_s"]["median"], alone["figure_layout_s"]["median"]
+    pairs = list(zip(walls["run_floor"], walls["numba_floor"], strict=True))
+    bounds = {
+        "no_figures": _spread([(p + loop) / f for p, f in pairs]),
+        "no_html": _spread([(p + loop + layout) / f for p, f in pairs]),
+    }
     return {
         "case": case,
         "duration_s": duration,
@@ -347,6 +430,9 @@ def end_to_end(case: str = "uniform", duration: float = 300.0, repeats: int = 5)
             name: {part: _spread(values) for part, values in split.items()}
             for name, split in parts.items()
         },
+        "run_floor_script": _RUN_FLOOR_SCRIPT.replace("{numba_blas!r}", "NUMBA_BLAS"),
+        "in_process": alone,
+        "bound_to_numba_floor": bounds,
     }
 
 
@@ -789,8 +875,18 @@ def format_parts(results: dict) -> list[str]:
         if "numba_floor_wall_s" in e2e:
             spread("floor: fresh 'import numpy' wall", e2e["numpy_floor_wall_s"], "s")
             spread("floor: fresh numba, one cached function", e2e["numba_floor_wall_s"], "s")
+        if "run_floor_wall_s" in e2e:
+            spread("floor of a run: no scipy.linalg, Pinocchio", e2e["run_floor_wall_s"], "s")
         for name, ratio in e2e.get("ratio_to_numba_floor", {}).items():
             spread(f"  {name} / numba floor (per round)", ratio, "x")
+        alone = e2e.get("in_process")
+        if alone:
+            spread("simulation loop alone (in process)", alone["loop_alone_s"], "s")
+            spread(f"{alone['figures']} figures, 2 processes (in process)", alone["figures_s"], "s")
+            spread("  the same figures' layout (a few samples)", alone["figure_layout_s"], "s")
+        for name, bound in e2e.get("bound_to_numba_floor", {}).items():
+            what = "loop" if name == "no_figures" else "loop + layout"
+            spread(f"  {name}: (run floor + {what}) / numba floor", bound, "x")
         labels = (
             ("no_html", "--no-html"),
             ("no_figures", "--no-figures"),

@@ -25,6 +25,7 @@ from aiauv_pin._internal.atomic import (
     atomic_path,
     open_inside,
     real_folder,
+    write_parts,
     write_text,
 )
 from aiauv_pin._internal.result_folder import (
@@ -203,6 +204,26 @@ def test_atomic_helper_refuses_every_special_path(tmp_path):
     assert snapshot(tmp_path / "outside") == {
         k[len("outside/") :]: v for k, v in before.items() if k.startswith("outside/")
     }
+
+
+def test_parts_are_written_one_after_the_other_and_atomically(tmp_path):
+    target = tmp_path / "table.csv"
+    parts = ["t [s],x [m]\n", "0.0,1.5\n", b"0.1,2.5\n", "0.2,\u00e9\n"]
+    assert write_parts(target, iter(parts)) == target
+    assert target.read_bytes() == "t [s],x [m]\n0.0,1.5\n0.1,2.5\n0.2,\u00e9\n".encode()
+
+    def failing():
+        yield "new text\n"
+        raise RuntimeError("a part that cannot be made")
+
+    with pytest.raises(RuntimeError, match="cannot be made"):
+        write_parts(target, failing())
+    assert target.read_bytes().startswith(b"t [s],x [m]\n")  # the old file, whole
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["table.csv"]  # no temporary left
+    (tmp_path / "hostile").mkdir()
+    for kind, hostile in _shuffled(hostile_targets(tmp_path / "hostile", ".csv")):
+        with pytest.raises(OutputPathError, match=EXPECTED[kind]):
+            write_parts(hostile, ["x"])
 
 
 def test_lock_file_is_opened_inside_the_folder_only(tmp_path):

@@ -82,6 +82,33 @@ def test_the_streamed_table_is_the_file_without_streaming(vehicle, tmp_path):
         assert written == (tmp_path / "plain.csv").read_bytes()
 
 
+def test_a_streamed_runs_summary_is_the_one_computed_in_one_thread(vehicle, tmp_path):
+    """With a streamed table, the energy block is computed by a second thread beside the table's
+    last rows (:func:`aiauv_pin.results.outputs.write_results`): the same ``summary.json``."""
+    result, streamed = _drained_run(vehicle, Scenario(duration=20.0))
+    expected = outputs.write_summary(result, tmp_path / "plain.json")
+    assert "energy" in expected
+    for parallel in (True, False):
+        got = outputs.write_results(
+            result, tmp_path / str(parallel), figures=False, parallel=parallel, streamed=streamed
+        )
+        assert got == expected
+        summary = (tmp_path / str(parallel) / "summary.json").read_bytes()
+        assert summary == (tmp_path / "plain.json").read_bytes()
+
+
+def test_the_energy_threads_failure_is_raised_and_leaves_no_summary(vehicle, tmp_path, monkeypatch):
+    result, streamed = _drained_run(vehicle, Scenario(duration=2.0))
+
+    def failing(result):
+        raise ArithmeticError("energy model failed")
+
+    monkeypatch.setattr(outputs, "energy_summary", failing)
+    with pytest.raises(ArithmeticError, match="energy model failed"):
+        outputs.write_results(result, tmp_path / "run", figures=False, streamed=streamed)
+    assert not (tmp_path / "run" / "summary.json").exists()
+
+
 def test_rows_whose_numbers_differ_by_one_bit_are_formatted_again(vehicle, tmp_path):
     result, streamed = _drained_run(vehicle, Scenario(duration=4.0))
     _, table, formats = outputs.timeseries_content(result)

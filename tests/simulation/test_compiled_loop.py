@@ -168,6 +168,23 @@ def test_after_first_chunk_runs_once_and_changes_nothing(numba_vehicle):
     _same_trajectory(with_callback.trajectory, plain.trajectory, dict(rtol=0, atol=0))
 
 
+def test_a_compiled_runs_trajectory_is_read_from_its_log_without_a_copy(numba_vehicle):
+    """``t, q, v, tau`` of a compiled loop's run are columns of its log's rows (one row stride, at
+    least a whole row's), with the values the Python controller's run holds in arrays of their
+    own."""
+    scenario = PaperScenario(duration=0.5)
+    compiled = run_paper_scenario(numba_vehicle, scenario).trajectory
+    assert numba_vehicle.fallback_reason is None
+    arrays = (compiled.t, compiled.q, compiled.v, compiled.tau)
+    row_bytes = 8 * (1 + numba_vehicle.nq + 2 * numba_vehicle.nv)
+    assert len({a.strides[0] for a in arrays}) == 1 and arrays[0].strides[0] > row_bytes
+    assert not compiled.q.flags.c_contiguous
+    python = run_paper_scenario(numba_vehicle, scenario, compiled=False).trajectory
+    assert python.q.flags.c_contiguous
+    for got, expected in zip(arrays, (python.t, python.q, python.v, python.tau), strict=True):
+        np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-9)
+
+
 @pytest.mark.parametrize("method", ["rk4", "midpoint"])
 def test_compile_only_loads_the_runs_loop_and_takes_no_step(numba_vehicle, method):
     """The warm-up of ``aiauv simulate`` (:func:`aiauv_pin.scenario.definition.warm_up`): the loop

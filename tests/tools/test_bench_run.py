@@ -67,6 +67,14 @@ def test_format_parts_prints_medians_and_ranges():
             "numba_floor_wall_s": _spread(0.75),
             "no_figures_wall_s": _spread(1.1),
             "ratio_to_numba_floor": {"no_figures": _spread(1.47)},
+            "run_floor_wall_s": _spread(0.66),
+            "in_process": {
+                "loop_alone_s": _spread(0.31),
+                "figures_s": _spread(0.45),
+                "figure_layout_s": _spread(0.41),
+                "figures": 7,
+            },
+            "bound_to_numba_floor": {"no_figures": _spread(1.43), "no_html": _spread(2.06)},
         },
     }
     lines = bench_run.format_parts(results)
@@ -97,6 +105,12 @@ def test_format_parts_prints_medians_and_ranges():
         "gain margin >= 2" in line and "euler dt=0.004 (is the default)" in line for line in lines
     )
     assert any("floor: fresh numba" in line and "0.75" in line for line in lines)
+    assert any("floor of a run" in line and "0.66" in line for line in lines)
+    assert any("loop alone" in line and "0.31" in line for line in lines)
+    assert any("7 figures" in line and "0.45" in line for line in lines)
+    assert any("figures' layout" in line and "0.41" in line for line in lines)
+    assert any("no_figures: (run floor + loop)" in line and "1.43" in line for line in lines)
+    assert any("no_html: (run floor + loop + layout)" in line and "2.06" in line for line in lines)
     assert any("floor: fresh 'import numpy'" in line and "0.08" in line for line in lines)
 
 
