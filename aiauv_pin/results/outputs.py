@@ -1299,13 +1299,13 @@ def write_results(
     head, rest, formats = _table_parts(result, streamed)
     blocks = min(_CSV_BLOCKS, len(rest) // _CSV_BLOCK_ROWS)
     summary_here = functools.partial(write_summary, result, out_dir / "summary.json", extra, given)
-    if energy is not None and (blocks < 2 or _second_process(parallel) is None):
-        try:  # the table first, while the energy is computed
-            _write_table(csv_path, head, rest, formats)
-            return summary_here()
-        finally:
-            energy.join()
     if _second_process(parallel) is None or blocks < 2:
+        if energy is not None:  # no other task: the table first, while the energy is computed
+            try:
+                _write_table(csv_path, head, rest, formats)
+                return summary_here()
+            finally:
+                energy.join()
         tasks.append(functools.partial(_write_table, csv_path, head, rest, formats))
         return _run_tasks(tasks, parallel, here_first=summary_here)
     if energy is not None:
