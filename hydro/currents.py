@@ -304,6 +304,19 @@ class Current:
         if self.acceleration is not None:
             stable_uuid(self.acceleration)
 
+    def __eq__(self, other: object) -> bool:
+        """The same functions, kind and model, and parameters equal value by value (the comparison
+        a dataclass generates compares the parameter arrays as one truth value, which raises)."""
+        if other.__class__ is not self.__class__:
+            return NotImplemented
+        return (
+            self.function == other.function
+            and self.kind == other.kind
+            and self.acceleration == other.acceleration
+            and self.unsteady == other.unsteady
+            and np.array_equal(self.parameters, other.parameters)
+        )
+
     def check(self) -> None:
         """Refuse parameters the compiled code would read past or compute NaN from.
 

@@ -60,9 +60,8 @@ SOURCES_GROUP = "aiauv.compiled_sources"
 def compiled_sources() -> tuple[str, ...]:
     """The dotted names of every package or module declared in :data:`SOURCES_GROUP`, sorted: the
     stamp hashes exactly these sources, so editing e.g. the command line recompiles nothing."""
-    from importlib import metadata
-
-    return tuple(sorted({entry.value for entry in metadata.entry_points(group=SOURCES_GROUP)}))
+    entries = prebuilt.declared_entry_points().select(group=SOURCES_GROUP)
+    return tuple(sorted({entry.value for entry in entries}))
 
 
 def project_packages() -> tuple[str, ...]:

@@ -211,6 +211,24 @@ def test_quasi_steady_option_in_api_and_tables():
         current_from_mapping({**table, "unsteady": "no"})
 
 
+def test_currents_compare_by_value_and_scenarios_holding_them_too():
+    """The comparison a dataclass generates compared the parameter arrays as one truth value, which
+    raised (``ValueError``), and so did comparing two scenarios with currents."""
+    import dataclasses
+
+    from aiauv_pin.scenario.definition import Scenario
+
+    table = {"type": "tidal", "velocity": [0.1, 0, 0], "amplitude": [0.2, 0, 0], "period": 9.0}
+    tidal = current_from_mapping(table)
+    assert tidal == current_from_mapping(table)
+    assert tidal != current_from_mapping({**table, "period": 9.5})
+    assert tidal != current_from_mapping({**table, "unsteady": False})
+    assert tidal != Current.constant([0.1, 0, 0]) and tidal != "tidal"
+    same = [dataclasses.replace(Scenario(), current=current_from_mapping(table)) for _ in range(2)]
+    assert same[0] == same[1]
+    assert same[0] != dataclasses.replace(Scenario(), current=Current.constant([0.1, 0, 0]))
+
+
 # ---------------------------------------------------------------------- the law
 def test_law_is_the_displaced_water_plus_added_mass_inertia(rng):
     nb = 3
