@@ -30,6 +30,7 @@ import os
 import sys
 import threading
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -1209,34 +1210,6 @@ def write_figures(
     return [figure_path(folder, name, figure_format) for name in figures_of(result)]
 
 
-class _Background:
-    """``function(*arguments)`` run by a thread of its own from now on (a daemon: it computes,
-    it writes nothing); :meth:`result` waits for it and returns its value or raises its
-    exception."""
-
-    def __init__(self, function: Callable, *arguments) -> None:
-        self._outcome: dict = {}
-        self._thread = threading.Thread(
-            target=self._run, args=(function, arguments), name="aiauv-background", daemon=True
-        )
-        self._thread.start()
-
-    def _run(self, function: Callable, arguments: tuple) -> None:
-        try:
-            self._outcome["value"] = function(*arguments)
-        except BaseException as exc:  # raised by result(), in the caller's thread
-            self._outcome["error"] = exc
-
-    def join(self) -> None:
-        self._thread.join()
-
-    def result(self):
-        self._thread.join()
-        if "error" in self._outcome:
-            raise self._outcome["error"]
-        return self._outcome["value"]
-
-
 #: Blocks of rows of ``timeseries.csv`` shared between the two processes of :func:`write_results`
 #: (at most), and the fewest rows of a block: a short run's table is one task, written at once.
 _CSV_BLOCKS = 4
@@ -1294,8 +1267,10 @@ def write_results(
     # the data files alone, the table mostly formatted during the run: the summary's energy
     # (array arithmetic and compiled sums, which release the GIL) in a thread beside the table's
     # last rows, 0.03 s of the paper run; never beside a fork (a thread's locks are not the child's)
-    energy = _Background(energy_summary, result) if not tasks and streamed is not None else None
-    given = None if energy is None else energy.result
+    energy = None
+    if not tasks and streamed is not None:
+        energy = ThreadPoolExecutor(max_workers=1, thread_name_prefix="aiauv-energy")
+    given = None if energy is None else energy.submit(energy_summary, result).result
     head, rest, formats = _table_parts(result, streamed)
     blocks = min(_CSV_BLOCKS, len(rest) // _CSV_BLOCK_ROWS)
     summary_here = functools.partial(write_summary, result, out_dir / "summary.json", extra, given)
@@ -1305,11 +1280,11 @@ def write_results(
                 _write_table(csv_path, head, rest, formats)
                 return summary_here()
             finally:
-                energy.join()
+                energy.shutdown()
         tasks.append(functools.partial(_write_table, csv_path, head, rest, formats))
         return _run_tasks(tasks, parallel, here_first=summary_here)
     if energy is not None:
-        energy.join()  # finished before the fork below
+        energy.shutdown()  # finished before the fork below
     # with two processes, the table in blocks, the last tasks (the smallest): whichever process
     # is free takes the next, so that they finish about together, also without figures
     csv = _TimeseriesBlocks(csv_path, head, rest, formats, blocks)

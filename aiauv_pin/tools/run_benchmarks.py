@@ -321,8 +321,10 @@ def _loop_and_figures(case: str, duration: float, repeats: int, folder: Path) ->
             warnings.simplefilter("ignore")
             return finish_run(plan, trajectory, wall), wall
 
-    loops = [run(duration)[1] for _ in range(repeats + 1)][1:]
-    result, _ = run(duration)
+    loops = []
+    for k in range(repeats + 1):  # the first round untimed; the last run's result is drawn
+        result, wall = run(duration)
+        loops += [wall] if k else []
     layout, _ = run(_LAYOUT_SECONDS)
 
     def figures(of, name: str) -> float:
