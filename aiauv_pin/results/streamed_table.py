@@ -16,7 +16,7 @@ end-effector position) is not streamed.
 
 Whatever the thread read, :func:`aiauv_pin.results.outputs.write_results` reuses a block's text
 only where its numbers are, bit for bit, those of the final table's rows
-(:meth:`StreamedTable.text_for`);
+(:meth:`StreamedTable.parts_for`);
 the file is the same bytes as without streaming.
 """
 
@@ -54,15 +54,11 @@ class StreamedTable:
     blocks: tuple[FormattedRows, ...]
     formats: tuple[str, ...]
 
-    def text_for(self, table: np.ndarray, formats: Sequence[str]) -> tuple[int, str]:
-        """How many leading rows of the final ``table`` (formatted with ``formats``) the blocks
-        hold, and their text: the blocks in order while their numbers are bit for bit the
-        table's rows, with the same formats."""
-        done, parts = self.parts_for(table, formats)
-        return done, "".join(parts)
-
     def parts_for(self, table: np.ndarray, formats: Sequence[str]) -> tuple[int, list[str]]:
-        """:meth:`text_for` with the text as the blocks' texts, in order (not joined)."""
+        """How many leading rows of the final ``table`` (formatted with ``formats``) the blocks
+        hold, and their texts: the blocks in order while their numbers are bit for bit the
+        table's rows, with the same formats (the texts are written one after the other, never
+        joined)."""
         if tuple(formats) != self.formats or table.ndim != 2:
             return 0, []
         done, parts = 0, []

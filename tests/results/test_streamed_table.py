@@ -118,9 +118,10 @@ def test_rows_whose_numbers_differ_by_one_bit_are_formatted_again(vehicle, tmp_p
     changed.view(np.uint64)[0, 1] ^= 1  # the last bit of one number
     blocks[1] = FormattedRows(changed, outputs.format_rows(changed, formats))
     tampered = StreamedTable(tuple(blocks), streamed.formats)
-    done, text = tampered.text_for(table, formats)
+    done, parts = tampered.parts_for(table, formats)
+    text = "".join(parts)
     assert done == blocks[0].values.shape[0] and text == blocks[0].text
-    assert tampered.text_for(table, ["%r"] * len(formats)) == (0, "")
+    assert tampered.parts_for(table, ["%r"] * len(formats)) == (0, [])
     outputs.write_timeseries(result, tmp_path / "plain.csv")
     outputs.write_timeseries(result, tmp_path / "tampered.csv", tampered)
     assert (tmp_path / "tampered.csv").read_bytes() == (tmp_path / "plain.csv").read_bytes()
@@ -150,7 +151,8 @@ def test_a_run_whose_table_is_computed_after_it_is_not_streamed(vehicle):
 def test_the_stream_formats_every_row_before_the_last_one_written(vehicle):
     result, streamed = _drained_run(vehicle, Scenario(duration=20.0))
     _, table, formats = outputs.timeseries_content(result)
-    done, text = streamed.text_for(table, formats)
+    done, parts = streamed.parts_for(table, formats)
+    text = "".join(parts)
     assert done == len(table) - 1 and len(streamed.blocks) >= 3  # all but the last row, in blocks
     assert text == outputs.format_rows(table[:done], formats)
 
