@@ -176,6 +176,34 @@ def scenario_for_args(args):
 
 
 def _run_simulate(args) -> int:
+    from aiauv_pin.errors import AiauvError
+    from aiauv_pin.model import loading
+
+    # (imported before the figure process forks: it then holds what drawing needs)
+    from aiauv_pin.results.figure_workers import FigureWorkers
+
+    scenario = scenario_for_args(args)
+    steps = scenario.duration / scenario.dt
+    if steps > MAX_STEPS:
+        raise AiauvError(
+            f"duration / dt = {steps:.3g} steps exceeds {MAX_STEPS}; "
+            "use a larger --dt or a shorter --duration"
+        )
+    path = scenario.vehicle if scenario.vehicle is not None else loading.bundled_urdf(scenario.case)
+    workers = None
+    if not args.no_figures:
+        # forked now, while no other thread runs: it imports matplotlib on the second core,
+        # idle while this process reads the vehicle and loads the compiled loop
+        workers = FigureWorkers.start(scenario)
+    try:
+        return _simulate_with(args, scenario, path, workers)
+    finally:
+        if workers is not None:
+            workers.close()
+
+
+def _simulate_with(args, scenario, path, workers) -> int:
+    """:func:`_run_simulate` once the figure process (``workers``, or ``None``) is started."""
     from aiauv_pin._internal.result_folder import check_output_folder, staged_folder
     from aiauv_pin.errors import AiauvError, SimulationDiverged
     from aiauv_pin.model import loading
@@ -188,17 +216,8 @@ def _run_simulate(args) -> int:
     )
     from aiauv_pin.results.streamed_table import TableStream
     from aiauv_pin.scenario.definition import finish_run, plan_run, result_of
-    from aiauv_pin.simulation.fixed_step import simulate
-
-    scenario = scenario_for_args(args)
-    steps = scenario.duration / scenario.dt
-    if steps > MAX_STEPS:
-        raise AiauvError(
-            f"duration / dt = {steps:.3g} steps exceeds {MAX_STEPS}; "
-            "use a larger --dt or a shorter --duration"
-        )
-    path = scenario.vehicle if scenario.vehicle is not None else loading.bundled_urdf(scenario.case)
     from aiauv_pin.simulation.compilation import CompilationWatch
+    from aiauv_pin.simulation.fixed_step import simulate
 
     compile_start = time.perf_counter()
     vehicle = loading.load_vehicle(path, **_load_options(args, scenario))
@@ -233,7 +252,7 @@ def _run_simulate(args) -> int:
     # before the timed run, without a step: summary.json's real-time factor is the simulation's
     # alone; the set-up time is recorded beside it
     plan = plan_run(vehicle, scenario)
-    if plan.compiled and not args.no_figures:
+    if plan.compiled and not args.no_figures and workers is None:
         # matplotlib for the figures, imported by a second thread from here on: loading the
         # compiled loop (numba parses its bitcode, the GIL released) and the loop itself leave
         # it the GIL (started with the loop, it ended 0.06-0.08 s after it, which the run waited)
@@ -247,10 +266,16 @@ def _run_simulate(args) -> int:
         from aiauv_pin.results.viewer import live_view
 
         on_log = live_view(vehicle, path_points=live_path_points(scenario))
-    # while the loop runs (it releases the GIL), a second thread imports matplotlib for the
-    # figures (preload_plotting, above) or, without figures, formats timeseries.csv's rows: one of
-    # them, as the two would share one core (the table then goes to the figure processes)
-    stream = TableStream.for_plan(plan) if args.no_figures else None
+    # while the loop runs (it releases the GIL), a second thread formats timeseries.csv's rows:
+    # without figures from the start; with the figure process once it has warmed matplotlib up
+    # (the two share the second core); not beside matplotlib's import in this process
+    # (preload_plotting, above: the table then goes to the figure processes)
+    if args.no_figures:
+        stream = TableStream.for_plan(plan)
+    elif workers is not None:
+        stream = TableStream.for_plan(plan, workers.warm)
+    else:
+        stream = None
     streamed = None
     start = time.perf_counter()
     try:
@@ -261,6 +286,7 @@ def _run_simulate(args) -> int:
                 progress=not args.quiet,
                 on_log=on_log,
                 log_reader=None if stream is None else stream.read,
+                log_memory=None if workers is None else workers.log.empty,
             )
         wall_time = time.perf_counter() - start
     except SimulationDiverged as exc:
@@ -283,6 +309,7 @@ def _run_simulate(args) -> int:
                 vehicle_name=title,
                 figures=not args.no_figures,
                 streamed=streamed,
+                figure_workers=workers,
             )
         raise AiauvError(
             f"simulation diverged: {cause}; partial results up to t = {partial.t[-1]:.6g} s "
@@ -318,6 +345,7 @@ def _run_simulate(args) -> int:
             vehicle_name=title,
             figures=not args.no_figures,
             streamed=streamed,
+            figure_workers=workers,
         )
     print(
         f"{name}: {content['simulated_time']:.1f} s simulated (set-up {timing['setup_time']:.1f} s, "

@@ -13,12 +13,15 @@ the last sample is always included; ``None`` writes every sample). The figures d
 the minimum and maximum of each of at most :data:`PLOT_BUCKETS` consecutive runs of samples (in
 time order), which at their size is indistinguishable from drawing every sample.
 
-Speed: call :func:`preload_plotting` before a compiled run (``aiauv simulate`` calls it once the
-vehicle is loaded, before the compiled loop is), or pass it as ``after_first_chunk`` to
+Speed: on Linux, ``aiauv simulate`` forks a figure process before the run, which imports
+matplotlib meanwhile and draws the figures after it
+(:mod:`aiauv_pin.results.figure_workers`, ``write_results(figure_workers=...)``). Elsewhere, call
+:func:`preload_plotting` before a compiled run (``aiauv simulate`` calls it once the vehicle is
+loaded, before the compiled loop is), or pass it as ``after_first_chunk`` to
 :func:`aiauv_pin.scenario.definition.run_paper_scenario`, and matplotlib (about 0.3 s of imports)
 is imported in a background thread while the compiled loop is loaded and runs (its kernels release
 the GIL); no backend is selected until figures are written (Agg). The figures are drawn by two
-processes on Linux.
+processes on Linux. PNG files are written by pypng (:func:`write_png`).
 """
 
 from __future__ import annotations
@@ -72,7 +75,9 @@ _MATH_TEXT = (
 )
 
 
-def _import_plotting() -> None:
+def import_plotting() -> None:
+    """Import matplotlib (no backend selected) and warm it up (:func:`_warm_plotting`); errors
+    are left for the figures to raise."""
     try:
         import matplotlib.backends.backend_agg
         import matplotlib.pyplot  # noqa: F401
@@ -151,7 +156,7 @@ def preload_plotting() -> None:
     """Start importing matplotlib in a background thread, once (no backend is selected)."""
     global _preload
     if _preload is None and "matplotlib.pyplot" not in sys.modules:
-        _preload = threading.Thread(target=_import_plotting, name="aiauv-preload", daemon=True)
+        _preload = threading.Thread(target=import_plotting, name="aiauv-preload", daemon=True)
         _preload.start()
 
 
@@ -647,9 +652,9 @@ FIGURES = (
 )
 """File names of the figures, in drawing order."""
 
-#: Extra ``savefig`` options per format: PNG with zlib level 1, the same pixels as the default
-#: level 6 in about half the encoding time (files about 20 % larger).
-_SAVE_OPTIONS = {"png": {"pil_kwargs": {"compress_level": 1}}}
+#: zlib level of the PNG figures: 1, the same pixels as the default 6 in about half the
+#: compression time (files about 20 % larger).
+PNG_COMPRESSION = 1
 
 #: Figures of a run that follows a path without the paper controller's diagnostics.
 PATH_FIGURES = ("fig2_cross_track.png", "path_3d.png")
@@ -716,6 +721,13 @@ def _plot_error(ax, ax_log, t, y, **kwargs) -> None:
     _plot(ax, t, y, **kwargs)
     magnitude = np.abs(np.asarray(y, dtype=float))
     _plot(ax_log, t, np.where(magnitude > 0.0, magnitude, np.nan), **kwargs)
+
+
+def run_cross_track_axes(result: ScenarioResult) -> tuple[str, str]:
+    """What a path-following run's cross-track errors are, over the arc length it covered
+    (:func:`aiauv_pin.scenario.definition.cross_track_axes`)."""
+    s = result.trajectory.info["path_s"]
+    return cross_track_axes(result.scenario, (float(np.min(s)), float(np.max(s))))
 
 
 def default_path_points(result: ScenarioResult, n: int = 400) -> np.ndarray | None:
@@ -790,6 +802,7 @@ def _draw(
     *,
     vehicle_name: str | None = None,
     path_points: np.ndarray | None = None,
+    cross_track_axes: tuple[str, str] | None = None,
 ):
     """The figure ``name`` of :data:`FIGURES` or :data:`MOTION_FIGURES`, titled with a name.
 
@@ -801,6 +814,8 @@ def _draw(
             scenario's case).
         path_points: World points of the path the 3-D figure draws, (N, 3) [m] (default:
             :func:`default_path_points`).
+        cross_track_axes: What the cross-track errors are
+            (:func:`aiauv_pin.scenario.definition.cross_track_axes`, found when not given).
     """
     tr = result.trajectory
     info, t = tr.info, tr.t
@@ -808,9 +823,7 @@ def _draw(
     if name == "fig2_cross_track.png":
         fig, ax, ax_log = _error_axes(plt, f"Cross-track errors ({case})")
         # on the paper's x-axis the path normals are y and z: e_1 = p_y, e_2 = p_z
-        s = info["path_s"]
-        axes = cross_track_axes(result.scenario, (float(np.min(s)), float(np.max(s))))
-        labels = _CROSS_TRACK_LABELS[axes]
+        labels = _CROSS_TRACK_LABELS[cross_track_axes or run_cross_track_axes(result)]
         _plot_error(ax, ax_log, t, info["cross_track"][:, 0], label=labels[0])
         _plot_error(ax, ax_log, t, info["cross_track"][:, 1], label=labels[1])
         ax.set_ylabel("cross-track error [m]")
@@ -1007,15 +1020,42 @@ def _render(
             fig.canvas.get_renderer().mathtext_parser = _shared_math_parser()
         path = figure_path(folder, name, figure_format)
         with atomic_path(path) as temporary:
-            fig.savefig(
-                temporary,
-                dpi=FIGURE_DPI,
-                format=figure_format,
-                **_SAVE_OPTIONS.get(figure_format, {}),
-            )
+            if figure_format == "png":
+                write_png(fig, temporary)
+            else:
+                fig.savefig(temporary, dpi=FIGURE_DPI, format=figure_format)
         plt.close(fig)
         written.append(path)
     return written
+
+
+def write_png(fig, path: Path) -> None:
+    """``fig`` (an Agg figure) drawn at its dpi and written to ``path`` as an 8-bit RGBA PNG by
+    pypng, with its resolution (``pHYs``): the pixels ``savefig`` writes.
+
+    Pillow, which ``savefig`` writes PNG files with, tries three or four row filters on every row
+    (``ZipEncode.c``; there is no option to turn that off) and takes 22-25 ms a figure at zlib
+    level 1; pypng writes the rows unfiltered in 7 ms (files about 2 % larger).
+    """
+    import png
+
+    fig.canvas.draw()
+    rgba = np.asarray(fig.canvas.buffer_rgba())
+    height, width = rgba.shape[:2]
+    per_metre = round(fig.dpi / 0.0254)  # [pixels / m]
+    writer = png.Writer(
+        width,
+        height,
+        greyscale=False,
+        alpha=True,
+        bitdepth=8,
+        compression=PNG_COMPRESSION,
+        x_pixels_per_unit=per_metre,
+        y_pixels_per_unit=per_metre,
+        unit_is_meter=True,
+    )
+    with open(path, "wb") as file:
+        writer.write_packed(file, rgba.reshape(height, 4 * width))
 
 
 def _fork_context():
@@ -1179,6 +1219,7 @@ def write_figures(
     figure_format: str = "png",
     vehicle_name: str | None = None,
     path_points: np.ndarray | None = None,
+    cross_track_axes: tuple[str, str] | None = None,
 ) -> list[Path]:
     """The figures of ``result`` (:func:`figures_of`): the paper's Figs. 2-7 and the 3-D path
     (:data:`FIGURES`) with its controller, the cross-track errors and the 3-D path for another run
@@ -1199,13 +1240,19 @@ def write_figures(
         vehicle_name: Name in the titles (default: the scenario's case).
         path_points: The path drawn in the 3-D figure, world points (N, 3) [m] (default:
             :func:`default_path_points`).
+        cross_track_axes: What the cross-track errors are (default:
+            :func:`run_cross_track_axes`).
 
     Returns:
         The files written, in the order of :func:`figures_of`.
     """
     _prepare_figures(figure_format)
     folder = Path(folder)
-    drawing = {"vehicle_name": vehicle_name, "path_points": path_points}
+    drawing = {
+        "vehicle_name": vehicle_name,
+        "path_points": path_points,
+        "cross_track_axes": cross_track_axes,
+    }
     _run_tasks(_figure_tasks(result, folder, figure_format, drawing), parallel)
     return [figure_path(folder, name, figure_format) for name in figures_of(result)]
 
@@ -1228,6 +1275,7 @@ def write_results(
     parallel: bool = True,
     figures: bool = True,
     streamed=None,
+    figure_workers=None,
 ) -> dict:
     """Write every result file of a run into ``out_dir``; return the summary.
 
@@ -1251,14 +1299,64 @@ def write_results(
             then not imported).
         streamed: Rows of ``timeseries.csv`` formatted during the run (see
             :func:`write_timeseries`).
+        figure_workers: The :class:`aiauv_pin.results.figure_workers.FigureWorkers` started
+            before the run (it logged into their shared log): they draw the figures while this
+            process writes the other files alone (matplotlib is then not imported here). They
+            are stopped once the files are written, or writing failed.
     """
-    if figures:
-        _prepare_figures(figure_format)
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     if vehicle_name is None and extra and extra.get("vehicle"):
         vehicle_name = Path(str(extra["vehicle"])).stem
-    drawing = {"vehicle_name": vehicle_name, "path_points": path_points}
+    files = functools.partial(
+        _write_files,
+        result,
+        out_dir,
+        extra,
+        figure_format=figure_format,
+        drawing={"vehicle_name": vehicle_name, "path_points": path_points},
+        also=also,
+        streamed=streamed,
+    )
+    if figure_workers is None:
+        return files(figures=figures, parallel=parallel)
+    try:
+        if not figures:
+            return files(figures=False, parallel=parallel)
+        out_dir.mkdir(parents=True, exist_ok=True)
+        followed = result.followed_path is not None
+        figure_workers.draw(
+            result,
+            out_dir / "figures",
+            figure_format=figure_format,
+            vehicle_name=vehicle_name,
+            # found here: a user's path runs compiled code, which the figure process never loads
+            path_points=default_path_points(result) if path_points is None else path_points,
+            cross_track_axes=run_cross_track_axes(result) if followed else None,
+        )
+        # the figure process and the one it forks take both cores: the rest is written here
+        content = files(figures=False, parallel=False)
+        figure_workers.wait()
+        return content
+    finally:
+        figure_workers.close()
+
+
+def _write_files(
+    result: ScenarioResult,
+    out_dir: Path,
+    extra: dict | None,
+    *,
+    figure_format: str,
+    drawing: dict,
+    also: Sequence[Callable[[], object]],
+    streamed,
+    figures: bool,
+    parallel: bool,
+) -> dict:
+    """:func:`write_results` with the figures drawn here (and by a process forked now)."""
+    if figures:
+        _prepare_figures(figure_format)
+    out_dir.mkdir(parents=True, exist_ok=True)
     tasks = [
         *also,
         *(_figure_tasks(result, out_dir / "figures", figure_format, drawing) if figures else ()),

@@ -23,7 +23,7 @@ the file is the same bytes as without streaming.
 from __future__ import annotations
 
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -121,8 +121,15 @@ class TableStream:
     rest is formatted when the file is written).
     """
 
-    def __init__(self, columns: np.ndarray, formats: list[str], period: float | None) -> None:
+    def __init__(
+        self,
+        columns: np.ndarray,
+        formats: list[str],
+        period: float | None,
+        start_after: Callable[[float], bool] | None = None,
+    ) -> None:
         self._columns = columns
+        self._start_after = start_after
         self._formats = list(formats)
         self._period = period
         self._log: np.ndarray | None = None
@@ -134,10 +141,14 @@ class TableStream:
         self._thread.start()
 
     @classmethod
-    def for_plan(cls, plan: RunPlan) -> TableStream | None:
+    def for_plan(
+        cls, plan: RunPlan, start_after: Callable[[float], bool] | None = None
+    ) -> TableStream | None:
         """A stream for ``plan``'s run, or ``None`` when its table is not the log's alone
         (:func:`log_columns_of_table`; also when that probe fails), or the loop is not
-        compiled."""
+        compiled. With ``start_after``, the thread formats nothing before
+        ``start_after(timeout [s])`` returned ``True`` (it is called until then, or until the
+        stream is closed): e.g. until the figure process is ready, which uses the same core."""
         if not plan.compiled:
             return None
         try:
@@ -147,7 +158,7 @@ class TableStream:
         if found is None:
             return None
         columns, formats = found
-        return cls(columns, formats, plan.scenario.csv_period)
+        return cls(columns, formats, plan.scenario.csv_period, start_after)
 
     def read(self, log: np.ndarray) -> None:
         """The log of the run (``simulate``'s ``log_reader``), formatted as its rows are written."""
@@ -165,6 +176,9 @@ class TableStream:
 
     def _format(self) -> None:
         self._given.wait()
+        if self._start_after is not None:
+            while not self._closed.is_set() and not self._start_after(POLL):
+                pass
         log, stride, row = self._log, None, 0  # row: the log row of the table's next row
         while log is not None and (not self._closed.is_set() or self._drain):
             complete = complete_rows(log)

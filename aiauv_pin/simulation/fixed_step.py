@@ -174,6 +174,7 @@ def simulate(
     chunk_seconds: float | None = None,
     after_first_chunk: Callable[[], None] | None = None,
     log_reader: Callable[[np.ndarray], None] | None = None,
+    log_memory: Callable[[tuple[int, int]], np.ndarray] | None = None,
     added_mass: str = "exact",
     lagged_filter: float = UUV_SIMULATOR_FILTER,
     compile_only: bool = False,
@@ -232,6 +233,10 @@ def simulate(
             written in order, each row's time first, and the log is zero where nothing was
             written yet: a row is complete once the next row's time is not zero
             (:func:`complete_rows`).
+        log_memory: Compiled controller only: ``log_memory(shape)`` returns the memory the
+            loop logs into, a zero C-ordered float64 array of ``shape`` (rows, columns), such as
+            :meth:`aiauv_pin._internal.log_memory.SharedLog.empty`, whose log a process forked
+            before the run reads (default: :func:`aiauv_pin._internal.log_memory.empty_log`).
         added_mass: ``"exact"`` (added mass in the mass matrix) or ``"lagged"``, the scheme of
             UUV Simulator and gz-sim (:mod:`aiauv_pin.dynamics.lagged_added_mass`: rigid mass in
             the dynamics, the
@@ -304,6 +309,7 @@ def simulate(
             chunk_seconds=chunk_seconds,
             after_first_chunk=after_first_chunk,
             log_reader=log_reader,
+            log_memory=log_memory,
             compile_only=compile_only,
         )
     # a controller that carries the thrusters' state itself (station keeping, velocity control)
@@ -521,6 +527,7 @@ def _simulate_compiled(
     chunk_seconds: float | None,
     after_first_chunk,
     log_reader=None,
+    log_memory=None,
     compile_only: bool = False,
 ) -> Trajectory | None:
     """:func:`simulate` with a compiled controller: the whole loop in compiled code (only loaded
@@ -558,7 +565,15 @@ def _simulate_compiled(
     n_logs = 1 if compile_only else n_steps // log_every + 1 + (1 if n_steps % log_every else 0)
     width = controller.info_width
     # (no huge-page faults; zero for a reader, which finds the rows written by their times)
-    log = empty_log((n_logs, 1 + nq + 2 * nv + width), zeroed=log_reader is not None)
+    shape = (n_logs, 1 + nq + 2 * nv + width)
+    if log_memory is None or compile_only:
+        log = empty_log(shape, zeroed=log_reader is not None)
+    else:
+        log = log_memory(shape)
+        if not (isinstance(log, np.ndarray) and log.shape == shape and log.dtype == np.float64):
+            raise ArgumentError(f"log_memory must return a float64 array of shape {shape}")
+        if not log.flags.c_contiguous:
+            raise ArgumentError("log_memory must return a C-ordered array")
     tau = np.zeros(nv)
     info = np.full(width, np.nan)
     workspace = fast.workspace

@@ -1,0 +1,175 @@
+"""The figure process ``aiauv simulate`` forks before a run (:mod:`aiauv_pin.results.figure_workers`)
+and the shared log it reads the run from (:class:`aiauv_pin._internal.log_memory.SharedLog`): the
+same figures as drawn in one process, failures raised here, stopped with this process."""
+
+from __future__ import annotations
+
+import multiprocessing
+import signal
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from aiauv_pin import load_vehicle
+from aiauv_pin._internal.log_memory import SharedLog
+from aiauv_pin.results import outputs
+from aiauv_pin.results.figure_workers import FigureWorkers
+from aiauv_pin.scenario.definition import PaperScenario, finish_run, plan_run
+from aiauv_pin.simulation.fixed_step import simulate
+from aiauv_pin.testing.processes import wait_gone
+
+linux_only = pytest.mark.skipif(
+    not SharedLog.available() or sys.platform != "linux", reason="memfd and fork (Linux)"
+)
+
+
+@linux_only
+def test_an_array_in_the_log_is_named_by_its_place_and_rebuilt_from_it():
+    log_file = SharedLog()
+    try:
+        log = log_file.empty((50, 7))
+        assert log.shape == (50, 7) and log.flags.c_contiguous and not log.any()
+        log[:] = np.arange(350.0).reshape(50, 7)
+        views = [log, log[:, 0], log[10:20, 2:5], log[::3, 1], log[::-2, 6], log[5], log[-1, -1:]]
+        for view in views:
+            reference = log_file.reference(view)
+            assert reference is not None
+            rebuilt = log_file.view(reference)
+            assert np.array_equal(rebuilt, view) and np.shares_memory(rebuilt, log)
+        # not in the log: a copy, other memory, another type, nothing at all
+        for other in (log[:, 0].copy(), np.zeros(3), log.astype(np.float32), log[:0]):
+            assert log_file.reference(other) is None
+    finally:
+        log_file.close()
+
+
+def _sum_of_named(connection, log_file: SharedLog) -> None:
+    connection.send(float(log_file.view(connection.recv()).sum()))
+
+
+@linux_only
+def test_a_process_forked_before_the_log_was_made_reads_what_was_written_after():
+    log_file = SharedLog()
+    context = multiprocessing.get_context("fork")
+    here, there = context.Pipe()
+    process = context.Process(target=_sum_of_named, args=(there, log_file))
+    process.start()
+    try:
+        log = log_file.empty((1000, 4))  # sized, mapped and written after the fork
+        log[:] = np.random.default_rng(1).normal(size=(1000, 4))
+        here.send(log_file.reference(log[::7, 1:3]))
+        assert here.recv() == float(log[::7, 1:3].sum())
+    finally:
+        process.join()
+        log_file.close()
+
+
+@pytest.fixture(scope="module")
+def shared_run():
+    """A short compiled paper run logged into a figure process's shared log, and the process."""
+    if not SharedLog.available() or sys.platform != "linux":
+        pytest.skip("memfd and fork (Linux)")
+    scenario = PaperScenario(duration=2.0, dt=0.004)
+    workers = FigureWorkers(scenario)
+    plan = plan_run(load_vehicle(), scenario)
+    assert plan.compiled
+    trajectory = simulate(*plan.arguments, **plan.options, log_memory=workers.log.empty)
+    result = finish_run(plan, trajectory, 0.0)
+    assert workers.log.reference(result.trajectory.info["u"]) is not None  # the run's log
+    yield workers, result
+    workers.close()
+
+
+def _pixels(path) -> np.ndarray:
+    return np.asarray(Image.open(path).convert("RGBA"))
+
+
+def test_the_figure_process_draws_the_figures_drawn_here(shared_run, tmp_path):
+    workers, result = shared_run
+    assert workers.warm(60.0)
+    workers.draw(result, tmp_path / "there", vehicle_name="shared")
+    workers.wait()
+    here = outputs.write_figures(result, tmp_path / "here", parallel=False, vehicle_name="shared")
+    assert [p.name for p in here] == list(outputs.FIGURES)
+    for path in here:
+        assert np.array_equal(_pixels(tmp_path / "there" / path.name), _pixels(path)), path.name
+
+
+@linux_only
+def test_a_failure_in_the_figure_process_is_raised_here(tmp_path):
+    scenario = PaperScenario(duration=1.0, dt=0.01)
+    plan = plan_run(load_vehicle(), scenario)
+    workers = FigureWorkers(scenario)
+    try:
+        trajectory = simulate(*plan.arguments, **plan.options, log_memory=workers.log.empty)
+        blocked = tmp_path / "a file"
+        blocked.write_text("not a folder")
+        workers.draw(finish_run(plan, trajectory, 0.0), blocked / "figures")
+        with pytest.raises(OSError):
+            workers.wait()
+        assert not workers._process.is_alive()
+    finally:
+        workers.close()
+    with pytest.raises(ValueError, match="unknown figure format 'gif'"):
+        FigureWorkers.draw(workers, None, tmp_path, figure_format="gif")
+
+
+@linux_only
+def test_a_figure_process_not_needed_any_more_is_stopped_at_once():
+    workers = FigureWorkers(PaperScenario(duration=1.0))
+    workers.close()  # still importing matplotlib, or waiting: killed, not waited for
+    assert workers._process.exitcode == -signal.SIGKILL
+    workers.close()  # twice is harmless
+
+
+_ORPHAN = textwrap.dedent(
+    """
+    import sys, time
+    from aiauv_pin.results.figure_workers import FigureWorkers
+    from aiauv_pin.scenario.definition import PaperScenario
+    workers = FigureWorkers(PaperScenario(duration=1.0))
+    print(workers._process.pid, flush=True)
+    time.sleep(60)
+    """
+)
+
+
+@linux_only
+def test_the_figure_process_dies_with_the_process_that_forked_it():
+    parent = subprocess.Popen(
+        [sys.executable, "-c", _ORPHAN], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL
+    )
+    try:
+        child = int(parent.stdout.readline())
+    finally:
+        parent.send_signal(signal.SIGKILL)
+        parent.wait()
+    assert not wait_gone({child}, 10.0), "the figure process outlived its parent"
+
+
+def test_figure_workers_are_not_started_where_they_cannot_run(monkeypatch):
+    monkeypatch.setattr(sys, "platform", "darwin")
+    assert not FigureWorkers.available()
+    assert FigureWorkers.start(PaperScenario(duration=1.0)) is None
+
+
+def test_png_figures_hold_the_pixels_and_resolution_savefig_writes(shared_run, tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    _, result = shared_run
+    for name in ("fig2_cross_track.png", "path_3d.png"):
+        fig = outputs._draw(name, result, plt)
+        fig.set_dpi(outputs.FIGURE_DPI)
+        fig.savefig(tmp_path / "savefig.png", dpi=outputs.FIGURE_DPI)
+        outputs.write_png(fig, tmp_path / "ours.png")
+        plt.close(fig)
+        ours = Image.open(tmp_path / "ours.png")
+        assert ours.mode == "RGBA" and ours.info["dpi"] == pytest.approx((200, 200), abs=1e-3)
+        assert np.array_equal(_pixels(tmp_path / "ours.png"), _pixels(tmp_path / "savefig.png"))
