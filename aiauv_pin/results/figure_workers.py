@@ -4,13 +4,14 @@
 matplotlib's, which also takes 0.35-0.4 s to import and warm up. :class:`FigureWorkers` forks a
 process before the vehicle is read (from ``aiauv``'s main thread, when no other thread runs):
 it imports and warms up matplotlib on the second core, which is idle while this process reads the
-vehicle and loads the compiled loop, then waits. The run logs into a :class:`SharedLog` that
-process holds too, so that after the run it is sent only the result's small parts (pickled; the
-scenario is its own copy from the fork and every array in the log is named by its place in it),
-then draws the figures with a process it forks (:func:`aiauv_pin.results.outputs.write_figures`),
-while this process writes the table, the summary and the playback page.
+vehicle and loads the compiled loop, forks a second figure process and waits. The run logs into a
+:class:`SharedLog` that both hold too, so that after the run they are sent only the result's small
+parts (pickled; the scenario is their own copy from the fork and every array in the log is named by
+its place in it), then draw the figures, each taking the next one nobody took (slowest first, as
+:func:`aiauv_pin.results.outputs.write_figures` does), while this process writes the table, the
+summary and the playback page.
 
-The process ends with this one, however this one ends (SIGKILL,
+The processes end with this one, however this one ends (SIGKILL,
 :func:`aiauv_pin._internal.parent_death.die_with_parent`); it ignores SIGINT (Ctrl-C, sent to the
 whole process group): this process stops it (:meth:`FigureWorkers.close`).
 """
@@ -59,29 +60,86 @@ class _Unpickler(pickle.Unpickler):
         return self._log.view(pid)
 
 
+def _draw_share(message: bytes, log: SharedLog, scenario, taken) -> None:
+    """Draw the figures of ``message`` (a pickled result, folder and options) that the other
+    figure process has not taken (``taken``: the shared index of the next)."""
+    result, folder, options = _Unpickler(io.BytesIO(message), log, scenario).load()
+    figure_format = options.pop("figure_format")
+    outputs._prepare_figures(figure_format)
+    outputs._take_tasks(outputs._figure_tasks(result, folder, figure_format, options), taken)
+
+
+def _answer(connection, failure: BaseException | None) -> None:
+    try:
+        connection.send(failure)
+    except Exception:  # an exception that does not pickle
+        connection.send(RuntimeError(f"{failure.__class__.__name__}: {failure}"))
+
+
+def _second(connection, taken, log: SharedLog, scenario, first: int) -> None:
+    """The second figure process, forked by the first once matplotlib is warm: it parses its own
+    math text (:func:`aiauv_pin.results.outputs._forget_parsed_math`), waits for what the first
+    is sent, draws its share, answers the first."""
+    from aiauv_pin._internal.parent_death import die_with_parent
+
+    die_with_parent(first, signal.SIGKILL)
+    outputs._forget_parsed_math()
+    try:
+        message = connection.recv_bytes()
+    except EOFError:  # no figures wanted after all
+        return
+    failure = None
+    try:
+        _draw_share(message, log, scenario, taken)
+    except BaseException as exc:  # reported to the first, which reports it
+        failure = exc
+    _answer(connection, failure)
+
+
 def _serve(connection, warm, log: SharedLog, scenario, parent: int) -> None:
-    """The figure process: warm matplotlib up, draw the figures it is sent, answer ``None`` or
-    the exception (or nothing, if the run ended without sending any)."""
+    """The figure process: warm matplotlib up, fork the second figure process, draw the figures
+    it is sent with that one (each takes the next figure nobody took), answer ``None`` or the
+    first exception (or nothing, if the run ended without sending any)."""
+    import multiprocessing
+
     from aiauv_pin._internal.parent_death import die_with_parent
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # stopped by the parent (close), not by Ctrl-C
     die_with_parent(parent, signal.SIGKILL)
     outputs.import_plotting()
+    # forked before the run ends, so that its start is not on the way of the figures
+    context = multiprocessing.get_context("fork")
+    taken = context.Value("i", 0)
+    partner, partner_end = context.Pipe()
+    second = context.Process(
+        target=_second,
+        args=(partner_end, taken, log, scenario, os.getpid()),
+        name="aiauv-figures-2",
+        daemon=True,
+    )
+    second.start()
+    partner_end.close()
     warm.set()
     try:
         message = connection.recv_bytes()
     except EOFError:  # no figures wanted after all (the run failed)
+        partner.close()
         return
+    partner.send_bytes(message)
     failure = None
     try:
-        result, folder, options = _Unpickler(io.BytesIO(message), log, scenario).load()
-        outputs.write_figures(result, folder, **options)
+        _draw_share(message, log, scenario, taken)
     except BaseException as exc:  # reported to the parent, which raises it
         failure = exc
-    try:
-        connection.send(failure)
-    except Exception:  # an exception that does not pickle
-        connection.send(RuntimeError(f"{failure.__class__.__name__}: {failure}"))
+        second.kill()
+    if failure is None:
+        try:
+            failure = partner.recv()
+        except EOFError:  # died without a word (killed)
+            second.join()
+            failure = RuntimeError(f"a figure process died (exit status {second.exitcode})")
+    second.join()
+    _answer(connection, failure)
 
 
 class FigureWorkers:

@@ -118,6 +118,29 @@ def test_a_failure_in_the_figure_process_is_raised_here(tmp_path):
         FigureWorkers.draw(workers, None, tmp_path, figure_format="gif")
 
 
+@pytest.mark.parametrize("failing", ["fig7_pointing.png", "fig6_base_angles.png"])
+def test_a_figure_that_fails_is_raised_whichever_figure_process_drew_it(
+    shared_run, tmp_path, monkeypatch, failing
+):
+    """The slowest figure is drawn first and the fastest last: by either process."""
+    _, result = shared_run
+    render = outputs._render
+
+    def failing_render(result, folder, names, *arguments, **options):
+        if failing in names:
+            raise RuntimeError(f"cannot draw {failing}")
+        return render(result, folder, names, *arguments, **options)
+
+    monkeypatch.setattr(outputs, "_render", failing_render)  # before the processes fork
+    workers = FigureWorkers(result.scenario)
+    try:
+        workers.draw(result, tmp_path / "figures")
+        with pytest.raises(RuntimeError, match=f"cannot draw {failing}"):
+            workers.wait()
+    finally:
+        workers.close()
+
+
 @linux_only
 def test_a_figure_process_not_needed_any_more_is_stopped_at_once():
     workers = FigureWorkers(PaperScenario(duration=1.0))
