@@ -77,39 +77,27 @@ def _answer(connection, failure: BaseException | None) -> None:
 
 
 def _second(connection, taken, log: SharedLog, scenario, first: int) -> None:
-    """The second figure process, forked by the first once matplotlib is warm: it parses its own
-    math text (:func:`aiauv_pin.results.outputs._forget_parsed_math`), waits for what the first
-    is sent, draws its share, answers the first."""
+    """The second figure process, forked by the first once matplotlib is warm: it waits for what
+    the first is sent, parses its own math text
+    (:func:`aiauv_pin.results.outputs._forget_parsed_math`), draws its share, answers the first."""
     from aiauv_pin._internal.parent_death import die_with_parent
 
     die_with_parent(first, signal.SIGKILL)
-    outputs._forget_parsed_math()
     try:
         message = connection.recv_bytes()
     except EOFError:  # no figures wanted after all
         return
     failure = None
     try:
+        outputs._forget_parsed_math()
         _draw_share(message, log, scenario, taken)
     except BaseException as exc:  # reported to the first, which reports it
         failure = exc
     _answer(connection, failure)
 
 
-def _serve(connection, warm, log: SharedLog, scenario, parent: int) -> None:
-    """The figure process: warm matplotlib up, fork the second figure process, draw the figures
-    it is sent with that one (each takes the next figure nobody took), answer ``None`` or the
-    first exception (or nothing, if the run ended without sending any)."""
-    import multiprocessing
-
-    from aiauv_pin._internal.parent_death import die_with_parent
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # stopped by the parent (close), not by Ctrl-C
-    die_with_parent(parent, signal.SIGKILL)
-    outputs.import_plotting()
-    # forked before the run ends, so that its start is not on the way of the figures
-    context = multiprocessing.get_context("fork")
-    taken = context.Value("i", 0)
+def _fork_second(context, taken, log: SharedLog, scenario):
+    """The second figure process (started) and the first's end of the pipe between them."""
     partner, partner_end = context.Pipe()
     second = context.Process(
         target=_second,
@@ -119,26 +107,53 @@ def _serve(connection, warm, log: SharedLog, scenario, parent: int) -> None:
     )
     second.start()
     partner_end.close()
+    return second, partner
+
+
+def _serve(connection, warm, log: SharedLog, scenario, parent: int) -> None:
+    """The figure process: warm matplotlib up, fork the second figure process, draw the figures
+    it is sent with that one (each takes the next figure nobody took), answer ``None`` or the
+    first exception (or nothing, if the run ended without sending any). Whatever fails is
+    answered, never printed; without a second process (its fork failed) it draws them alone."""
+    import multiprocessing
+
+    from aiauv_pin._internal.parent_death import die_with_parent
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # stopped by the parent (close), not by Ctrl-C
+    die_with_parent(parent, signal.SIGKILL)
+    failure = second = partner = None
+    try:
+        outputs.import_plotting()
+        context = multiprocessing.get_context("fork")
+        taken = context.Value("i", 0)
+        try:  # forked before the run ends, so that its start is not on the way of the figures
+            second, partner = _fork_second(context, taken, log, scenario)
+        except OSError:  # (no process left to fork): the figures drawn here alone
+            pass
+    except BaseException as exc:  # answered when the figures are asked for
+        failure = exc
     warm.set()
     try:
         message = connection.recv_bytes()
     except EOFError:  # no figures wanted after all (the run failed)
-        partner.close()
         return
-    partner.send_bytes(message)
-    failure = None
-    try:
-        _draw_share(message, log, scenario, taken)
-    except BaseException as exc:  # reported to the parent, which raises it
-        failure = exc
-        second.kill()
     if failure is None:
+        if partner is not None:
+            partner.send_bytes(message)
+        try:
+            _draw_share(message, log, scenario, taken)
+        except BaseException as exc:  # reported to the parent, which raises it
+            failure = exc
+            if second is not None:
+                second.kill()
+    if failure is None and partner is not None:
         try:
             failure = partner.recv()
         except EOFError:  # died without a word (killed)
             second.join()
             failure = RuntimeError(f"a figure process died (exit status {second.exitcode})")
-    second.join()
+    if second is not None:
+        second.join()
     _answer(connection, failure)
 
 
@@ -203,9 +218,10 @@ class FigureWorkers:
         vehicle_name: str | None = None,
         path_points: np.ndarray | None = None,
         cross_track_axes: tuple[str, str] | None = None,
-    ) -> None:
+    ) -> bool:
         """Send the figure process ``result`` (run with :attr:`log` as its log memory) to draw
-        into ``folder`` (arguments of :func:`aiauv_pin.results.outputs.write_figures`)."""
+        into ``folder`` (arguments of :func:`aiauv_pin.results.outputs.write_figures`); ``False``
+        (nothing sent) if ``result`` does not pickle: draw it here then."""
         if figure_format not in outputs.FIGURE_FORMATS:
             raise ValueError(
                 f"unknown figure format '{figure_format}' "
@@ -218,9 +234,13 @@ class FigureWorkers:
             "cross_track_axes": cross_track_axes,
         }
         buffer = io.BytesIO()
-        _Pickler(buffer, self.log, self._scenario).dump((result, Path(folder), options))
+        try:
+            _Pickler(buffer, self.log, self._scenario).dump((result, Path(folder), options))
+        except Exception:  # e.g. a diagnostic that holds a function: drawn by the caller
+            return False
         self._connection.send_bytes(buffer.getbuffer())
         self._sent = True
+        return True
 
     def wait(self) -> None:
         """Wait for the figures sent with :meth:`draw`; raise the figure process's failure."""

@@ -1324,7 +1324,7 @@ def write_results(
             return files(figures=False, parallel=parallel)
         out_dir.mkdir(parents=True, exist_ok=True)
         followed = result.followed_path is not None
-        figure_workers.draw(
+        sent = figure_workers.draw(
             result,
             out_dir / "figures",
             figure_format=figure_format,
@@ -1333,7 +1333,10 @@ def write_results(
             path_points=default_path_points(result) if path_points is None else path_points,
             cross_track_axes=run_cross_track_axes(result) if followed else None,
         )
-        # the figure process and the one it forks take both cores: the rest is written here
+        if not sent:  # a result that does not pickle: drawn here
+            figure_workers.close()
+            return files(figures=True, parallel=parallel)
+        # the figure processes take both cores: the rest is written here
         content = files(figures=False, parallel=False)
         figure_workers.wait()
         return content

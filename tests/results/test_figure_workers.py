@@ -141,6 +141,57 @@ def test_a_figure_that_fails_is_raised_whichever_figure_process_drew_it(
         workers.close()
 
 
+def test_without_a_second_process_the_first_draws_every_figure(shared_run, tmp_path, monkeypatch):
+    from aiauv_pin.results import figure_workers
+
+    def no_process_left(*arguments):
+        raise BlockingIOError("fork: Resource temporarily unavailable")
+
+    _, result = shared_run
+    monkeypatch.setattr(figure_workers, "_fork_second", no_process_left)  # before the fork
+    workers = FigureWorkers(result.scenario)
+    try:
+        assert workers.draw(result, tmp_path / "figures")
+        workers.wait()
+    finally:
+        workers.close()
+    assert sorted(p.name for p in (tmp_path / "figures").iterdir()) == sorted(outputs.FIGURES)
+
+
+def test_a_failure_before_the_figures_are_asked_for_is_raised_when_they_are(
+    shared_run, tmp_path, monkeypatch
+):
+    from aiauv_pin.results import figure_workers
+
+    def broken(*arguments):
+        raise RuntimeError("broken set-up")
+
+    _, result = shared_run
+    monkeypatch.setattr(figure_workers, "_fork_second", broken)
+    workers = FigureWorkers(result.scenario)
+    try:
+        assert workers.warm(60.0)  # the table is not kept waiting
+        workers.draw(result, tmp_path / "figures")
+        with pytest.raises(RuntimeError, match="broken set-up"):
+            workers.wait()
+    finally:
+        workers.close()
+
+
+def test_a_result_that_does_not_pickle_is_drawn_here(shared_run, tmp_path):
+    import dataclasses
+
+    _, result = shared_run
+    odd = dataclasses.replace(result, extra={**result.extra, "hook": lambda: None})
+    workers = FigureWorkers(result.scenario)
+    assert not workers.draw(odd, tmp_path / "unsent")
+    outputs.write_results(odd, tmp_path / "run", figure_workers=workers)
+    assert workers._process.exitcode is not None
+    assert sorted(p.name for p in (tmp_path / "run" / "figures").iterdir()) == sorted(
+        outputs.FIGURES
+    )
+
+
 @linux_only
 def test_a_figure_process_not_needed_any_more_is_stopped_at_once():
     workers = FigureWorkers(PaperScenario(duration=1.0))
