@@ -1,7 +1,7 @@
 """Processes that draw a run's figures, started before the run (Linux, two or more CPUs).
 
-``aiauv simulate`` draws seven figures after a paper run, about 0.75 s of CPU, all of it
-matplotlib's, which also takes 0.35-0.4 s to import and warm up. :class:`FigureWorkers` forks a
+``aiauv simulate`` draws seven figures after a paper run, about 0.5 s of CPU, nearly all of it
+matplotlib's, which also takes 0.4-0.5 s to import and warm up. :class:`FigureWorkers` forks a
 process before the vehicle is read (from ``aiauv``'s main thread, when no other thread runs):
 it imports and warms up matplotlib on the second core, which is idle while this process reads the
 vehicle and loads the compiled loop, forks a second figure process and waits. The run logs into a
