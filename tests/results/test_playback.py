@@ -401,3 +401,20 @@ def test_live_viewer_draws_the_scenario_path(vehicle):
     assert drawn[:, 2].max() - drawn[:, 2].min() > 5.0  # climbs with the helix
     # on the helix's cylinder, but for the tick marks sticking out across it
     assert np.median(np.hypot(drawn[:, 0], drawn[:, 1])) == pytest.approx(10.0, rel=1e-3)
+
+
+def test_the_scene_json_holds_the_values_json_writes(vehicle, run):
+    import json
+
+    from aiauv_hydro.waves import Waves
+
+    for sea in (None, Waves(height=0.5, period=4.0)):
+        commands = playback.playback_commands(vehicle, run, urdf=URDF, sea=sea)
+        ours = playback.commands_json(commands)
+        # the same values, every float exactly (both write the shortest text that reads back)
+        assert json.loads(ours) == json.loads(json.dumps(commands))
+    odd = [{"none": None, "float": np.float64(0.25), "nested": [[1, 2.5e-05], "é"]}]
+    assert json.loads(playback.commands_json(odd)) == odd
+    for bad in (math.nan, math.inf, -math.inf):
+        with pytest.raises(ValueError, match="Out of range float"):
+            playback.commands_json([{"values": [0.0, bad]}])
