@@ -90,7 +90,8 @@ def commands_json(commands: list[dict]) -> str:
 
     Written by orjson: the values of ``json.dumps(commands, separators=(",", ":"))``, every float
     the shortest text that reads back to it as there (tested; a small number may be written
-    ``-0.0000913`` rather than ``-9.13e-05``), 22 ms instead of 163 ms for the paper run's 6.5 MB. orjson writes a NaN as ``null``; text with a ``null`` is made again by ``json``,
+    ``-0.0000913`` rather than ``-9.13e-05``), 22 ms instead of 163 ms for the paper run's
+    6.5 MB. orjson writes a NaN as ``null``; text with a ``null`` is made again by ``json``,
     which raises ``ValueError`` for a NaN or an infinity as before; so is a value orjson does not
     write.
     """
