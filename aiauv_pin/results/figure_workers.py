@@ -158,7 +158,8 @@ def _serve(connection, warm, log: SharedLog, scenario, parent: int) -> None:
 
 
 class FigureWorkers:
-    """A process, forked before a run, that draws its figures after it (see the module).
+    """The figure processes, forked before a run, that draw its figures after it (see the
+    module).
 
     Start it with :meth:`start` (``None`` where it cannot run), give :attr:`log`'s
     :meth:`~SharedLog.empty` to the run as ``log_memory``, hand it the result with :meth:`draw`,
@@ -180,7 +181,6 @@ class FigureWorkers:
         )
         self._process.start()
         child.close()
-        self._sent = False
 
     @classmethod
     def start(cls, scenario) -> FigureWorkers | None:
@@ -222,11 +222,7 @@ class FigureWorkers:
         """Send the figure process ``result`` (run with :attr:`log` as its log memory) to draw
         into ``folder`` (arguments of :func:`aiauv_pin.results.outputs.write_figures`); ``False``
         (nothing sent) if ``result`` does not pickle: draw it here then."""
-        if figure_format not in outputs.FIGURE_FORMATS:
-            raise ValueError(
-                f"unknown figure format '{figure_format}' "
-                f"(expected {', '.join(outputs.FIGURE_FORMATS)})"
-            )
+        outputs.check_figure_format(figure_format)
         options = {
             "figure_format": figure_format,
             "vehicle_name": vehicle_name,
@@ -239,7 +235,6 @@ class FigureWorkers:
         except Exception:  # e.g. a diagnostic that holds a function: drawn by the caller
             return False
         self._connection.send_bytes(buffer.getbuffer())
-        self._sent = True
         return True
 
     def wait(self) -> None:

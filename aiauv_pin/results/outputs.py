@@ -1187,12 +1187,17 @@ def _run_tasks(tasks, parallel: bool = True, here_first=None):
     return value
 
 
-def _prepare_figures(figure_format: str) -> None:
-    """Check the format and import matplotlib (Agg) here, before a figure process forks."""
+def check_figure_format(figure_format: str) -> None:
+    """Raise ``ValueError`` (one line) unless ``figure_format`` is one of :data:`FIGURE_FORMATS`."""
     if figure_format not in FIGURE_FORMATS:
         raise ValueError(
             f"unknown figure format '{figure_format}' (expected {', '.join(FIGURE_FORMATS)})"
         )
+
+
+def _prepare_figures(figure_format: str) -> None:
+    """Check the format and import matplotlib (Agg) here, before a figure process forks."""
+    check_figure_format(figure_format)
     _wait_for_preload()  # no import may be in progress in another thread when forking
     import matplotlib
 
