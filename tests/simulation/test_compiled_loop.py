@@ -185,6 +185,35 @@ def test_a_compiled_runs_trajectory_is_read_from_its_log_without_a_copy(numba_ve
         np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-9)
 
 
+def test_a_run_logs_into_the_memory_it_is_given_and_refuses_memory_that_does_not_fit(
+    numba_vehicle,
+):
+    from aiauv_pin.errors import ArgumentError
+    from aiauv_pin.scenario.definition import plan_run
+    from aiauv_pin.simulation.fixed_step import simulate
+
+    plan = plan_run(numba_vehicle, PaperScenario(duration=0.5))
+    given = []
+
+    def memory(shape):
+        given.append(np.zeros(shape))
+        return given[-1]
+
+    trajectory = simulate(*plan.arguments, **plan.options, log_memory=memory)
+    assert len(given) == 1 and np.shares_memory(trajectory.q, given[0])
+    plain = simulate(*plan.arguments, **plan.options)
+    _same_trajectory(trajectory, plain, dict(rtol=0, atol=0))
+    refused = {
+        "shape": lambda shape: np.zeros((shape[0] + 1, shape[1])),
+        "float64": lambda shape: np.zeros(shape, dtype=np.float32),
+        "C-ordered": lambda shape: np.zeros(shape, order="F"),
+    }
+    for word, bad in refused.items():
+        with pytest.raises(ArgumentError, match=word) as error:
+            simulate(*plan.arguments, **plan.options, log_memory=bad)
+        assert "\n" not in str(error.value)
+
+
 @pytest.mark.parametrize("method", ["rk4", "midpoint"])
 def test_compile_only_loads_the_runs_loop_and_takes_no_step(numba_vehicle, method):
     """The warm-up of ``aiauv simulate`` (:func:`aiauv_pin.scenario.definition.warm_up`): the loop
