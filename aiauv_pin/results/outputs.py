@@ -27,8 +27,8 @@ processes on Linux. PNG files are written by pypng (:func:`write_png`).
 from __future__ import annotations
 
 import functools
-import itertools
 import json
+import math
 import os
 import sys
 import threading
@@ -216,12 +216,6 @@ BASE_TWIST = (
     ("base_q", "rad/s"),
     ("base_r", "rad/s"),
 )
-#: Number format of ``timeseries.csv``: 17 significant digits, which read back to the same float,
-#: so :func:`read_timeseries` returns the logged values bit for bit (Python's shortest such text,
-#: ``repr``, takes 1.6 times as long to write; it is kept for the time, ``0.04`` rather than
-#: ``0.040000000000000001``).
-CSV_FORMAT = "%.17g"
-TIME_FORMAT = "%r"
 
 
 def _rate_unit(unit: str) -> str:
@@ -404,22 +398,63 @@ def format_table(header: list[str], table: np.ndarray, fmt: str | Sequence[str] 
 
     ``fmt`` is a ``%`` format of one number, or one per column; ``"%r"`` writes Python's ``repr``
     (the shortest text that reads back to the same float)."""
-    return ",".join(header) + "\n" + format_rows(table, fmt)
-
-
-def format_rows(table: np.ndarray, fmt: str | Sequence[str]) -> str:
-    """The rows of :func:`format_table` (no header): a row's text depends on that row alone, so
-    the text of consecutive blocks of rows, joined, is the text of the whole table."""
     n_rows, n_columns = table.shape
     formats = [fmt] * n_columns if isinstance(fmt, str) else list(fmt)
     line = ",".join(formats) + "\n"
-    return (line * n_rows) % tuple(table.ravel().tolist()) if n_rows else ""
+    rows = (line * n_rows) % tuple(table.ravel().tolist()) if n_rows else ""
+    return ",".join(header) + "\n" + rows
+
+
+def format_rows(table: np.ndarray) -> str:
+    """The rows of a 2-D float table as CSV text (a line per row, no header), each number the
+    shortest text that reads back to the same float (``float(text)``, ``np.loadtxt``, a C
+    ``strtod``): the digits of Python's ``repr``, written as JSON numbers are by orjson
+    (``1e-7``, ``0.00001``, ``1e+16``), and ``nan``, ``inf``, ``-inf`` where a value is not
+    finite. A row's text depends on that row alone, so the texts of consecutive blocks of rows,
+    joined, are the text of the whole table.
+
+    orjson writes the numbers in compiled code (about 0.03 s for the paper run's 5,221 x 71
+    table, where Python's ``%`` formatting of 17 digits took 0.12-0.2 s); rows with a value that
+    is not finite, which JSON has no number for, are written a number at a time."""
+    import orjson
+
+    table = np.ascontiguousarray(table, dtype=np.float64)
+    if table.ndim != 2:
+        raise ValueError(f"format_rows needs a 2-D table, got shape {table.shape}")
+    if table.size == 0:
+        return "\n" * table.shape[0] if table.shape[1] == 0 else ""
+    finite = np.isfinite(table).all(axis=1)
+    if finite.all():
+        return _finite_rows(table, orjson)
+    parts, start = [], 0
+    for row in np.flatnonzero(~finite):
+        if row > start:
+            parts.append(_finite_rows(table[start:row], orjson))
+        parts.append(",".join(_number_text(x, orjson) for x in table[row].tolist()) + "\n")
+        start = row + 1
+    if start < table.shape[0]:
+        parts.append(_finite_rows(table[start:], orjson))
+    return "".join(parts)
+
+
+def _finite_rows(table: np.ndarray, orjson) -> str:
+    """:func:`format_rows` of a C-ordered table of finite numbers (at least one): orjson's
+    nested list ``[[a,b],[c,d]]`` made into lines."""
+    text = orjson.dumps(table, option=orjson.OPT_SERIALIZE_NUMPY)
+    return text[2:-2].replace(b"],[", b"\n").decode("ascii") + "\n"
+
+
+def _number_text(x: float, orjson) -> str:
+    """One number as :func:`format_rows` writes it."""
+    if math.isfinite(x):
+        return orjson.dumps(x).decode("ascii")
+    return "nan" if math.isnan(x) else ("inf" if x > 0 else "-inf")
 
 
 def write_timeseries(result: ScenarioResult, path: Path, streamed=None) -> Path:
     """Write ``timeseries.csv``: one row per ``csv_period`` (see the module docstring), a header
     of ``name [unit]`` cells (:func:`timeseries_table`), numbers that read back exactly
-    (:data:`CSV_FORMAT`, :data:`TIME_FORMAT`).
+    (:func:`format_rows`).
 
     ``streamed``: rows formatted while the run was computed
     (:class:`aiauv_pin.results.streamed_table.StreamedTable`); their text is used where their
@@ -427,77 +462,29 @@ def write_timeseries(result: ScenarioResult, path: Path, streamed=None) -> Path:
     return _write_table(path, *_table_parts(result, streamed))
 
 
-def _write_table(path: Path, head: list[str], rest: np.ndarray, formats: list[str]) -> Path:
+def _write_table(path: Path, head: list[str], rest: np.ndarray) -> Path:
     """Write the text ``head`` and the rows ``rest`` formatted (:func:`_table_parts`) to ``path``,
     part after part (:func:`~aiauv_pin._internal.atomic.write_parts`)."""
-    return write_parts(path, [*head, format_rows(rest, formats)])
+    return write_parts(path, [*head, format_rows(rest)])
 
 
-def _table_parts(result: ScenarioResult, streamed=None) -> tuple[list[str], np.ndarray, list[str]]:
+def _table_parts(result: ScenarioResult, streamed=None) -> tuple[list[str], np.ndarray]:
     """``timeseries.csv``'s text so far, in parts (the header line and the blocks of rows
     ``streamed`` formatted,
-    :meth:`~aiauv_pin.results.streamed_table.StreamedTable.parts_for`), the rows left to format
-    and the columns' number formats."""
-    header, table, formats = timeseries_content(result)
-    done, parts = (0, []) if streamed is None else streamed.parts_for(table, formats)
-    return [",".join(header) + "\n", *parts], table[done:], formats
+    :meth:`~aiauv_pin.results.streamed_table.StreamedTable.parts_for`), and the rows left to
+    format."""
+    header, table = timeseries_content(result)
+    done, parts = (0, []) if streamed is None else streamed.parts_for(table)
+    return [",".join(header) + "\n", *parts], table[done:]
 
 
-def timeseries_content(result: ScenarioResult) -> tuple[list[str], np.ndarray, list[str]]:
-    """``timeseries.csv``'s header cells, rows (a float table) and number format per column."""
+def timeseries_content(result: ScenarioResult) -> tuple[list[str], np.ndarray]:
+    """``timeseries.csv``'s header cells and rows (a float table)."""
     columns = timeseries_table(result)
     rows = csv_rows(result)
     table = np.column_stack([np.asarray(column.values, dtype=float)[rows] for column in columns])
     header = [column_header(column.name, column.unit) for column in columns]
-    formats = [TIME_FORMAT if column.name == "t" else CSV_FORMAT for column in columns]
-    return header, table, formats
-
-
-class _TimeseriesBlocks:
-    """``timeseries.csv`` written as ``blocks`` tasks for :func:`_run_tasks`, which the two
-    processes share, then put together here (:meth:`finish`): the text is the same bytes as
-    :func:`write_timeseries`' (:func:`format_rows`).
-
-    Each task formats a block of consecutive rows (the formatting is about 0.2 s of the paper's run)
-    into an anonymous temporary file in the file's folder opened before the fork (no name on
-    disk: a kill leaves nothing behind), which both processes share; :meth:`finish` reads the
-    blocks back in order and writes the file atomically
-    (:func:`~aiauv_pin._internal.atomic.write_parts`), so the file is absent or complete as before.
-    ``head`` and ``table``: the text so far, in parts, and the rows left (:func:`_table_parts`).
-    """
-
-    def __init__(
-        self, path: Path, head: list[str], table: np.ndarray, formats, blocks: int
-    ) -> None:
-        import tempfile
-
-        self._formats = formats
-        self._head = head
-        self._path = path
-        self._tables = np.array_split(table, blocks)  # consecutive rows, in order
-        # beside the file (where its bytes have room), unnamed (``O_TMPFILE`` on Linux)
-        self._sinks = [tempfile.TemporaryFile(buffering=0, dir=path.parent) for _ in self._tables]
-        self.tasks = [functools.partial(self._write_block, k) for k in range(len(self._tables))]
-
-    def _write_block(self, k: int) -> None:
-        data = memoryview(format_rows(self._tables[k], self._formats).encode("utf-8"))
-        fd = self._sinks[k].fileno()
-        while data:  # os.write may write less than asked
-            data = data[os.write(fd, data) :]
-
-    def finish(self) -> Path:
-        """Put the blocks together into the file (every task has run)."""
-
-        def blocks():
-            for sink in self._sinks:
-                sink.seek(0)
-                yield sink.read()
-
-        return write_parts(self._path, itertools.chain(self._head, blocks()))
-
-    def close(self) -> None:
-        for sink in self._sinks:
-            sink.close()
+    return header, table
 
 
 @dataclass(frozen=True)
@@ -1263,12 +1250,6 @@ def write_figures(
     return [figure_path(folder, name, figure_format) for name in figures_of(result)]
 
 
-#: Blocks of rows of ``timeseries.csv`` shared between the two processes of :func:`write_results`
-#: (at most), and the fewest rows of a block: a short run's table is one task, written at once.
-_CSV_BLOCKS = 4
-_CSV_BLOCK_ROWS = 1000
-
-
 def write_results(
     result: ScenarioResult,
     out_dir: Path,
@@ -1286,9 +1267,8 @@ def write_results(
     """Write every result file of a run into ``out_dir``; return the summary.
 
     The files are written by two processes where possible (see :func:`_run_tasks`), ``also``
-    first (the slowest, e.g. the playback page), then the figures and ``timeseries.csv`` (in
-    blocks of rows that either process formats, :class:`_TimeseriesBlocks`, also without
-    figures); ``summary.json`` is written here meanwhile.
+    first (the slowest, e.g. the playback page), then the figures; ``timeseries.csv`` and
+    ``summary.json`` are written here meanwhile.
 
     Args:
         result: The run.
@@ -1370,38 +1350,21 @@ def _write_files(
         *also,
         *(_figure_tasks(result, out_dir / "figures", figure_format, drawing) if figures else ()),
     ]
-    csv_path = out_dir / "timeseries.csv"
-    # the data files alone, the table mostly formatted during the run: the summary's energy
-    # (array arithmetic and compiled sums, which release the GIL) in a thread beside the table's
-    # last rows, 0.03 s of the paper run; never beside a fork (a thread's locks are not the child's)
+    head, rest = _table_parts(result, streamed)
+    # the data files alone: the summary's energy (array arithmetic and compiled sums, which
+    # release the GIL) in a thread beside the table's last rows; never beside a fork (a thread's
+    # locks are not the child's)
     energy = None
-    if not tasks and streamed is not None:
+    if not tasks:
         energy = ThreadPoolExecutor(max_workers=1, thread_name_prefix="aiauv-energy")
     given = None if energy is None else energy.submit(energy_summary, result).result
-    head, rest, formats = _table_parts(result, streamed)
-    blocks = min(_CSV_BLOCKS, len(rest) // _CSV_BLOCK_ROWS)
-    summary_here = functools.partial(write_summary, result, out_dir / "summary.json", extra, given)
-    if _second_process(parallel) is None or blocks < 2:
-        if energy is not None:  # no other task: the table first, while the energy is computed
-            try:
-                _write_table(csv_path, head, rest, formats)
-                return summary_here()
-            finally:
-                energy.shutdown()
-        tasks.append(functools.partial(_write_table, csv_path, head, rest, formats))
-        return _run_tasks(tasks, parallel, here_first=summary_here)
-    if energy is not None:
-        energy.shutdown()  # finished before the fork below
-    # with two processes, the table in blocks, the last tasks (the smallest): whichever process
-    # is free takes the next, so that they finish about together, also without figures
-    csv = _TimeseriesBlocks(csv_path, head, rest, formats, blocks)
     try:
-        content = _run_tasks(
-            [*tasks, *csv.tasks],
-            parallel,
-            here_first=summary_here,
-        )
-        csv.finish()
+
+        def here_first():
+            _write_table(out_dir / "timeseries.csv", head, rest)
+            return write_summary(result, out_dir / "summary.json", extra, given)
+
+        return _run_tasks(tasks, parallel, here_first=here_first)
     finally:
-        csv.close()
-    return content
+        if energy is not None:
+            energy.shutdown()

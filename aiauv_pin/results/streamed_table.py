@@ -1,7 +1,7 @@
 """``timeseries.csv``'s rows formatted while the compiled loop is still running.
 
-Formatting the table's numbers exactly (:data:`aiauv_pin.results.outputs.CSV_FORMAT`) is about
-0.2 s of the paper's 300 s run, as long as half the loop. The compiled loop releases the GIL, so
+Formatting the table's numbers exactly (:func:`aiauv_pin.results.outputs.format_rows`) is about
+0.03 s of the paper's 300 s run, a tenth of the loop. The compiled loop releases the GIL, so
 a second core is free while it runs: :class:`TableStream` is handed the log before the loop starts
 (``simulate(log_reader=...)``) and a background thread formats the table's rows among the rows
 written so far with the same function as :func:`aiauv_pin.results.outputs.write_timeseries`
@@ -23,7 +23,7 @@ the file is the same bytes as without streaming.
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,7 +32,7 @@ from aiauv_pin.results import outputs
 from aiauv_pin.scenario.definition import RunPlan, complete_diagnostics, result_of
 from aiauv_pin.simulation.fixed_step import complete_rows, trajectory_of_log
 
-#: Rows of the table formatted per block (one block holds the GIL for about 1 ms).
+#: Rows of the table formatted per block (one block holds the GIL for about 0.2 ms).
 BLOCK_ROWS = 40
 
 #: How long the thread waits before it looks for more complete rows [s].
@@ -49,17 +49,15 @@ class FormattedRows:
 
 @dataclass(frozen=True)
 class StreamedTable:
-    """What :class:`TableStream` formatted: its blocks in order and the columns' formats."""
+    """What :class:`TableStream` formatted: its blocks in order."""
 
     blocks: tuple[FormattedRows, ...]
-    formats: tuple[str, ...]
 
-    def parts_for(self, table: np.ndarray, formats: Sequence[str]) -> tuple[int, list[str]]:
-        """How many leading rows of the final ``table`` (formatted with ``formats``) the blocks
-        hold, and their texts: the blocks in order while their numbers are bit for bit the
-        table's rows, with the same formats (the texts are written one after the other, never
-        joined)."""
-        if tuple(formats) != self.formats or table.ndim != 2:
+    def parts_for(self, table: np.ndarray) -> tuple[int, list[str]]:
+        """How many leading rows of the final ``table`` the blocks hold, and their texts: the
+        blocks in order while their numbers are bit for bit the table's rows (the texts are
+        written one after the other, never joined)."""
+        if table.ndim != 2:
             return 0, []
         done, parts = 0, []
         bits = np.ascontiguousarray(table).view(np.uint64)
@@ -74,10 +72,9 @@ class StreamedTable:
         return done, parts
 
 
-def log_columns_of_table(plan: RunPlan) -> tuple[np.ndarray, list[str]] | None:
-    """For each column of the run's ``timeseries.csv``, the log column it is read from, and the
-    columns' number formats; ``None`` when a column is computed after the run rather than read
-    from the log.
+def log_columns_of_table(plan: RunPlan) -> np.ndarray | None:
+    """For each column of the run's ``timeseries.csv``, the log column it is read from; ``None``
+    when a column is computed after the run rather than read from the log.
 
     The diagnostics the run gets after it
     (:func:`aiauv_pin.scenario.definition.complete_diagnostics`) are first applied to a log at
@@ -101,7 +98,7 @@ def log_columns_of_table(plan: RunPlan) -> tuple[np.ndarray, list[str]] | None:
     # it leaves the log's diagnostics as they are: the table of a log of positions
     probe = np.arange(2.0 * width).reshape(2, width)
     result = result_of(plan, trajectory_of_log(probe, nq, nv, controller.unpack), 0.0)
-    _, table, formats = outputs.timeseries_content(result)
+    _, table = outputs.timeseries_content(result)
     if table.shape[0] != 2:
         return None
     columns = table[0]
@@ -109,7 +106,7 @@ def log_columns_of_table(plan: RunPlan) -> tuple[np.ndarray, list[str]] | None:
         return None
     if np.any(columns < 0) or np.any(columns >= width):
         return None
-    return columns.astype(np.intp), formats
+    return columns.astype(np.intp)
 
 
 class TableStream:
@@ -124,13 +121,11 @@ class TableStream:
     def __init__(
         self,
         columns: np.ndarray,
-        formats: list[str],
         period: float | None,
         start_after: Callable[[float], bool] | None = None,
     ) -> None:
         self._columns = columns
         self._start_after = start_after
-        self._formats = list(formats)
         self._period = period
         self._log: np.ndarray | None = None
         self._blocks: list[FormattedRows] = []
@@ -157,8 +152,7 @@ class TableStream:
             return None
         if found is None:
             return None
-        columns, formats = found
-        return cls(columns, formats, plan.scenario.csv_period, start_after)
+        return cls(found, plan.scenario.csv_period, start_after)
 
     def read(self, log: np.ndarray) -> None:
         """The log of the run (``simulate``'s ``log_reader``), formatted as its rows are written."""
@@ -172,7 +166,7 @@ class TableStream:
         self._closed.set()
         self._given.set()
         self._thread.join()
-        return StreamedTable(tuple(self._blocks), tuple(self._formats))
+        return StreamedTable(tuple(self._blocks))
 
     def _format(self) -> None:
         self._given.wait()
@@ -191,5 +185,5 @@ class TableStream:
                 continue
             picked = log[row : min(complete, row + BLOCK_ROWS * stride) : stride]
             values = picked[:, self._columns]
-            self._blocks.append(FormattedRows(values, outputs.format_rows(values, self._formats)))
+            self._blocks.append(FormattedRows(values, outputs.format_rows(values)))
             row += len(picked) * stride

@@ -131,24 +131,9 @@ def _result_of(n: int):
     return ScenarioResult(scenario, trajectory, 0.0, ["j1", "j2"], [])
 
 
-@pytest.mark.parametrize("blocks", [2, 3, 4])
-def test_the_table_in_blocks_is_the_same_bytes_as_written_at_once(tmp_path, blocks):
-    result = _result_of(1003)
-    outputs.write_timeseries(result, tmp_path / "once.csv")
-    csv = outputs._TimeseriesBlocks(tmp_path / "blocks.csv", *outputs._table_parts(result), blocks)
-    try:
-        assert len(csv.tasks) == blocks
-        outputs._run_tasks(list(reversed(csv.tasks)), True)  # any order, either process
-        csv.finish()
-    finally:
-        csv.close()
-    assert (tmp_path / "blocks.csv").read_bytes() == (tmp_path / "once.csv").read_bytes()
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["blocks.csv", "once.csv"]
-
-
 @pytest.mark.parametrize("parallel", [True, False])
 def test_write_results_writes_the_same_table_with_one_or_two_processes(tmp_path, parallel):
-    result = _result_of(2 * outputs._CSV_BLOCK_ROWS + 5)  # enough rows for blocks
+    result = _result_of(2005)
     outputs.write_results(result, tmp_path, parallel=parallel, figures=False)
     outputs.write_timeseries(result, tmp_path / "once.csv")
     assert (tmp_path / "timeseries.csv").read_bytes() == (tmp_path / "once.csv").read_bytes()

@@ -111,17 +111,16 @@ def test_the_energy_threads_failure_is_raised_and_leaves_no_summary(vehicle, tmp
 
 def test_rows_whose_numbers_differ_by_one_bit_are_formatted_again(vehicle, tmp_path):
     result, streamed = _drained_run(vehicle, Scenario(duration=4.0))
-    _, table, formats = outputs.timeseries_content(result)
+    _, table = outputs.timeseries_content(result)
     blocks = list(streamed.blocks)
     assert len(blocks) >= 3
     changed = blocks[1].values.copy()
     changed.view(np.uint64)[0, 1] ^= 1  # the last bit of one number
-    blocks[1] = FormattedRows(changed, outputs.format_rows(changed, formats))
-    tampered = StreamedTable(tuple(blocks), streamed.formats)
-    done, parts = tampered.parts_for(table, formats)
+    blocks[1] = FormattedRows(changed, outputs.format_rows(changed))
+    tampered = StreamedTable(tuple(blocks))
+    done, parts = tampered.parts_for(table)
     text = "".join(parts)
     assert done == blocks[0].values.shape[0] and text == blocks[0].text
-    assert tampered.parts_for(table, ["%r"] * len(formats)) == (0, [])
     outputs.write_timeseries(result, tmp_path / "plain.csv")
     outputs.write_timeseries(result, tmp_path / "tampered.csv", tampered)
     assert (tmp_path / "tampered.csv").read_bytes() == (tmp_path / "plain.csv").read_bytes()
@@ -129,10 +128,10 @@ def test_rows_whose_numbers_differ_by_one_bit_are_formatted_again(vehicle, tmp_p
 
 def test_the_probe_finds_each_column_of_the_table_in_the_log(vehicle):
     plan = plan_run(vehicle, Scenario(duration=1.0))
-    columns, formats = log_columns_of_table(plan)
+    columns = log_columns_of_table(plan)
     result = finish_run(plan, simulate(*plan.arguments, **plan.options), 1.0)
-    _, table, expected_formats = outputs.timeseries_content(result)
-    assert formats == expected_formats and len(columns) == table.shape[1]
+    _, table = outputs.timeseries_content(result)
+    assert len(columns) == table.shape[1]
     t, q = result.trajectory.t, result.trajectory.q
     nq = q.shape[1]
     log_t = np.column_stack([t, q])  # the log's first 1 + nq columns
@@ -150,11 +149,11 @@ def test_a_run_whose_table_is_computed_after_it_is_not_streamed(vehicle):
 
 def test_the_stream_formats_every_row_before_the_last_one_written(vehicle):
     result, streamed = _drained_run(vehicle, Scenario(duration=20.0))
-    _, table, formats = outputs.timeseries_content(result)
-    done, parts = streamed.parts_for(table, formats)
+    _, table = outputs.timeseries_content(result)
+    done, parts = streamed.parts_for(table)
     text = "".join(parts)
     assert done == len(table) - 1 and len(streamed.blocks) >= 3  # all but the last row, in blocks
-    assert text == outputs.format_rows(table[:done], formats)
+    assert text == outputs.format_rows(table[:done])
 
 
 def test_a_probe_that_fails_leaves_the_run_unstreamed(vehicle, monkeypatch):
