@@ -20,8 +20,9 @@ matplotlib meanwhile and draws the figures after it
 loaded, before the compiled loop is), or pass it as ``after_first_chunk`` to
 :func:`aiauv_pin.scenario.definition.run_paper_scenario`, and matplotlib (about 0.3 s of imports)
 is imported in a background thread while the compiled loop is loaded and runs (its kernels release
-the GIL); no backend is selected until figures are written (Agg). The figures are drawn by two
-processes on Linux. PNG files are written by pypng (:func:`write_png`).
+the GIL). Each figure is drawn on its own Agg canvas, without pyplot: matplotlib's backend, which a
+notebook's plots use, is never changed. The figures are drawn by two processes on Linux. PNG
+files are written by pypng (:func:`write_png`).
 """
 
 from __future__ import annotations
@@ -80,7 +81,7 @@ def import_plotting() -> None:
     are left for the figures to raise."""
     try:
         import matplotlib.backends.backend_agg
-        import matplotlib.pyplot  # noqa: F401
+        import matplotlib.figure  # noqa: F401
         import mpl_toolkits.mplot3d  # noqa: F401
 
         _warm_plotting()
@@ -155,7 +156,7 @@ def _warm_math() -> None:
 def preload_plotting() -> None:
     """Start importing matplotlib in a background thread, once (no backend is selected)."""
     global _preload
-    if _preload is None and "matplotlib.pyplot" not in sys.modules:
+    if _preload is None and "mpl_toolkits.mplot3d" not in sys.modules:
         _preload = threading.Thread(target=import_plotting, name="aiauv-preload", daemon=True)
         _preload.start()
 
@@ -685,9 +686,26 @@ _CROSS_TRACK_LABELS = {
 }
 
 
-def _error_axes(plt, title: str):
+def _new_figure(figsize: tuple[float, float]):
+    """An empty figure of ``figsize`` [in] on its own Agg canvas (no pyplot: nothing to close,
+    and its import, 0.03 s of a figure process, is saved)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _subplots(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float], **options):
+    """A figure (:func:`_new_figure`) and its axes, as ``pyplot.subplots`` makes them."""
+    fig = _new_figure(figsize)
+    return fig, fig.subplots(nrows, ncols, **options)
+
+
+def _error_axes(title: str):
     """A figure with an error panel above its log-scale companion (``|error|``, shared time axis)."""
-    fig, (ax, ax_log) = plt.subplots(
+    fig, (ax, ax_log) = _subplots(
         2, 1, figsize=(6, 4.6), sharex=True, gridspec_kw={"height_ratios": (3, 2)}
     )
     ax.set_title(title)
@@ -785,7 +803,6 @@ def _set_equal_axes(ax, points: np.ndarray) -> None:
 def _draw(
     name: str,
     result: ScenarioResult,
-    plt,
     *,
     vehicle_name: str | None = None,
     path_points: np.ndarray | None = None,
@@ -796,7 +813,6 @@ def _draw(
     Args:
         name: One of :data:`FIGURES` or :data:`MOTION_FIGURES`.
         result: The run.
-        plt: ``matplotlib.pyplot``.
         vehicle_name: Name in the titles (``aiauv simulate``: its output folder's; default: the
             scenario's case).
         path_points: World points of the path the 3-D figure draws, (N, 3) [m] (default:
@@ -808,7 +824,7 @@ def _draw(
     info, t = tr.info, tr.t
     case = vehicle_name if vehicle_name else result.scenario.case
     if name == "fig2_cross_track.png":
-        fig, ax, ax_log = _error_axes(plt, f"Cross-track errors ({case})")
+        fig, ax, ax_log = _error_axes(f"Cross-track errors ({case})")
         # on the paper's x-axis the path normals are y and z: e_1 = p_y, e_2 = p_z
         labels = _CROSS_TRACK_LABELS[cross_track_axes or run_cross_track_axes(result)]
         _plot_error(ax, ax_log, t, info["cross_track"][:, 0], label=labels[0])
@@ -817,32 +833,32 @@ def _draw(
         ax_log.set_ylabel("|error| [m]")
         ax.legend()
     elif name == "fig3_surge.png":
-        fig, ax = plt.subplots(figsize=(6, 3.2))
+        fig, ax = _subplots(figsize=(6, 3.2))
         _plot(ax, t, info["u"], label="$u$")
         u_d = result.scenario.controller_gains.u_d
         ax.axhline(u_d, color="k", ls="--", lw=0.8, label="$u_d$")
         ax.set(xlabel="t [s]", ylabel="surge velocity [m/s]", title=f"Surge velocity ({case})")
         ax.legend()
     elif name == "fig4_phi_tilde.png":
-        fig, ax, ax_log = _error_axes(plt, f"Pointing error ({case})")
+        fig, ax, ax_log = _error_axes(f"Pointing error ({case})")
         _plot_error(ax, ax_log, t, info["phi_tilde"])
         ax.set_ylabel(r"$\tilde\phi$ [rad]")
         ax_log.set_ylabel(r"$|\tilde\phi|$ [rad]")
     elif name == "fig5_omega_tilde.png":
-        fig, ax, ax_log = _error_axes(plt, f"Angular velocity error ({case})")
+        fig, ax, ax_log = _error_axes(f"Angular velocity error ({case})")
         _plot_error(ax, ax_log, t, info["omega_tilde"][:, 0], label=r"$\tilde\omega_y$")
         _plot_error(ax, ax_log, t, info["omega_tilde"][:, 1], label=r"$\tilde\omega_z$")
         ax.set_ylabel(r"$\tilde\omega$ [rad/s]")
         ax_log.set_ylabel("|error| [rad/s]")
         ax.legend()
     elif name == "fig6_base_angles.png":
-        fig, ax = plt.subplots(figsize=(6, 3.2))
+        fig, ax = _subplots(figsize=(6, 3.2))
         _plot(ax, t, info["base_angles"][:, 0], label="$q_{y,0}$")
         _plot(ax, t, info["base_angles"][:, 1], label="$q_{z,0}$")
         ax.set(xlabel="t [s]", ylabel="base angle [rad]", title=f"Base angles ({case})")
         ax.legend()
     elif name == "fig7_pointing.png":
-        fig, axes = plt.subplots(3, 1, figsize=(6, 5), sharex=True)
+        fig, axes = _subplots(3, 1, figsize=(6, 5), sharex=True)
         for k, axis in enumerate("xyz"):
             _plot(axes[k], t, info["pointing"][:, k], label=f"$x^I_{axis}$")
             _plot(axes[k], t, info["x_ref"][:, k], ls="--", label=rf"$x_{{ref,{axis}}}$")
@@ -851,7 +867,7 @@ def _draw(
         axes[-1].set_xlabel("t [s]")
         axes[0].set_title(f"End-effector and reference pointing direction ({case})")
     elif name == "path_3d.png":
-        fig = plt.figure(figsize=(6, 4.5))
+        fig = _new_figure((6, 4.5))
         ax = fig.add_subplot(projection="3d")
         p = info["p"]
         stride = max(1, len(p) // (2 * PLOT_BUCKETS))  # a smooth space curve: every stride-th point
@@ -866,7 +882,7 @@ def _draw(
         _set_equal_axes(ax, np.concatenate((path, drawn)))
         ax.legend()
     elif name == "base_motion.png":
-        fig, (ax, ax_speed) = plt.subplots(2, 1, figsize=(6, 4.6), sharex=True)
+        fig, (ax, ax_speed) = _subplots(2, 1, figsize=(6, 4.6), sharex=True)
         q, v = np.asarray(tr.q), np.asarray(tr.v)
         for k, axis in enumerate("xyz"):
             _plot(ax, t, q[:, k] - q[0, k], label=f"${axis}$")
@@ -879,7 +895,7 @@ def _draw(
     elif name == "pose_error.png":
         velocity = result.scenario.controller == "velocity"
         kind = "Twist" if velocity else "Pose"
-        fig, ax, ax_log = _error_axes(plt, f"{kind} errors of the held axes ({case})")
+        fig, ax, ax_log = _error_axes(f"{kind} errors of the held axes ({case})")
         error = np.asarray(info["error"])
         units = ("m/s", "rad/s") if velocity else ("m", "rad")
         for k, axis in enumerate(("surge", "sway", "heave", "roll", "pitch", "yaw")):
@@ -889,7 +905,7 @@ def _draw(
         ax_log.set_ylabel("|error|")
         ax.legend(ncol=3, fontsize="small")
     elif name == "thrusts.png":
-        fig, (ax, ax_res) = plt.subplots(2, 1, figsize=(6, 4.6), sharex=True)
+        fig, (ax, ax_res) = _subplots(2, 1, figsize=(6, 4.6), sharex=True)
         thrust = np.asarray(info["thrust"])
         for k, thruster in enumerate(result.thruster_names):
             _plot(ax, t, thrust[:, k], label=thruster)
@@ -901,7 +917,7 @@ def _draw(
         ax_res.set(xlabel="t [s]", ylabel="|residual|")
         ax_res.legend()
     elif name == "fins.png":
-        fig, (ax_h, ax_p, ax_f) = plt.subplots(3, 1, figsize=(6, 6), sharex=True)
+        fig, (ax_h, ax_p, ax_f) = _subplots(3, 1, figsize=(6, 6), sharex=True)
         for ax, key, label in ((ax_h, "heading", "heading"), (ax_p, "pitch", "pitch")):
             angles = np.asarray(info[key])
             _plot(ax, t, np.unwrap(angles[:, 0]), label=f"{label}")
@@ -918,7 +934,7 @@ def _draw(
         ax_f.set(xlabel="t [s]", ylabel="angle [rad]")
         ax_f.legend(ncol=3, fontsize="x-small")
     elif name == "motion_3d.png":
-        fig = plt.figure(figsize=(6, 4.5))
+        fig = _new_figure((6, 4.5))
         ax = fig.add_subplot(projection="3d")
         drawn = []
         for label, points in (("base", np.asarray(tr.q)[:, :3]), ("end-effector", info["p"])):
@@ -931,7 +947,7 @@ def _draw(
         _set_equal_axes(ax, np.concatenate(drawn))
         ax.legend()
     elif name == "intervention.png":
-        fig, axes = plt.subplots(3, 1, figsize=(6, 6), sharex=True)
+        fig, axes = _subplots(3, 1, figsize=(6, 6), sharex=True)
         error = np.asarray(info["pose_error"])
         for k, axis in enumerate("xyz"):
             (line,) = _plot(axes[0], t, 1000.0 * error[:, k], label=f"${axis}$ [mm]")
@@ -993,14 +1009,9 @@ _LAYOUT_OF = {
 def _render(
     result: ScenarioResult, folder: Path, names, figure_format: str = "png", **drawing
 ) -> list[Path]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     written = []
     for name in names:
-        fig = _draw(name, result, plt, **drawing)
+        fig = _draw(name, result, **drawing)
         fig.subplots_adjust(**_MARGINS[_LAYOUT_OF.get(name, "single")])
         if figure_format == "png":  # the renderer savefig reuses, with the shared parser
             fig.set_dpi(FIGURE_DPI)
@@ -1011,7 +1022,6 @@ def _render(
                 write_png(fig, temporary)
             else:
                 fig.savefig(temporary, dpi=FIGURE_DPI, format=figure_format)
-        plt.close(fig)
         written.append(path)
     return written
 
@@ -1186,10 +1196,8 @@ def _prepare_figures(figure_format: str) -> None:
     """Check the format and import matplotlib (Agg) here, before a figure process forks."""
     check_figure_format(figure_format)
     _wait_for_preload()  # no import may be in progress in another thread when forking
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot
+    import matplotlib.backends.backend_agg
+    import matplotlib.figure  # noqa: F401
     import mpl_toolkits.mplot3d  # noqa: F401
 
 

@@ -232,18 +232,12 @@ def test_figure_workers_are_not_started_where_they_cannot_run(monkeypatch):
 
 
 def test_png_figures_hold_the_pixels_and_resolution_savefig_writes(shared_run, tmp_path):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     _, result = shared_run
     for name in ("fig2_cross_track.png", "path_3d.png"):
-        fig = outputs._draw(name, result, plt)
+        fig = outputs._draw(name, result)
         fig.set_dpi(outputs.FIGURE_DPI)
         fig.savefig(tmp_path / "savefig.png", dpi=outputs.FIGURE_DPI)
         outputs.write_png(fig, tmp_path / "ours.png")
-        plt.close(fig)
         ours = Image.open(tmp_path / "ours.png")
         assert ours.mode == "RGBA" and ours.info["dpi"] == pytest.approx((200, 200), abs=1e-3)
         assert np.array_equal(_pixels(tmp_path / "ours.png"), _pixels(tmp_path / "savefig.png"))

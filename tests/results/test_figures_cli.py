@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 
 from aiauv_pin import load_vehicle
 from aiauv_pin.app import cli
@@ -53,40 +52,33 @@ def test_png_at_200_dpi_and_vector_formats(short_result, tmp_path):
     "name", ["fig2_cross_track.png", "fig4_phi_tilde.png", "fig5_omega_tilde.png"]
 )
 def test_error_figures_have_a_log_companion(short_result, name):
-    fig = outputs._draw(name, short_result, plt, vehicle_name="my_vehicle")
-    try:
-        linear, log = fig.axes[:2]
-        assert linear.get_yscale() == "linear" and log.get_yscale() == "log"
-        assert "my_vehicle" in linear.get_title()
-        # the log panel draws |error| of each linear curve
-        for line, magnitude in zip(linear.get_lines()[1:], log.get_lines(), strict=False):
-            y = np.asarray(line.get_ydata(), dtype=float)
-            np.testing.assert_allclose(
-                np.asarray(magnitude.get_ydata(), dtype=float),
-                np.where(np.abs(y) > 0, np.abs(y), np.nan),
-            )
-    finally:
-        plt.close(fig)
+    fig = outputs._draw(name, short_result, vehicle_name="my_vehicle")
+    linear, log = fig.axes[:2]
+    assert linear.get_yscale() == "linear" and log.get_yscale() == "log"
+    assert "my_vehicle" in linear.get_title()
+    # the log panel draws |error| of each linear curve
+    for line, magnitude in zip(linear.get_lines()[1:], log.get_lines(), strict=False):
+        y = np.asarray(line.get_ydata(), dtype=float)
+        np.testing.assert_allclose(
+            np.asarray(magnitude.get_ydata(), dtype=float),
+            np.where(np.abs(y) > 0, np.abs(y), np.nan),
+        )
 
 
 def test_path_figure_has_equal_axes_and_draws_given_points(short_result):
     helix = np.column_stack(
         [np.linspace(0, 3, 50), np.cos(np.linspace(0, 6, 50)), np.sin(np.linspace(0, 6, 50))]
     )
-    fig = outputs._draw("path_3d.png", short_result, plt, path_points=helix)
-    try:
-        ax = fig.axes[0]
-        spans = [np.diff(limits)[0] for limits in (ax.get_xlim(), ax.get_ylim(), ax.get_zlim())]
-        np.testing.assert_allclose(spans, spans[0], rtol=1e-12)
-        path_line = next(line for line in ax.get_lines() if line.get_label() == "path")
-        x, y, z = path_line.get_data_3d()
-        np.testing.assert_array_equal(np.column_stack([x, y, z]), helix)
-        assert "uniform" in ax.get_title()  # no vehicle name given: the case
-    finally:
-        plt.close(fig)
+    fig = outputs._draw("path_3d.png", short_result, path_points=helix)
+    ax = fig.axes[0]
+    spans = [np.diff(limits)[0] for limits in (ax.get_xlim(), ax.get_ylim(), ax.get_zlim())]
+    np.testing.assert_allclose(spans, spans[0], rtol=1e-12)
+    path_line = next(line for line in ax.get_lines() if line.get_label() == "path")
+    x, y, z = path_line.get_data_3d()
+    np.testing.assert_array_equal(np.column_stack([x, y, z]), helix)
+    assert "uniform" in ax.get_title()  # no vehicle name given: the case
     with pytest.raises(ValueError, match=r"\(N, 3\)"):
-        outputs._draw("path_3d.png", short_result, plt, path_points=np.zeros((4, 2)))
-    plt.close("all")
+        outputs._draw("path_3d.png", short_result, path_points=np.zeros((4, 2)))
 
 
 def test_version_and_module_entry_point(capsys):

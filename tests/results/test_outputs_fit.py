@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 
 import aiauv_pin
 from aiauv_control.paths import HelixPath, LinePath, WaypointPath
@@ -232,12 +231,9 @@ def test_every_figure_has_labelled_axes_with_units(paper_run, passive_run):
     drawn = [(name, paper_run) for name in outputs.FIGURES]
     drawn += [(name, passive_run) for name in outputs.MOTION_FIGURES]
     for name, result in drawn:
-        fig = outputs._draw(name, result, plt, vehicle_name="run_folder")
-        try:
-            assert _labelled(fig.axes) == [], name
-            assert any("(run_folder)" in ax.get_title() for ax in fig.axes), name
-        finally:
-            plt.close(fig)
+        fig = outputs._draw(name, result, vehicle_name="run_folder")
+        assert _labelled(fig.axes) == [], name
+        assert any("(run_folder)" in ax.get_title() for ax in fig.axes), name
 
 
 def test_titles_name_the_output_folder(tmp_path, monkeypatch, capsys):
