@@ -9,15 +9,18 @@ Python warnings are printed as single ``aiauv: warning: ...`` lines.
 from __future__ import annotations
 
 import argparse
+import atexit
 import dataclasses
 import functools
 import gc
 import os
 import sys
+import threading
 import time
 import warnings
 from pathlib import Path
 
+import aiauv_pin
 from aiauv_pin._internal.argument_types import (  # noqa: F401  (positive_seconds is part of the CLI's public helpers)
     EXIT_FAILED,
     EXIT_USAGE,
@@ -176,26 +179,32 @@ def scenario_for_args(args):
 
 
 def _run_simulate(args) -> int:
-    from aiauv_pin.errors import AiauvError
-    from aiauv_pin.model import loading
-
-    # (imported before the figure process forks: it then holds what drawing needs)
+    # (imports numpy alone: forked before the simulation's modules are imported)
     from aiauv_pin.results.figure_workers import FigureWorkers
 
-    scenario = scenario_for_args(args)
-    steps = scenario.duration / scenario.dt
-    if steps > MAX_STEPS:
-        raise AiauvError(
-            f"duration / dt = {steps:.3g} steps exceeds {MAX_STEPS}; "
-            "use a larger --dt or a shorter --duration"
-        )
-    path = scenario.vehicle if scenario.vehicle is not None else loading.bundled_urdf(scenario.case)
     workers = None
     if not args.no_figures:
-        # forked now, while no other thread runs: it imports matplotlib on the second core,
-        # idle while this process reads the vehicle and loads the compiled loop
-        workers = FigureWorkers.start(scenario)
+        # forked first, while no other thread runs: it imports matplotlib on the second core,
+        # idle while this process imports numba and Pinocchio, reads the vehicle and loads the
+        # compiled loop
+        workers = FigureWorkers.start()
     try:
+        aiauv_pin.import_all()
+        from aiauv_pin.errors import AiauvError
+        from aiauv_pin.model import loading
+
+        scenario = scenario_for_args(args)
+        steps = scenario.duration / scenario.dt
+        if steps > MAX_STEPS:
+            raise AiauvError(
+                f"duration / dt = {steps:.3g} steps exceeds {MAX_STEPS}; "
+                "use a larger --dt or a shorter --duration"
+            )
+        path = (
+            scenario.vehicle
+            if scenario.vehicle is not None
+            else loading.bundled_urdf(scenario.case)
+        )
         return _simulate_with(args, scenario, path, workers)
     finally:
         if workers is not None:
@@ -654,8 +663,15 @@ def _main(argv: list[str] | None, *, process_ends: bool) -> int:
     from aiauv_pin.errors import AiauvError
 
     arguments = sys.argv[1:] if argv is None else list(argv)
-    parser = build_parser(arguments[0] if arguments else None)
-    args = parser.parse_args(arguments)
+    collecting = gc.isenabled()
+    gc.disable()  # paused from here for simulate (below); the command line makes little garbage
+    try:
+        parser = build_parser(arguments[0] if arguments else None)
+        args = parser.parse_args(arguments)
+    except BaseException:  # (argparse's exit)
+        if collecting:
+            gc.enable()
+        raise
     with warnings.catch_warnings():  # restores the filters and showwarning on return
         # Deprecations are for the developers of the code that issues them, not for the user of
         # the command: on Python 3.10, importing xacro warned that its enum's private names "will
@@ -668,11 +684,13 @@ def _main(argv: list[str] | None, *, process_ends: bool) -> int:
         # one run's cyclic garbage is small, and a collection during it would scan numba's
         # long-lived objects made by its first call (0.02-0.03 s): the collector waits for the
         # end of the command, but for a live view, which may run for long
-        pause = getattr(args, "command", None) == "simulate" and not getattr(args, "view", False)
-        collecting = gc.isenabled()
-        if pause:
-            gc.disable()
+        simulating = getattr(args, "command", None) == "simulate"
+        pause = simulating and not getattr(args, "view", False)
+        if collecting and not pause:
+            gc.enable()
         try:
+            if not simulating:  # (simulate first forks its figure process: _run_simulate)
+                aiauv_pin.import_all()
             return int(args.handler(args) or 0)
         except KeyboardInterrupt:
             print("aiauv: interrupted", file=sys.stderr)
@@ -701,19 +719,16 @@ def _main(argv: list[str] | None, *, process_ends: bool) -> int:
 def console_main() -> None:
     """The ``aiauv`` console script: :func:`main`, then a quick interpreter exit.
 
-    The modules imported by then (numba, Pinocchio, ours: several hundred thousand long-lived
-    objects) are first moved out of the garbage collector's reach (``gc.freeze``), so that no
-    collection during the command scans them again; a collector paused for ``simulate`` stays
-    paused to the end (:func:`_main`). Everything is written (atomically) before :func:`main`
+    The simulation's modules (numba, Pinocchio, ours: several hundred thousand long-lived
+    objects) are imported by the command (:func:`aiauv_pin.import_all`, after ``simulate`` forked
+    its figure process), with the collector paused, and moved out of its reach; a collector paused
+    for ``simulate`` stays paused to the end (:func:`_main`). Everything is written (atomically) before :func:`main`
     returns. Freezing the garbage collector's generations then spares the
     interpreter's final collection over the objects made since, mostly numba's; the exit handlers
     run (e.g. stopping a meshcat server of ``--view``), the standard streams are flushed, and the
     process ends without tearing down its modules one by one (another 0.05 s). A thread still
     running (not a daemon) gets the ordinary exit, which waits for it.
     """
-    import atexit
-    import threading
-
     gc.freeze()
     status = _main(None, process_ends=True)
     gc.freeze()

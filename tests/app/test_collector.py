@@ -18,6 +18,7 @@ def test_importing_the_package_leaves_the_collector_as_it_was(enabled):
         "import gc\n"
         f"{'' if enabled else 'gc.disable()'}\n"
         "import aiauv_pin\n"
+        "aiauv_pin.load_vehicle  # the simulation's modules, imported on first use\n"
         "print(gc.isenabled(), len(gc.get_objects()) > 10_000)\n"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

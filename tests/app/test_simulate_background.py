@@ -1,5 +1,5 @@
 """What ``aiauv simulate`` does beside the compiled loop: on Linux a figure process, forked
-before the vehicle is read, imports matplotlib while a second thread formats the rows of
+before the simulation's modules are imported, imports matplotlib while a second thread formats the rows of
 ``timeseries.csv`` (once that process is warm); elsewhere that thread imports matplotlib when
 figures are drawn (from before the loop is loaded) and formats the rows otherwise."""
 
@@ -18,7 +18,7 @@ from aiauv_pin.simulation import fixed_step
 def test_the_second_thread_starts_before_the_loop_is_loaded(tmp_path, monkeypatch, figures):
     """Where no figure process can be forked (not Linux): matplotlib is imported by a thread."""
     events = []
-    monkeypatch.setattr(FigureWorkers, "start", classmethod(lambda cls, scenario: None))
+    monkeypatch.setattr(FigureWorkers, "start", classmethod(lambda cls: None))
     monkeypatch.setattr(outputs, "preload_plotting", lambda: events.append("preload"))
     simulate = fixed_step.simulate
 
@@ -42,9 +42,9 @@ def test_the_figure_process_is_forked_before_the_vehicle_is_read(tmp_path, monke
     start, load, simulate = FigureWorkers.start.__func__, loading.load_vehicle, fixed_step.simulate
     started = []
 
-    def starting(cls, scenario):
+    def starting(cls):
         events.append("fork")
-        started.append(start(cls, scenario))
+        started.append(start(cls))
         return started[-1]
 
     def loading_vehicle(*arguments, **options):

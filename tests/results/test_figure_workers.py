@@ -16,7 +16,7 @@ from PIL import Image
 
 from aiauv_pin import load_vehicle
 from aiauv_pin._internal.log_memory import SharedLog
-from aiauv_pin.results import outputs
+from aiauv_pin.results import figures, outputs
 from aiauv_pin.results.figure_workers import FigureWorkers
 from aiauv_pin.scenario.definition import PaperScenario, finish_run, plan_run
 from aiauv_pin.simulation.fixed_step import simulate
@@ -74,7 +74,7 @@ def shared_run():
     if not SharedLog.available() or sys.platform != "linux":
         pytest.skip("memfd and fork (Linux)")
     scenario = PaperScenario(duration=2.0, dt=0.004)
-    workers = FigureWorkers(scenario)
+    workers = FigureWorkers()
     plan = plan_run(load_vehicle(), scenario)
     assert plan.compiled
     trajectory = simulate(*plan.arguments, **plan.options, log_memory=workers.log.empty)
@@ -91,7 +91,7 @@ def _pixels(path) -> np.ndarray:
 def test_the_figure_process_draws_the_figures_drawn_here(shared_run, tmp_path):
     workers, result = shared_run
     assert workers.warm(60.0)
-    workers.draw(result, tmp_path / "there", vehicle_name="shared")
+    workers.draw(outputs.figure_data(result, vehicle_name="shared"), tmp_path / "there")
     workers.wait()
     here = outputs.write_figures(result, tmp_path / "here", parallel=False, vehicle_name="shared")
     assert [p.name for p in here] == list(outputs.FIGURES)
@@ -103,12 +103,12 @@ def test_the_figure_process_draws_the_figures_drawn_here(shared_run, tmp_path):
 def test_a_failure_in_the_figure_process_is_raised_here(tmp_path):
     scenario = PaperScenario(duration=1.0, dt=0.01)
     plan = plan_run(load_vehicle(), scenario)
-    workers = FigureWorkers(scenario)
+    workers = FigureWorkers()
     try:
         trajectory = simulate(*plan.arguments, **plan.options, log_memory=workers.log.empty)
         blocked = tmp_path / "a file"
         blocked.write_text("not a folder")
-        workers.draw(finish_run(plan, trajectory, 0.0), blocked / "figures")
+        workers.draw(outputs.figure_data(finish_run(plan, trajectory, 0.0)), blocked / "figures")
         with pytest.raises(OSError):
             workers.wait()
         assert not workers._process.is_alive()
@@ -124,17 +124,17 @@ def test_a_figure_that_fails_is_raised_whichever_figure_process_drew_it(
 ):
     """The slowest figure is drawn first and the fastest last: by either process."""
     _, result = shared_run
-    render = outputs._render
+    render = figures._render
 
-    def failing_render(result, folder, names, *arguments, **options):
+    def failing_render(data, folder, names, *arguments):
         if failing in names:
             raise RuntimeError(f"cannot draw {failing}")
-        return render(result, folder, names, *arguments, **options)
+        return render(data, folder, names, *arguments)
 
-    monkeypatch.setattr(outputs, "_render", failing_render)  # before the processes fork
-    workers = FigureWorkers(result.scenario)
+    monkeypatch.setattr(figures, "_render", failing_render)  # before the processes fork
+    workers = FigureWorkers()
     try:
-        workers.draw(result, tmp_path / "figures")
+        workers.draw(outputs.figure_data(result), tmp_path / "figures")
         with pytest.raises(RuntimeError, match=f"cannot draw {failing}"):
             workers.wait()
     finally:
@@ -149,9 +149,9 @@ def test_without_a_second_process_the_first_draws_every_figure(shared_run, tmp_p
 
     _, result = shared_run
     monkeypatch.setattr(figure_workers, "_fork_second", no_process_left)  # before the fork
-    workers = FigureWorkers(result.scenario)
+    workers = FigureWorkers()
     try:
-        assert workers.draw(result, tmp_path / "figures")
+        assert workers.draw(outputs.figure_data(result), tmp_path / "figures")
         workers.wait()
     finally:
         workers.close()
@@ -168,23 +168,26 @@ def test_a_failure_before_the_figures_are_asked_for_is_raised_when_they_are(
 
     _, result = shared_run
     monkeypatch.setattr(figure_workers, "_fork_second", broken)
-    workers = FigureWorkers(result.scenario)
+    workers = FigureWorkers()
     try:
         assert workers.warm(60.0)  # the table is not kept waiting
-        workers.draw(result, tmp_path / "figures")
+        workers.draw(outputs.figure_data(result), tmp_path / "figures")
         with pytest.raises(RuntimeError, match="broken set-up"):
             workers.wait()
     finally:
         workers.close()
 
 
-def test_a_result_that_does_not_pickle_is_drawn_here(shared_run, tmp_path):
+def test_figure_data_that_does_not_pickle_is_drawn_here(shared_run, tmp_path):
     import dataclasses
 
+    class LocalName(str):  # defined in a function: its instances do not pickle
+        pass
+
     _, result = shared_run
-    odd = dataclasses.replace(result, extra={**result.extra, "hook": lambda: None})
-    workers = FigureWorkers(result.scenario)
-    assert not workers.draw(odd, tmp_path / "unsent")
+    odd = dataclasses.replace(result, thruster_names=[LocalName(n) for n in result.thruster_names])
+    workers = FigureWorkers()
+    assert not workers.draw(outputs.figure_data(odd), tmp_path / "unsent")
     outputs.write_results(odd, tmp_path / "run", figure_workers=workers)
     assert workers._process.exitcode is not None
     assert sorted(p.name for p in (tmp_path / "run" / "figures").iterdir()) == sorted(
@@ -194,7 +197,7 @@ def test_a_result_that_does_not_pickle_is_drawn_here(shared_run, tmp_path):
 
 @linux_only
 def test_a_figure_process_not_needed_any_more_is_stopped_at_once():
-    workers = FigureWorkers(PaperScenario(duration=1.0))
+    workers = FigureWorkers()
     workers.close()  # still importing matplotlib, or waiting: killed, not waited for
     assert workers._process.exitcode == -signal.SIGKILL
     workers.close()  # twice is harmless
@@ -204,8 +207,7 @@ _ORPHAN = textwrap.dedent(
     """
     import sys, time
     from aiauv_pin.results.figure_workers import FigureWorkers
-    from aiauv_pin.scenario.definition import PaperScenario
-    workers = FigureWorkers(PaperScenario(duration=1.0))
+    workers = FigureWorkers()
     print(workers._process.pid, flush=True)
     time.sleep(60)
     """
@@ -228,7 +230,19 @@ def test_the_figure_process_dies_with_the_process_that_forked_it():
 def test_figure_workers_are_not_started_where_they_cannot_run(monkeypatch):
     monkeypatch.setattr(sys, "platform", "darwin")
     assert not FigureWorkers.available()
-    assert FigureWorkers.start(PaperScenario(duration=1.0)) is None
+    assert FigureWorkers.start() is None
+
+
+def test_the_figure_process_is_forked_before_anything_heavy_is_imported():
+    """``aiauv simulate`` forks it first thing: the package, the figure modules and the command
+    line import neither numba, Pinocchio, matplotlib nor the project's compiled packages."""
+    code = (
+        "import sys, aiauv_pin, aiauv_pin.app.cli, aiauv_pin.results.figure_workers; "
+        "print(sorted({m.split('.')[0] for m in sys.modules}"
+        " & {'numba', 'pinocchio', 'matplotlib', 'scipy', 'aiauv_hydro', 'aiauv_control'}))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
 
 
 def test_png_figures_hold_the_pixels_and_resolution_savefig_writes(shared_run, tmp_path):

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from aiauv_pin.results import outputs
+from aiauv_pin.results import figures, outputs
 
 pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="fork")
 
@@ -58,9 +58,9 @@ def test_a_failed_task_is_raised_whichever_process_ran_it(tmp_path, where):
 def test_the_forked_process_parses_its_own_math_text(tmp_path):
     from matplotlib.mathtext import MathTextParser
 
-    outputs._prepare_figures("png")
-    outputs._stop_warming.clear()  # an earlier run in this process may have stopped the warm-up
-    outputs._warm_math()
+    figures._prepare_figures("png")
+    figures._stop_warming.clear()  # an earlier run in this process may have stopped the warm-up
+    figures._warm_math()
     assert MathTextParser._parse_cached.cache_info().currsize > 0
     tasks = [partial(_math_cache_size, tmp_path) for _ in range(2)]
     # the first task is taken by one process, the second by the other or the same: both must
@@ -83,13 +83,13 @@ def test_a_matplotlib_without_the_private_math_cache_gets_no_warm_up(tmp_path, m
     emptying of the cache is a no-op instead of an AttributeError."""
     from matplotlib.mathtext import MathTextParser
 
-    outputs._prepare_figures("png")
+    figures._prepare_figures("png")
     MathTextParser._parse_cached.cache_clear()
     monkeypatch.delattr(MathTextParser, "_parse_cached")
-    assert outputs._math_cache_clear() is None
-    outputs._stop_warming.clear()
-    outputs._warm_math()  # a no-op
-    outputs._forget_parsed_math()  # no AttributeError
+    assert figures._math_cache_clear() is None
+    figures._stop_warming.clear()
+    figures._warm_math()  # a no-op
+    figures._forget_parsed_math()  # no AttributeError
     monkeypatch.undo()
     assert MathTextParser._parse_cached.cache_info().currsize == 0
 
@@ -101,7 +101,7 @@ def test_the_shared_math_parser_is_the_kind_an_agg_renderer_makes():
     from matplotlib.font_manager import FontProperties
 
     own = RendererAgg(10, 10, outputs.FIGURE_DPI).mathtext_parser
-    shared = outputs._shared_math_parser()
+    shared = figures._shared_math_parser()
     prop = FontProperties(size=10)
     assert len(shared.parse("$u_d$", outputs.FIGURE_DPI, prop)) == len(
         own.parse("$u_d$", outputs.FIGURE_DPI, prop)
