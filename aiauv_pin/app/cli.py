@@ -722,8 +722,8 @@ def console_main() -> None:
     The simulation's modules (numba, Pinocchio, ours: several hundred thousand long-lived
     objects) are imported by the command (:func:`aiauv_pin.import_all`, after ``simulate`` forked
     its figure process), with the collector paused, and moved out of its reach; a collector paused
-    for ``simulate`` stays paused to the end (:func:`_main`). Everything is written (atomically) before :func:`main`
-    returns. Freezing the garbage collector's generations then spares the
+    for ``simulate`` stays paused to the end (:func:`_main`). Everything is written (atomically)
+    before :func:`main` returns. Freezing the garbage collector's generations then spares the
     interpreter's final collection over the objects made since, mostly numba's; the exit handlers
     run (e.g. stopping a meshcat server of ``--view``), the standard streams are flushed, and the
     process ends without tearing down its modules one by one (another 0.05 s). A thread still
