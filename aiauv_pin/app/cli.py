@@ -190,6 +190,8 @@ def _run_simulate(args) -> int:
         workers = FigureWorkers.start()
     try:
         aiauv_pin.import_all()
+        if args.view:  # the collector runs during a live view: the modules out of its reach
+            gc.freeze()
         from aiauv_pin.errors import AiauvError
         from aiauv_pin.model import loading
 
@@ -691,6 +693,8 @@ def _main(argv: list[str] | None, *, process_ends: bool) -> int:
         try:
             if not simulating:  # (simulate first forks its figure process: _run_simulate)
                 aiauv_pin.import_all()
+                if process_ends:  # out of the collector's reach for the rest of the command
+                    gc.freeze()
             return int(args.handler(args) or 0)
         except KeyboardInterrupt:
             print("aiauv: interrupted", file=sys.stderr)
