@@ -13,16 +13,17 @@ the last sample is always included; ``None`` writes every sample). The figures d
 the minimum and maximum of each of at most :data:`PLOT_BUCKETS` consecutive runs of samples (in
 time order), which at their size is indistinguishable from drawing every sample.
 
-Speed: on Linux, ``aiauv simulate`` forks a figure process before the run, which imports
-matplotlib meanwhile and draws the figures after it
+The figures themselves are drawn from plain data (:func:`figure_data`) by
+:mod:`aiauv_pin.results.figures`, which imports numpy and matplotlib alone.
+
+Speed: on Linux, ``aiauv simulate`` forks a figure process before the simulation's modules are
+imported, which imports matplotlib meanwhile and draws the figures after the run
 (:mod:`aiauv_pin.results.figure_workers`, ``write_results(figure_workers=...)``). Elsewhere, call
 :func:`preload_plotting` before a compiled run (``aiauv simulate`` calls it once the vehicle is
 loaded, before the compiled loop is), or pass it as ``after_first_chunk`` to
 :func:`aiauv_pin.scenario.definition.run_paper_scenario`, and matplotlib (about 0.3 s of imports)
 is imported in a background thread while the compiled loop is loaded and runs (its kernels release
-the GIL). Each figure is drawn on its own Agg canvas, without pyplot: matplotlib's backend, which a
-notebook's plots use, is never changed. The figures are drawn by two processes on Linux. PNG
-files are written by pypng (:func:`write_png`).
+the GIL). The figures are drawn by two processes on Linux.
 """
 
 from __future__ import annotations
