@@ -741,13 +741,6 @@ def figure_data(
     )
 
 
-def _draw(name: str, result: ScenarioResult, **drawing):
-    """The figure ``name`` of ``result`` (arguments of :func:`figure_data`), not written."""
-    from aiauv_pin.results.figures import _draw as draw
-
-    return draw(name, figure_data(result, **drawing))
-
-
 def write_results(
     result: ScenarioResult,
     out_dir: Path,

@@ -248,7 +248,7 @@ def test_the_figure_process_is_forked_before_anything_heavy_is_imported():
 def test_png_figures_hold_the_pixels_and_resolution_savefig_writes(shared_run, tmp_path):
     _, result = shared_run
     for name in ("fig2_cross_track.png", "path_3d.png"):
-        fig = outputs._draw(name, result)
+        fig = figures._draw(name, outputs.figure_data(result))
         fig.set_dpi(outputs.FIGURE_DPI)
         fig.savefig(tmp_path / "savefig.png", dpi=outputs.FIGURE_DPI)
         outputs.write_png(fig, tmp_path / "ours.png")

@@ -16,7 +16,7 @@ matplotlib.use("Agg")
 
 from aiauv_pin import load_vehicle
 from aiauv_pin.app import cli
-from aiauv_pin.results import outputs
+from aiauv_pin.results import figures, outputs
 from aiauv_pin.scenario.definition import PaperScenario, run_paper_scenario
 from aiauv_pin.simulation import compilation
 
@@ -52,7 +52,7 @@ def test_png_at_200_dpi_and_vector_formats(short_result, tmp_path):
     "name", ["fig2_cross_track.png", "fig4_phi_tilde.png", "fig5_omega_tilde.png"]
 )
 def test_error_figures_have_a_log_companion(short_result, name):
-    fig = outputs._draw(name, short_result, vehicle_name="my_vehicle")
+    fig = figures._draw(name, outputs.figure_data(short_result, vehicle_name="my_vehicle"))
     linear, log = fig.axes[:2]
     assert linear.get_yscale() == "linear" and log.get_yscale() == "log"
     assert "my_vehicle" in linear.get_title()
@@ -69,7 +69,7 @@ def test_path_figure_has_equal_axes_and_draws_given_points(short_result):
     helix = np.column_stack(
         [np.linspace(0, 3, 50), np.cos(np.linspace(0, 6, 50)), np.sin(np.linspace(0, 6, 50))]
     )
-    fig = outputs._draw("path_3d.png", short_result, path_points=helix)
+    fig = figures._draw("path_3d.png", outputs.figure_data(short_result, path_points=helix))
     ax = fig.axes[0]
     spans = [np.diff(limits)[0] for limits in (ax.get_xlim(), ax.get_ylim(), ax.get_zlim())]
     np.testing.assert_allclose(spans, spans[0], rtol=1e-12)
@@ -78,7 +78,9 @@ def test_path_figure_has_equal_axes_and_draws_given_points(short_result):
     np.testing.assert_array_equal(np.column_stack([x, y, z]), helix)
     assert "uniform" in ax.get_title()  # no vehicle name given: the case
     with pytest.raises(ValueError, match=r"\(N, 3\)"):
-        outputs._draw("path_3d.png", short_result, path_points=np.zeros((4, 2)))
+        figures._draw(
+            "path_3d.png", outputs.figure_data(short_result, path_points=np.zeros((4, 2)))
+        )
 
 
 def test_version_and_module_entry_point(capsys):

@@ -19,7 +19,7 @@ matplotlib.use("Agg")
 import aiauv_pin
 from aiauv_control.paths import HelixPath, LinePath, WaypointPath
 from aiauv_pin.app import cli
-from aiauv_pin.results import outputs, playback
+from aiauv_pin.results import figures, outputs, playback
 from aiauv_pin.scenario.definition import Scenario, cross_track_axes, run_scenario, summary
 
 #: A unit in brackets at the end of an axis label, e.g. "[m]", "[rad/s]", "[-]".
@@ -231,7 +231,7 @@ def test_every_figure_has_labelled_axes_with_units(paper_run, passive_run):
     drawn = [(name, paper_run) for name in outputs.FIGURES]
     drawn += [(name, passive_run) for name in outputs.MOTION_FIGURES]
     for name, result in drawn:
-        fig = outputs._draw(name, result, vehicle_name="run_folder")
+        fig = figures._draw(name, outputs.figure_data(result, vehicle_name="run_folder"))
         assert _labelled(fig.axes) == [], name
         assert any("(run_folder)" in ax.get_title() for ax in fig.axes), name
 
