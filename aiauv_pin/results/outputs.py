@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import orjson
 
 from aiauv_pin._internal.atomic import write_parts, write_text
 from aiauv_pin._internal.text import signed
@@ -294,18 +295,6 @@ def csv_rows(result: ScenarioResult) -> np.ndarray:
     return rows
 
 
-def format_table(header: list[str], table: np.ndarray, fmt: str | Sequence[str] = "%.9g") -> str:
-    """CSV text of a 2-D float table (same text as ``np.savetxt(..., delimiter=",")``).
-
-    ``fmt`` is a ``%`` format of one number, or one per column; ``"%r"`` writes Python's ``repr``
-    (the shortest text that reads back to the same float)."""
-    n_rows, n_columns = table.shape
-    formats = [fmt] * n_columns if isinstance(fmt, str) else list(fmt)
-    line = ",".join(formats) + "\n"
-    rows = (line * n_rows) % tuple(table.ravel().tolist()) if n_rows else ""
-    return ",".join(header) + "\n" + rows
-
-
 def format_rows(table: np.ndarray) -> str:
     """The rows of a 2-D float table as CSV text (a line per row, no header), each number the
     shortest text that reads back to the same float (``float(text)``, ``np.loadtxt``, a C
@@ -317,8 +306,6 @@ def format_rows(table: np.ndarray) -> str:
     orjson writes the numbers in compiled code (about 0.03 s for the paper run's 5,221 x 71
     table, where Python's ``%`` formatting of 17 digits took 0.12-0.2 s); rows with a value that
     is not finite, which JSON has no number for, are written a number at a time."""
-    import orjson
-
     table = np.ascontiguousarray(table, dtype=np.float64)
     if table.ndim != 2:
         raise ValueError(f"format_rows needs a 2-D table, got shape {table.shape}")
@@ -326,26 +313,26 @@ def format_rows(table: np.ndarray) -> str:
         return "\n" * table.shape[0] if table.shape[1] == 0 else ""
     finite = np.isfinite(table).all(axis=1)
     if finite.all():
-        return _finite_rows(table, orjson)
+        return _finite_rows(table)
     parts, start = [], 0
     for row in np.flatnonzero(~finite):
         if row > start:
-            parts.append(_finite_rows(table[start:row], orjson))
-        parts.append(",".join(_number_text(x, orjson) for x in table[row].tolist()) + "\n")
+            parts.append(_finite_rows(table[start:row]))
+        parts.append(",".join(_number_text(x) for x in table[row].tolist()) + "\n")
         start = row + 1
     if start < table.shape[0]:
-        parts.append(_finite_rows(table[start:], orjson))
+        parts.append(_finite_rows(table[start:]))
     return "".join(parts)
 
 
-def _finite_rows(table: np.ndarray, orjson) -> str:
+def _finite_rows(table: np.ndarray) -> str:
     """:func:`format_rows` of a C-ordered table of finite numbers (at least one): orjson's
     nested list ``[[a,b],[c,d]]`` made into lines."""
     text = orjson.dumps(table, option=orjson.OPT_SERIALIZE_NUMPY)
     return text[2:-2].replace(b"],[", b"\n").decode("ascii") + "\n"
 
 
-def _number_text(x: float, orjson) -> str:
+def _number_text(x: float) -> str:
     """One number as :func:`format_rows` writes it."""
     if math.isfinite(x):
         return orjson.dumps(x).decode("ascii")

@@ -291,16 +291,6 @@ def test_custom_controllers_fall_back_to_python(numba_vehicle, paper_vehicle):
 
 
 # ---------------------------------------------------------------- result files (speed-ups)
-def test_csv_text_is_that_of_numpy_savetxt(rng):
-    import io
-
-    from aiauv_pin.results.outputs import format_table
-
-    table = rng.normal(size=(7, 5)) * np.logspace(-12, 12, 5)
-    table[0, 0] = 0.0
-    buffer = io.StringIO()
-    np.savetxt(buffer, table, delimiter=",", header="a,b,c,d,e", comments="", fmt="%.9g")
-    assert format_table(list("abcde"), table) == buffer.getvalue()
 
 
 def test_csv_keeps_every_csv_period_and_the_summary_every_step(numba_vehicle, tmp_path):
