@@ -41,7 +41,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from aiauv_hydro.numerics.function_identity import stable_uuid
-from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled, user_or_builtin
+from aiauv_hydro.numerics.jit import (
+    NUMBA_AVAILABLE,
+    USER_CALL_OPTIONS,
+    compiled,
+    user_or_builtin,
+)
 from aiauv_hydro.spec import HydroError
 from aiauv_hydro.waves import kinematics as wave_kinematics
 from aiauv_hydro.waves.kinematics import wave_acceleration, wave_velocity
@@ -221,8 +226,10 @@ if NUMBA_AVAILABLE:
     def _absent(value) -> bool:
         return isinstance(value, (types.NoneType, types.Omitted))
 
-    @overload(current_acceleration)
-    def _current_acceleration(acceleration, velocity, kind, t, x, y, z, parameters):
+    # a user's functions from a reference-counted function (USER_CALL_OPTIONS), the built-in
+    # current from one that runs as its caller does
+    @overload(current_acceleration, jit_options=USER_CALL_OPTIONS)
+    def _user_current_acceleration(acceleration, velocity, kind, t, x, y, z, parameters):
         if not _absent(acceleration):
 
             def call_user(acceleration, velocity, kind, t, x, y, z, parameters):
@@ -235,6 +242,12 @@ if NUMBA_AVAILABLE:
                 return difference_acceleration(velocity, t, x, y, z, parameters)
 
             return call_difference
+        return None
+
+    @overload(current_acceleration)
+    def _current_acceleration(acceleration, velocity, kind, t, x, y, z, parameters):
+        if not (_absent(acceleration) and _absent(velocity)):
+            return None
 
         def call_builtin(acceleration, velocity, kind, t, x, y, z, parameters):
             return builtin_current_acceleration(kind, t, x, y, z, parameters)

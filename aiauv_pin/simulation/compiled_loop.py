@@ -48,7 +48,12 @@ from __future__ import annotations
 from functools import cache, lru_cache
 from typing import NamedTuple
 
-from aiauv_hydro.numerics.jit import NUMBA_AVAILABLE, compiled, is_project_function
+from aiauv_hydro.numerics.jit import (
+    NUMBA_AVAILABLE,
+    USER_CALL_OPTIONS,
+    compiled,
+    is_project_function,
+)
 from aiauv_pin.controllers.gait_compiled import GaitParameters, serpentine_gait
 from aiauv_pin.controllers.paper_compiled import (
     ConstantParameters,
@@ -145,7 +150,8 @@ if NUMBA_AVAILABLE:
     def _is_user(user) -> bool:
         return not isinstance(user, (types.NoneType, types.Omitted))
 
-    @overload(run_controller)
+    # with reference counting, said explicitly (USER_CALL_OPTIONS): a user's function may allocate
+    @overload(run_controller, jit_options=USER_CALL_OPTIONS)
     def _run_user_controller(user, t, q, v, model, workspace, parameters, state, tau, info):
         if _is_user(user):
 
@@ -377,12 +383,23 @@ def _dispatchers(value, found: list) -> list:
     return found
 
 
+#: How the loop is compiled for a user's functions: as :func:`run_chunk`, without reference
+#: counting. The loop never calls a user's function itself: a controller through
+#: :func:`run_controller`'s separate function for it, a path, current or disturbance through
+#: :func:`aiauv_hydro.numerics.jit.user_or_builtin`'s or a reference-counted kernel, so what a
+#: user's function allocates and returns is counted there. Counted in the loop too (as it was),
+#: every record read there counted each of its arrays up and down: the paper's path following
+#: written as a user's controller (``benchmarks/user_controller.py``) took 1.9-2.0x the built-in
+#: controller's CPU time.
+_USER_LOOP_OPTIONS = {"nogil": True, "error_model": "numpy", "_nrt": False}
+
+
 @lru_cache(maxsize=1)
 def _run_chunk_uncached():
     import numba
 
-    # with reference counting: a user's function may allocate and return arrays of its own
-    return numba.njit(nogil=True, error_model="numpy")(run_chunk.py_func)
+    # without reference counting, as run_chunk (_USER_LOOP_OPTIONS)
+    return numba.njit(**_USER_LOOP_OPTIONS)(run_chunk.py_func)
 
 
 def loop_for(*arguments):
@@ -440,6 +457,5 @@ def _run_chunk_for(uuids: tuple[str, ...]):
     copy.__qualname__ = copy.__name__
     copy.__module__ = source.__module__
     copy.__doc__ = source.__doc__
-    # with reference counting: a user's function may allocate and return arrays of its own
-    loop = numba.njit(cache=disk_cache_usable(), nogil=True, error_model="numpy")(copy)
+    loop = numba.njit(cache=disk_cache_usable(), **_USER_LOOP_OPTIONS)(copy)
     return saving_only_what_pickles(loop)

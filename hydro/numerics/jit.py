@@ -341,6 +341,13 @@ def interpreted(function: Callable) -> Callable:
     return getattr(function, "py_func", function)
 
 
+#: numba options of a function that calls a user's function: with reference counting, set
+#: explicitly. A function compiled for a call from compiled code takes the caller's setting unless
+#: it sets its own (numba's flags inheritance), and the project's kernels run without it
+#: (``compiled(borrows_only=True)``): a user's function that allocates would not compile there.
+USER_CALL_OPTIONS = {"_nrt": True}
+
+
 def user_or_builtin(builtin: Callable) -> Callable:
     """A function ``select(user, kind, *args)`` that calls ``user(*args)`` when ``user`` is a
     function and ``builtin(kind, *args)`` when it is ``None``, resolved at compile time.
@@ -364,14 +371,25 @@ def user_or_builtin(builtin: Callable) -> Callable:
         from numba import types
         from numba.extending import overload
 
+        def _is_user(user) -> bool:
+            return not isinstance(user, (types.NoneType, types.Omitted))
+
         @overload(select)
-        def _select(user, kind, *args):
-            if isinstance(user, (types.NoneType, types.Omitted)):
+        def _select_builtin(user, kind, *args):
+            if _is_user(user):
+                return None
 
-                def call_builtin(user, kind, *args):
-                    return builtin(kind, *args)
+            def call_builtin(user, kind, *args):
+                return builtin(kind, *args)
 
-                return call_builtin
+            return call_builtin
+
+        # reference-counted, said explicitly: the user's function, compiled for this call,
+        # inherits the setting (numba's flags inheritance), and may allocate what it returns
+        @overload(select, jit_options=USER_CALL_OPTIONS)
+        def _select_user(user, kind, *args):
+            if not _is_user(user):
+                return None
 
             def call_user(user, kind, *args):
                 return user(*args)
