@@ -8,6 +8,7 @@ import dataclasses
 
 import numba
 import numpy as np
+import pytest
 
 from aiauv_control.paths import HelixPath, UserPath, helix_point
 from aiauv_hydro.currents import Current
@@ -36,6 +37,7 @@ def _run(scenario):
     return simulate(*plan.arguments, **plan.options)
 
 
+@pytest.mark.slow  # compiles the loop for the user's functions: about 1.5 min of CPU
 def test_a_user_path_and_current_that_allocate_run_as_the_built_in_ones():
     helix = HelixPath(centre=(0.0, 0.0, 0.0), axis=(1.0, 0.0, 0.0), radius=2.0, pitch=10.0)
     water = (0.1, -0.05, 0.02)
